@@ -1,0 +1,47 @@
+//! `mbgc metrics`: space-filling metrics of a design file.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::sampling::{metrics, Design};
+use crate::space::Space;
+
+#[derive(Debug, Args)]
+pub struct MetricsArgs {
+    /// Design CSV (unit-cube coordinates unless --space is given).
+    pub design: PathBuf,
+    /// Space file to map physical values back to the unit cube.
+    #[arg(long)]
+    pub space: Option<PathBuf>,
+    /// Print one JSON object as the last line.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: &MetricsArgs) -> anyhow::Result<()> {
+    let space = a.space.as_deref().map(Space::from_file).transpose()?;
+    let design = Design::read(&a.design, space.as_ref())?;
+    if design.len() < 2 {
+        anyhow::bail!(
+            "{}: rows: expected at least 2 points to compute distances, found {}",
+            a.design.display(),
+            design.len()
+        );
+    }
+    let m = metrics::metrics(&design.unit);
+    println!("design  {}", a.design.display());
+    println!("n       {}", m.n);
+    println!("dim     {}", m.dim);
+    println!(
+        "MID     {:.6}   minimum intersite distance (larger is better)",
+        m.mid
+    );
+    println!("COV     {:.6}   cover measure (smaller is better)", m.cov);
+    println!("CD^2    {:.6e}   centered L2 discrepancy, squared", m.cd);
+    println!("WD^2    {:.6e}   wrap-around L2 discrepancy, squared", m.wd);
+    if a.json {
+        println!("{}", serde_json::to_string(&m)?);
+    }
+    Ok(())
+}

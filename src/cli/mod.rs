@@ -1,0 +1,51 @@
+//! The command line: one file per subcommand, each with its argument struct and a `run`.
+
+use clap::{Parser, Subcommand};
+
+pub mod bench;
+pub mod metrics;
+pub mod psd;
+pub mod sample;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "mbgc",
+    version,
+    about = "Metamodel-first global calibration of DEM simulation parameters"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Generate (or extend) a space-filling design.
+    Sample(sample::SampleArgs),
+    /// Space-filling metrics of a design: MID, COV, centered and wrap-around L2 discrepancy.
+    Metrics(metrics::MetricsArgs),
+    /// Particle size distributions: fit sieve data, draw particle sets.
+    Psd(psd::PsdArgs),
+    /// Benchmarks and reproduction reports.
+    Bench(bench::BenchArgs),
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Sample(a) => sample::run(&a),
+        Command::Metrics(a) => metrics::run(&a),
+        Command::Psd(a) => psd::run(&a),
+        Command::Bench(a) => bench::run(&a),
+    }
+}
+
+/// Entry point of the binary: errors are printed as one readable message, never as a panic.
+pub fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

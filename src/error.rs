@@ -1,0 +1,78 @@
+//! The library's error type. Errors about user files always name the file, the field and what
+//! was expected, so a user can fix the input without reading the source.
+
+use std::fmt::Display;
+use std::path::Path;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Bad content in a user-supplied file or argument.
+    #[error("{file}: {field}: {expected}")]
+    Input {
+        file: String,
+        field: String,
+        expected: String,
+    },
+    /// The file could not be read or written.
+    #[error("{file}: {source}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A request that cannot be satisfied (bad combination of options, impossible size, ...).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    pub fn input(
+        file: impl Display,
+        field: impl Into<String>,
+        expected: impl Into<String>,
+    ) -> Self {
+        Error::Input {
+            file: file.to_string(),
+            field: field.into(),
+            expected: expected.into(),
+        }
+    }
+
+    pub fn io(file: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            file: file.display().to_string(),
+            source,
+        }
+    }
+
+    pub fn invalid(msg: impl Into<String>) -> Self {
+        Error::Invalid(msg.into())
+    }
+}
+
+/// Reads a whole text file, mapping the failure to an error naming the file.
+pub fn read_to_string(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
+}
+
+/// Writes a file atomically (temporary file in the same directory, then rename), so an
+/// interrupted run never leaves a half-written result behind.
+pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| Error::invalid(format!("{}: not a file path", path.display())))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}",
+        file_name.to_string_lossy(),
+        std::process::id()
+    ));
+    std::fs::write(&tmp, contents).map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}

@@ -1,0 +1,15 @@
+//! mbgc: metamodel-first global calibration of DEM simulation parameters.
+//!
+//! The pipeline, stage by stage (see `ARCHITECTURE.md` in the project's shared notes and the
+//! README): a parameter [`space`] is filled by a [`sampling`] design; particle size distributions
+//! ([`psd`]) turn sieve data into the two PSD inputs of the metamodel; later stages simulate,
+//! fit, and calibrate.
+
+pub mod cli;
+pub mod error;
+pub mod plot;
+pub mod psd;
+pub mod sampling;
+pub mod space;
+
+pub use error::{Error, Result};

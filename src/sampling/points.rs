@@ -1,0 +1,84 @@
+//! Point sets in the unit cube, stored row-major in one flat array.
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Points {
+    dim: usize,
+    data: Vec<f64>,
+}
+
+impl Points {
+    pub fn new(dim: usize) -> Self {
+        Points {
+            dim,
+            data: Vec::new(),
+        }
+    }
+
+    pub fn with_capacity(dim: usize, n: usize) -> Self {
+        Points {
+            dim,
+            data: Vec::with_capacity(dim * n),
+        }
+    }
+
+    /// Builds from a flat row-major array; panics if its length is not a multiple of `dim`.
+    pub fn from_flat(dim: usize, data: Vec<f64>) -> Self {
+        assert!(
+            dim > 0 && data.len() % dim == 0,
+            "flat data does not fit dim"
+        );
+        Points { dim, data }
+    }
+
+    pub fn from_rows(dim: usize, rows: &[Vec<f64>]) -> Self {
+        let mut p = Points::with_capacity(dim, rows.len());
+        for r in rows {
+            p.push(r);
+        }
+        p
+    }
+
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    pub fn len(&self) -> usize {
+        if self.dim == 0 {
+            0
+        } else {
+            self.data.len() / self.dim
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    pub fn row(&self, i: usize) -> &[f64] {
+        &self.data[i * self.dim..(i + 1) * self.dim]
+    }
+
+    pub fn push(&mut self, row: &[f64]) {
+        assert_eq!(row.len(), self.dim, "row has the wrong dimension");
+        self.data.extend_from_slice(row);
+    }
+
+    pub fn rows(&self) -> impl Iterator<Item = &[f64]> {
+        self.data.chunks_exact(self.dim.max(1))
+    }
+
+    pub fn as_flat(&self) -> &[f64] {
+        &self.data
+    }
+
+    /// Appends all rows of `other` (same dimension).
+    pub fn append(&mut self, other: &Points) {
+        assert_eq!(self.dim, other.dim);
+        self.data.extend_from_slice(&other.data);
+    }
+}
+
+#[inline]
+pub fn dist2(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
+}

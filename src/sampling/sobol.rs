@@ -1,0 +1,55 @@
+//! Owen-scrambled Sobol points (sobol_burley).
+
+use super::{Points, Sampler};
+use crate::error::{Error, Result};
+
+/// sobol_burley computes at most 2^16 points per sequence.
+pub const MAX_POINTS: usize = 1 << 16;
+pub const MAX_DIM: usize = sobol_burley::NUM_DIMENSIONS as usize;
+
+pub struct Sobol;
+
+/// A 64-bit seed folded into sobol_burley's 32-bit scramble seed.
+pub fn scramble_seed(seed: u64) -> u32 {
+    let z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    let z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    ((z ^ (z >> 31)) >> 32) as u32
+}
+
+/// Points `start..start + n` of the scrambled sequence for `seed`.
+pub fn sobol_points(dim: usize, start: usize, n: usize, seed: u32) -> Points {
+    let mut data = Vec::with_capacity(n * dim);
+    for i in start..start + n {
+        for j in 0..dim {
+            data.push(sobol_burley::sample(i as u32, j as u32, seed) as f64);
+        }
+    }
+    Points::from_flat(dim, data)
+}
+
+impl Sampler for Sobol {
+    fn name(&self) -> &'static str {
+        "sobol"
+    }
+
+    /// Continues the sequence at index `existing.len()`: a Sobol design of n points from the
+    /// same seed extended by m equals the one-shot design of n + m points.
+    fn extend(&self, existing: &Points, n_new: usize, seed: u64) -> Result<Points> {
+        let d = existing.dim();
+        let start = existing.len();
+        if d > MAX_DIM {
+            return Err(Error::invalid(format!(
+                "sobol supports at most {MAX_DIM} dimensions, asked for {d}"
+            )));
+        }
+        if start + n_new > MAX_POINTS {
+            return Err(Error::invalid(format!(
+                "sobol supports at most {MAX_POINTS} points per design (sobol_burley's index \
+                 limit); asked for {} in all. Use fssf-f or halton for larger designs",
+                start + n_new
+            )));
+        }
+        Ok(sobol_points(d, start, n_new, scramble_seed(seed)))
+    }
+}

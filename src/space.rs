@@ -1,0 +1,363 @@
+//! Parameter spaces: the named, bounded inputs of a metamodel and their map to the unit cube.
+//!
+//! A `space.toml` lists parameters under `[parameters]`, each with a unit, bounds, a scale
+//! (`linear` or `log`) and optionally a fixed value:
+//!
+//! ```toml
+//! name = "seed 004, Table 2"
+//! [parameters]
+//! E_p  = { unit = "Pa", min = 5e6, max = 5e8, scale = "log", what = "Young's modulus" }
+//! e_pp = { unit = "-",  min = 0.05, max = 0.95, fixed = 0.6 }
+//! ```
+//!
+//! Free parameters span the unit cube in file order; fixed parameters keep their value and take
+//! no dimension. A log-scaled parameter is uniform in `ln x`, which is what a sampler should
+//! fill when the range spans decades (Young's modulus, particle size).
+
+use std::path::Path;
+
+use crate::error::{read_to_string, Error, Result};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    Linear,
+    Log,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    pub name: String,
+    pub unit: String,
+    pub min: f64,
+    pub max: f64,
+    pub scale: Scale,
+    pub fixed: Option<f64>,
+    pub what: String,
+}
+
+/// Relative slack accepted when mapping physical values back into the bounds, so that a value
+/// printed and re-read (or computed with rounding) at a bound is not refused.
+const BOUND_SLACK: f64 = 1e-9;
+
+impl Parameter {
+    /// Unit-cube coordinate of a physical value (0 at `min`, 1 at `max`).
+    pub fn to_unit(&self, x: f64) -> f64 {
+        match self.scale {
+            Scale::Linear => (x - self.min) / (self.max - self.min),
+            Scale::Log => (x / self.min).ln() / (self.max / self.min).ln(),
+        }
+    }
+
+    /// Physical value of a unit-cube coordinate.
+    pub fn from_unit(&self, u: f64) -> f64 {
+        match self.scale {
+            Scale::Linear => self.min + u * (self.max - self.min),
+            Scale::Log => self.min * (self.max / self.min).powf(u),
+        }
+    }
+
+    /// Whether `x` lies within the bounds (with a tiny relative slack for rounding).
+    pub fn contains(&self, x: f64) -> bool {
+        let slack = BOUND_SLACK * (self.max - self.min).abs().max(self.max.abs());
+        x.is_finite() && x >= self.min - slack && x <= self.max + slack
+    }
+
+    pub fn is_fixed(&self) -> bool {
+        self.fixed.is_some()
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Space {
+    pub name: Option<String>,
+    pub parameters: Vec<Parameter>,
+    /// Where the space came from (file path), used in error messages.
+    pub source: String,
+}
+
+const PARAM_KEYS: &[&str] = &["unit", "min", "max", "scale", "fixed", "what"];
+const TOP_KEYS: &[&str] = &["name", "description", "parameters"];
+
+impl Space {
+    pub fn from_file(path: &Path) -> Result<Space> {
+        let text = read_to_string(path)?;
+        Space::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// Parses a space from TOML text; `source` names the file in error messages.
+    pub fn from_toml_str(text: &str, source: &str) -> Result<Space> {
+        let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            Error::input(source, "TOML syntax", e.to_string().trim_end().to_string())
+        })?;
+        for key in table.keys() {
+            if !TOP_KEYS.contains(&key.as_str()) {
+                return Err(Error::input(
+                    source,
+                    key.clone(),
+                    format!("unknown key; expected one of: {}", TOP_KEYS.join(", ")),
+                ));
+            }
+        }
+        let name = match table.get("name") {
+            None => None,
+            Some(toml::Value::String(s)) => Some(s.clone()),
+            Some(_) => return Err(Error::input(source, "name", "expected a string")),
+        };
+        let params = match table.get("parameters") {
+            Some(toml::Value::Table(t)) => t,
+            Some(_) => {
+                return Err(Error::input(
+                    source,
+                    "parameters",
+                    "expected a table of parameters ([parameters])",
+                ))
+            }
+            None => {
+                return Err(Error::input(
+                    source,
+                    "parameters",
+                    "missing; expected a [parameters] table with at least one parameter",
+                ))
+            }
+        };
+        if params.is_empty() {
+            return Err(Error::input(
+                source,
+                "parameters",
+                "empty; expected at least one parameter",
+            ));
+        }
+        let mut parameters = Vec::with_capacity(params.len());
+        for (pname, value) in params {
+            parameters.push(parse_parameter(source, pname, value)?);
+        }
+        Ok(Space {
+            name,
+            parameters,
+            source: source.to_string(),
+        })
+    }
+
+    /// Number of free (sampled) parameters: the dimension of the unit cube.
+    pub fn dim(&self) -> usize {
+        self.parameters.iter().filter(|p| !p.is_fixed()).count()
+    }
+
+    pub fn free(&self) -> impl Iterator<Item = &Parameter> {
+        self.parameters.iter().filter(|p| !p.is_fixed())
+    }
+
+    pub fn names(&self) -> Vec<&str> {
+        self.parameters.iter().map(|p| p.name.as_str()).collect()
+    }
+
+    pub fn get(&self, name: &str) -> Option<&Parameter> {
+        self.parameters.iter().find(|p| p.name == name)
+    }
+
+    /// Physical values of all parameters (fixed ones included, file order) for a unit-cube point
+    /// over the free parameters.
+    pub fn to_physical(&self, u: &[f64]) -> Vec<f64> {
+        assert_eq!(u.len(), self.dim(), "unit point has the wrong dimension");
+        let mut free = u.iter();
+        self.parameters
+            .iter()
+            .map(|p| match p.fixed {
+                Some(v) => v,
+                None => p.from_unit(*free.next().expect("dimension checked above")),
+            })
+            .collect()
+    }
+
+    /// Unit-cube coordinates of the free parameters from physical values of all parameters.
+    /// Values must already be checked to lie in their bounds; results are clamped to [0, 1] to
+    /// absorb rounding at the bounds.
+    pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
+        assert_eq!(x.len(), self.parameters.len());
+        self.parameters
+            .iter()
+            .zip(x)
+            .filter(|(p, _)| !p.is_fixed())
+            .map(|(p, &v)| p.to_unit(v).clamp(0.0, 1.0))
+            .collect()
+    }
+}
+
+fn parse_parameter(source: &str, pname: &str, value: &toml::Value) -> Result<Parameter> {
+    let field = |k: &str| format!("parameters.{pname}.{k}");
+    if !is_identifier(pname) {
+        return Err(Error::input(
+            source,
+            format!("parameters.{pname}"),
+            "parameter names must start with a letter and contain only letters, digits and _",
+        ));
+    }
+    let t = value.as_table().ok_or_else(|| {
+        Error::input(
+            source,
+            format!("parameters.{pname}"),
+            "expected an inline table such as { unit = \"-\", min = 0.0, max = 1.0 }",
+        )
+    })?;
+    for key in t.keys() {
+        if !PARAM_KEYS.contains(&key.as_str()) {
+            return Err(Error::input(
+                source,
+                field(key),
+                format!("unknown key; expected one of: {}", PARAM_KEYS.join(", ")),
+            ));
+        }
+    }
+    let number = |k: &str| -> Result<Option<f64>> {
+        match t.get(k) {
+            None => Ok(None),
+            Some(toml::Value::Float(f)) => Ok(Some(*f)),
+            Some(toml::Value::Integer(i)) => Ok(Some(*i as f64)),
+            Some(other) => Err(Error::input(
+                source,
+                field(k),
+                format!("expected a number, found {}", other.type_str()),
+            )),
+        }
+    };
+    let string = |k: &str| -> Result<Option<String>> {
+        match t.get(k) {
+            None => Ok(None),
+            Some(toml::Value::String(s)) => Ok(Some(s.clone())),
+            Some(other) => Err(Error::input(
+                source,
+                field(k),
+                format!("expected a string, found {}", other.type_str()),
+            )),
+        }
+    };
+    let min =
+        number("min")?.ok_or_else(|| Error::input(source, field("min"), "missing lower bound"))?;
+    let max =
+        number("max")?.ok_or_else(|| Error::input(source, field("max"), "missing upper bound"))?;
+    for (k, v) in [("min", min), ("max", max)] {
+        if !v.is_finite() {
+            return Err(Error::input(source, field(k), "expected a finite number"));
+        }
+    }
+    if min >= max {
+        return Err(Error::input(
+            source,
+            field("min"),
+            format!("min ({min}) must be smaller than max ({max})"),
+        ));
+    }
+    let scale = match string("scale")?.as_deref() {
+        None | Some("linear") => Scale::Linear,
+        Some("log") => Scale::Log,
+        Some(other) => {
+            return Err(Error::input(
+                source,
+                field("scale"),
+                format!("expected \"linear\" or \"log\", found \"{other}\""),
+            ))
+        }
+    };
+    if scale == Scale::Log && min <= 0.0 {
+        return Err(Error::input(
+            source,
+            field("min"),
+            format!("log scale needs min > 0, found {min}"),
+        ));
+    }
+    let fixed = number("fixed")?;
+    if let Some(v) = fixed {
+        if !v.is_finite() || v < min || v > max {
+            return Err(Error::input(
+                source,
+                field("fixed"),
+                format!("fixed value {v} must lie within [min, max] = [{min}, {max}]"),
+            ));
+        }
+    }
+    Ok(Parameter {
+        name: pname.to_string(),
+        unit: string("unit")?.unwrap_or_else(|| "-".to_string()),
+        min,
+        max,
+        scale,
+        fixed,
+        what: string("what")?.unwrap_or_default(),
+    })
+}
+
+/// Parameter and response names become CSV headers and equation variables.
+pub fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+name = "test"
+[parameters]
+E_p = { unit = "Pa", min = 5e6, max = 5e8, scale = "log" }
+mu_pp = { min = 0, max = 1 }
+e_pp = { min = 0.05, max = 0.95, fixed = 0.6 }
+"#;
+
+    #[test]
+    fn parses_and_maps_round_trip() {
+        let s = Space::from_toml_str(GOOD, "good.toml").unwrap();
+        assert_eq!(s.dim(), 2);
+        assert_eq!(s.names(), vec!["E_p", "mu_pp", "e_pp"]);
+        let x = s.to_physical(&[0.5, 0.25]);
+        assert!(
+            (x[0] - 5e7).abs() < 1e-6,
+            "log midpoint is the geometric mean"
+        );
+        assert_eq!(x[1], 0.25);
+        assert_eq!(x[2], 0.6);
+        let u = s.to_unit(&x);
+        assert!((u[0] - 0.5).abs() < 1e-14 && (u[1] - 0.25).abs() < 1e-14);
+    }
+
+    fn err(text: &str) -> String {
+        Space::from_toml_str(text, "bad.toml")
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn rejects_bad_files_naming_file_and_field() {
+        let e = err("[parameters]\na = { max = 1 }");
+        assert!(
+            e.contains("bad.toml") && e.contains("parameters.a.min"),
+            "{e}"
+        );
+        let e = err("[parameters]\na = { min = 2, max = 1 }");
+        assert!(
+            e.contains("parameters.a.min") && e.contains("smaller"),
+            "{e}"
+        );
+        let e = err("[parameters]\na = { min = 0, max = 1, scale = \"log\" }");
+        assert!(e.contains("parameters.a.min") && e.contains("log"), "{e}");
+        let e = err("[parameters]\na = { min = 0, max = 1, unt = \"m\" }");
+        assert!(
+            e.contains("parameters.a.unt") && e.contains("unknown"),
+            "{e}"
+        );
+        let e = err("[parameters]\na = { min = 0, max = 1, fixed = 3 }");
+        assert!(e.contains("parameters.a.fixed"), "{e}");
+        let e = err("[parameters]\na = { min = 0, max = nan }");
+        assert!(
+            e.contains("parameters.a.max") && e.contains("finite"),
+            "{e}"
+        );
+        let e = err("[parameters]\na = { min = 0, max = 1, scale = \"cubic\" }");
+        assert!(e.contains("parameters.a.scale"), "{e}");
+        let e = err("[params]\na = { min = 0, max = 1 }");
+        assert!(e.contains("params") && e.contains("unknown key"), "{e}");
+        let e = err("[parameters]\na = { min = 0, max = 1");
+        assert!(e.contains("bad.toml") && e.contains("TOML"), "{e}");
+    }
+}
