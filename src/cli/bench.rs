@@ -41,6 +41,9 @@ pub struct SamplingBenchArgs {
     pub timing_n: usize,
     #[arg(long, default_value_t = 12)]
     pub timing_dim: usize,
+    /// Figure path (.svg or .png); default <out-dir>/sampling_benchmark.svg.
+    #[arg(long)]
+    pub figure: Option<PathBuf>,
     /// Print the raw results as one JSON object (last line).
     #[arg(long)]
     pub json: bool,
@@ -74,7 +77,10 @@ fn sampling(a: &SamplingBenchArgs) -> anyhow::Result<()> {
     );
     let times = timing(&Method::ALL, a.timing_n, a.timing_dim, 3)?;
 
-    let figure = a.out_dir.join("sampling_benchmark.svg");
+    let figure = a
+        .figure
+        .clone()
+        .unwrap_or_else(|| a.out_dir.join("sampling_benchmark.svg"));
     let mut panels = Vec::new();
     for d in DIMS {
         for (metric, f) in [

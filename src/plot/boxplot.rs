@@ -41,7 +41,11 @@ fn draw_panel<DB: DrawingBackend>(
     panel: &BoxPanel,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let labels: Vec<String> = panel.groups.iter().map(|(l, _)| l.clone()).collect();
-    let all = panel.groups.iter().flat_map(|(_, v)| v.iter().copied());
+    // Whiskers reach 1.5 IQR beyond the quartiles, possibly past every value: include them.
+    let all = panel.groups.iter().flat_map(|(_, v)| {
+        let q = Quartiles::new(v).values();
+        v.iter().copied().chain([q[0] as f64, q[4] as f64])
+    });
     let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
     });
@@ -57,6 +61,10 @@ fn draw_panel<DB: DrawingBackend>(
         .configure_mesh()
         .disable_x_mesh()
         .y_desc(&panel.y_label)
+        .x_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(s) | SegmentValue::Exact(s) => s.to_string(),
+            SegmentValue::Last => String::new(),
+        })
         .x_label_style(("sans-serif", 12))
         .draw()?;
     let blue = RGBColor(31, 119, 180);

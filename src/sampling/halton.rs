@@ -3,7 +3,7 @@
 
 use rand::seq::SliceRandom;
 
-use super::{rng, Points, Sampler};
+use super::{extend_sequence, rng, Points, Sampler};
 use crate::error::Result;
 
 pub struct Halton {
@@ -21,7 +21,7 @@ pub fn primes(n: usize) -> Vec<u64> {
     let mut ps: Vec<u64> = Vec::with_capacity(n);
     let mut c = 2u64;
     while ps.len() < n {
-        if ps.iter().take_while(|&&p| p * p <= c).all(|&p| c % p != 0) {
+        if ps.iter().take_while(|&&p| p * p <= c).all(|&p| !c.is_multiple_of(p)) {
             ps.push(c);
         }
         c += 1;
@@ -34,8 +34,8 @@ impl Sampler for Halton {
         "halton"
     }
 
-    /// Continues the sequence at index `existing.len()` (plus one for the unscrambled sequence,
-    /// whose index 0 is the origin), so extension and one-shot designs agree.
+    /// Continues the sequence after the existing points (see [`super::extend_sequence`]), so
+    /// extension and one-shot designs of the same seed agree.
     fn extend(&self, existing: &Points, n_new: usize, seed: u64) -> Result<Points> {
         let d = existing.dim();
         let bases = primes(d);
@@ -56,25 +56,29 @@ impl Sampler for Halton {
                     .collect()
             })
             .collect();
-        let offset = existing.len() + usize::from(!self.scrambled);
-        let mut data = Vec::with_capacity(n_new * d);
-        for i in offset..offset + n_new {
-            for (j, &b) in bases.iter().enumerate() {
-                let mut idx = i as u64;
-                let mut v = 0.0;
-                let mut scale = 1.0 / b as f64;
-                for perm in &perms[j] {
-                    v += perm[(idx % b) as usize] as f64 * scale;
-                    idx /= b;
-                    scale /= b as f64;
-                    if !self.scrambled && idx == 0 {
-                        break;
+        // The unscrambled sequence starts at index 1: its index 0 is the origin.
+        let skip = usize::from(!self.scrambled);
+        let gen = |start: usize, n: usize| {
+            let mut data = Vec::with_capacity(n * d);
+            for i in start + skip..start + skip + n {
+                for (j, &b) in bases.iter().enumerate() {
+                    let mut idx = i as u64;
+                    let mut v = 0.0;
+                    let mut scale = 1.0 / b as f64;
+                    for perm in &perms[j] {
+                        v += perm[(idx % b) as usize] as f64 * scale;
+                        idx /= b;
+                        scale /= b as f64;
+                        if !self.scrambled && idx == 0 {
+                            break;
+                        }
                     }
+                    data.push(v.min(1.0 - f64::EPSILON));
                 }
-                data.push(v.min(1.0 - f64::EPSILON));
             }
-        }
-        Ok(Points::from_flat(d, data))
+            Points::from_flat(d, data)
+        };
+        extend_sequence(existing, n_new, usize::MAX / 2, gen)
     }
 }
 

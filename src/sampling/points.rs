@@ -24,7 +24,7 @@ impl Points {
     /// Builds from a flat row-major array; panics if its length is not a multiple of `dim`.
     pub fn from_flat(dim: usize, data: Vec<f64>) -> Self {
         assert!(
-            dim > 0 && data.len() % dim == 0,
+            dim > 0 && data.len().is_multiple_of(dim),
             "flat data does not fit dim"
         );
         Points { dim, data }
@@ -43,11 +43,7 @@ impl Points {
     }
 
     pub fn len(&self) -> usize {
-        if self.dim == 0 {
-            0
-        } else {
-            self.data.len() / self.dim
-        }
+        self.data.len().checked_div(self.dim).unwrap_or(0)
     }
 
     pub fn is_empty(&self) -> bool {

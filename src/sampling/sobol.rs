@@ -1,6 +1,6 @@
 //! Owen-scrambled Sobol points (sobol_burley).
 
-use super::{Points, Sampler};
+use super::{extend_sequence, Points, Sampler};
 use crate::error::{Error, Result};
 
 /// sobol_burley computes at most 2^16 points per sequence.
@@ -33,23 +33,18 @@ impl Sampler for Sobol {
         "sobol"
     }
 
-    /// Continues the sequence at index `existing.len()`: a Sobol design of n points from the
-    /// same seed extended by m equals the one-shot design of n + m points.
+    /// Continues the sequence after the existing points (see [`super::extend_sequence`]): a
+    /// Sobol design of n points extended by m with the same seed equals the design of n + m.
     fn extend(&self, existing: &Points, n_new: usize, seed: u64) -> Result<Points> {
         let d = existing.dim();
-        let start = existing.len();
         if d > MAX_DIM {
             return Err(Error::invalid(format!(
                 "sobol supports at most {MAX_DIM} dimensions, asked for {d}"
             )));
         }
-        if start + n_new > MAX_POINTS {
-            return Err(Error::invalid(format!(
-                "sobol supports at most {MAX_POINTS} points per design (sobol_burley's index \
-                 limit); asked for {} in all. Use fssf-f or halton for larger designs",
-                start + n_new
-            )));
-        }
-        Ok(sobol_points(d, start, n_new, scramble_seed(seed)))
+        let s = scramble_seed(seed);
+        extend_sequence(existing, n_new, MAX_POINTS, |start, n| {
+            sobol_points(d, start, n, s)
+        })
     }
 }
