@@ -154,7 +154,7 @@ mod tests {
         assert!(cov(&g) < 1e-12);
         assert!((mid(&g) - 0.25).abs() < 1e-12);
         let mut clumped = grid.clone();
-        clumped[0] = vec![0.126, 0.126];
+        clumped[0] = vec![0.125, 0.36];
         let c = Points::from_rows(2, &clumped);
         assert!(cov(&c) > 0.2);
     }
