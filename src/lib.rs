@@ -6,6 +6,7 @@
 //! fit, and calibrate.
 
 pub mod cli;
+pub mod dem;
 pub mod error;
 pub mod plot;
 pub mod psd;

@@ -1,0 +1,64 @@
+//! Tangential force: the history spring with Coulomb cap of LIGGGHTS 3.8 `tangential history`.
+
+use super::Contact;
+use crate::dem::material::PairConstants;
+use crate::dem::vec3::*;
+
+const SQRT_5_6: f64 = 0.912_870_929_175_276_8;
+
+/// Advances the spring `xi` by the tangential relative velocity, keeps it in the tangent plane,
+/// and returns the tangential force on i; k_t = 8 G* sqrt(R* d),
+/// gamma_t = -2 sqrt(5/6) beta sqrt(k_t m*).
+///
+/// LIGGGHTS (`strict = false`): if the spring force k_t |xi| exceeds mu |F_n|, the force is the
+/// cap and the spring is reset to it, without damping; otherwise F_t = -k_t xi - gamma_t v_t, and
+/// this total may exceed the cap, by the dashpot.
+///
+/// Strict Coulomb (`strict = true`): the total -k_t xi - gamma_t v_t is capped at
+/// mu max(F_n, 0), and when capped the spring alone is set to the cap, so that sliding goes on at
+/// exactly mu F_n. (Setting the spring so that spring plus dashpot equal the cap, as LAMMPS
+/// `mindlin` does, leaves the spring pointing the wrong way after a fast slip and under-counts
+/// friction in the following steps.)
+#[inline(always)]
+pub fn mindlin_history(
+    c: &Contact,
+    p: &PairConstants,
+    f_n: f64,
+    xi: &mut V3,
+    dt: f64,
+    strict: bool,
+) -> V3 {
+    add_assign(xi, scale(c.v_t, dt));
+    let xn = dot(*xi, c.n);
+    sub_assign(xi, scale(c.n, xn));
+    let k_t = 8.0 * p.g_eff * c.sqrt_rd;
+    if strict {
+        let gamma_t = -2.0 * SQRT_5_6 * p.beta * (k_t * c.m_eff).sqrt();
+        let mut f_t = sub(scale(*xi, -k_t), scale(c.v_t, gamma_t));
+        let cap = p.friction * f_n.max(0.0);
+        let mag2 = norm2(f_t);
+        if mag2 > cap * cap {
+            f_t = if mag2 > 0.0 {
+                scale(f_t, cap / mag2.sqrt())
+            } else {
+                f_t
+            };
+            *xi = scale(f_t, -1.0 / k_t);
+        }
+        return f_t;
+    }
+    let mut f_t = scale(*xi, -k_t);
+    let f_shear2 = norm2(f_t);
+    let f_friction = p.friction * f_n.abs();
+    if f_shear2 > f_friction * f_friction {
+        let f_shear = f_shear2.sqrt();
+        if f_shear > 0.0 {
+            f_t = scale(f_t, f_friction / f_shear);
+            *xi = scale(f_t, -1.0 / k_t);
+        }
+    } else {
+        let gamma_t = -2.0 * SQRT_5_6 * p.beta * (k_t * c.m_eff).sqrt();
+        sub_assign(&mut f_t, scale(c.v_t, gamma_t));
+    }
+    f_t
+}

@@ -1,0 +1,206 @@
+//! Single-contact impacts: a sphere against a rigid plane or against another sphere, run until the
+//! contact opens. The verification tests of Chung & Ooi (2011) and the wall-impact experiment are
+//! built on this.
+
+use super::contact::{ContactModel, NormalKind};
+use super::material::{Interaction, Material, Materials};
+use super::particles::Particles;
+use super::sim::{Scene, Simulation};
+use super::timestep::rayleigh_time;
+use super::vec3::*;
+use super::walls::{Shape, Wall};
+use crate::error::{Error, Result};
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Body {
+    pub youngs_modulus: f64,
+    pub poisson: f64,
+    pub density: f64,
+    pub radius: f64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Impact {
+    pub body: Body,
+    /// The partner: `None` for a rigid plane (z = 0, normal +z); a second sphere otherwise, placed
+    /// on the +x side of the first and moving with `partner_velocity`.
+    pub partner: Option<Body>,
+    pub velocity: V3,
+    pub spin: V3,
+    pub partner_velocity: V3,
+    pub partner_spin: V3,
+    pub interaction: Interaction,
+    pub normal: NormalKind,
+    pub rolling: bool,
+    /// Keep the normal force from turning attractive (see `Law::limit_force`).
+    pub limit_force: bool,
+    /// Cap spring plus dashpot at the Coulomb limit (see `Law::strict_coulomb`).
+    pub strict_coulomb: bool,
+    /// Time steps per Hertz contact duration.
+    pub steps_per_contact: f64,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct ImpactResult {
+    pub max_normal_force: f64,
+    pub max_overlap: f64,
+    pub contact_time: f64,
+    pub velocity: V3,
+    pub spin: V3,
+    pub partner_velocity: V3,
+    pub partner_spin: V3,
+    pub steps: u64,
+}
+
+/// Hertz elastic impact theory (Timoshenko & Goodier / Chung & Ooi 2011): maximum overlap,
+/// maximum force and contact duration for effective modulus `y_eff`, radius `r_eff`, mass
+/// `m_eff` and relative normal speed `v`.
+pub fn hertz_theory(y_eff: f64, r_eff: f64, m_eff: f64, v: f64) -> (f64, f64, f64) {
+    let delta = (15.0 * m_eff * v * v / (16.0 * y_eff * r_eff.sqrt())).powf(0.4);
+    let force = 4.0 / 3.0 * y_eff * r_eff.sqrt() * delta.powf(1.5);
+    let t_c = 2.87 * (m_eff * m_eff / (r_eff * y_eff * y_eff * v)).powf(0.2);
+    (delta, force, t_c)
+}
+
+fn mass(b: &Body) -> f64 {
+    b.density * 4.0 / 3.0 * std::f64::consts::PI * b.radius.powi(3)
+}
+
+/// Runs an impact to the end of contact.
+pub fn run_impact(imp: &Impact) -> Result<ImpactResult> {
+    let b = &imp.body;
+    let mut materials = Materials::new();
+    let m_body = materials.add(Material {
+        name: "body".into(),
+        youngs_modulus: b.youngs_modulus,
+        poisson: b.poisson,
+    })?;
+    // The rigid plane: a modulus so large that Y* and G* are the body's alone.
+    let m_other = match &imp.partner {
+        None => materials.add(Material {
+            name: "rigid".into(),
+            youngs_modulus: 1e40,
+            poisson: 0.0,
+        })?,
+        Some(p) if *p == *b => m_body,
+        Some(p) => materials.add(Material {
+            name: "partner".into(),
+            youngs_modulus: p.youngs_modulus,
+            poisson: p.poisson,
+        })?,
+    };
+    for (x, y) in [(m_body, m_body), (m_body, m_other), (m_other, m_other)] {
+        materials.set_interaction(x, y, imp.interaction.clone())?;
+    }
+    let mut particles = Particles::new();
+    let gap = 1e-9 * b.radius;
+    let mut walls = Vec::new();
+    let (y_eff, r_eff, m_eff, v_rel);
+    match &imp.partner {
+        None => {
+            particles.add([0.0, 0.0, b.radius + gap], b.radius, b.density, m_body)?;
+            walls.push(Wall::new(
+                "plane",
+                Shape::Plane {
+                    point: [0.0; 3],
+                    normal: [0.0, 0.0, 1.0],
+                },
+                m_other,
+            )?);
+            y_eff = materials.pair(m_body, m_other).y_eff;
+            r_eff = b.radius;
+            m_eff = mass(b);
+            v_rel = -imp.velocity[2];
+        }
+        Some(p) => {
+            particles.add([0.0; 3], b.radius, b.density, m_body)?;
+            particles.add(
+                [b.radius + p.radius + gap, 0.0, 0.0],
+                p.radius,
+                p.density,
+                m_other,
+            )?;
+            y_eff = materials.pair(m_body, m_other).y_eff;
+            r_eff = b.radius * p.radius / (b.radius + p.radius);
+            m_eff = mass(b) * mass(p) / (mass(b) + mass(p));
+            v_rel = imp.velocity[0] - imp.partner_velocity[0];
+        }
+    }
+    if v_rel <= 0.0 {
+        return Err(Error::invalid("the bodies must approach each other"));
+    }
+    particles.v[0] = imp.velocity;
+    particles.w[0] = imp.spin;
+    if imp.partner.is_some() {
+        particles.v[1] = imp.partner_velocity;
+        particles.w[1] = imp.partner_spin;
+    }
+    let (_, _, t_c) = hertz_theory(y_eff, r_eff, m_eff, v_rel);
+    let dt = t_c / imp.steps_per_contact;
+    let r_min = b
+        .radius
+        .min(imp.partner.as_ref().map_or(f64::INFINITY, |p| p.radius));
+    let t_r = rayleigh_time(r_min, b.density, b.youngs_modulus, b.poisson);
+    let size = 10.0 * (b.radius + imp.partner.as_ref().map_or(0.0, |p| p.radius)) + 1.0;
+    let scene = Scene {
+        particles,
+        walls,
+        materials,
+        model: ContactModel {
+            normal: imp.normal,
+            cohesion: super::contact::CohesionKind::None,
+            rolling: if imp.rolling {
+                super::contact::RollingKind::Epsd2
+            } else {
+                super::contact::RollingKind::None
+            },
+            limit_force: imp.limit_force,
+            strict_coulomb: imp.strict_coulomb,
+        },
+        gravity: [0.0; 3],
+        dt,
+        skin: 0.1 * r_min,
+        domain: ([-size; 3], [size; 3]),
+        max_dt_fraction: (dt / t_r).max(0.3),
+    };
+    let mut sim = Simulation::new(scene)?;
+    let mut res = ImpactResult::default();
+    let mut touched = false;
+    let max_steps = (20.0 * imp.steps_per_contact) as u64;
+    for _ in 0..max_steps {
+        sim.advance();
+        let p = &sim.particles;
+        let i0 = p.id.iter().position(|&id| id == 0).expect("body");
+        let overlap = match &imp.partner {
+            None => p.r[i0] - p.x[i0][2],
+            Some(_) => {
+                let i1 = 1 - i0;
+                p.r[i0] + p.r[i1] - norm(sub(p.x[i0], p.x[i1]))
+            }
+        };
+        if overlap > 0.0 {
+            touched = true;
+            res.contact_time += dt;
+            res.max_overlap = res.max_overlap.max(overlap);
+            // The contact force along the line of centres: gravity is off, so it is the total.
+            let f = p.f[i0];
+            let fnorm = match &imp.partner {
+                None => f[2],
+                Some(_) => -f[0],
+            };
+            res.max_normal_force = res.max_normal_force.max(fnorm);
+        } else if touched {
+            res.velocity = p.v[i0];
+            res.spin = p.w[i0];
+            if imp.partner.is_some() {
+                res.partner_velocity = p.v[1 - i0];
+                res.partner_spin = p.w[1 - i0];
+            }
+            res.steps = sim.step;
+            return Ok(res);
+        }
+    }
+    Err(Error::invalid(format!(
+        "the contact did not end within {max_steps} steps"
+    )))
+}

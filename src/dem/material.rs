@@ -1,0 +1,302 @@
+//! Materials and the per-pair constants of the contact law.
+//!
+//! Particles and walls each carry a material index. Everything the contact law needs that does not
+//! depend on the overlap is computed once per pair of materials, as LIGGGHTS does: effective
+//! moduli, the damping factor from the restitution coefficient, friction coefficients and the
+//! parameters of optional effects.
+
+use crate::error::{Error, Result};
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Young's modulus, Pa.
+    pub youngs_modulus: f64,
+    pub poisson: f64,
+}
+
+/// What two materials do when they touch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interaction {
+    /// Coefficient of restitution (used by the restitution-based damping of the Hertz model).
+    pub restitution: f64,
+    /// Coulomb sliding friction.
+    pub friction: f64,
+    /// Rolling friction coefficient (EPSD2: torque cap mu_r R* |F_n|).
+    pub rolling_friction: f64,
+    /// Cohesion energy density, J/m^3 (simplified JKR), 0 for none.
+    pub cohesion_energy_density: f64,
+    /// Phenomenological damping constant gamma_n of the power-law damped normal models
+    /// (Tsuji, Kuwabara-Kono, free exponent), in N s/m^(1+alpha).
+    pub damping_gamma_n: f64,
+}
+
+impl Default for Interaction {
+    fn default() -> Self {
+        Interaction {
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: 0.0,
+            cohesion_energy_density: 0.0,
+            damping_gamma_n: 0.0,
+        }
+    }
+}
+
+/// Pair constants used in the force kernel.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PairConstants {
+    /// Effective Young's modulus Y*.
+    pub y_eff: f64,
+    /// Effective shear modulus G*.
+    pub g_eff: f64,
+    /// Damping factor beta = ln e / sqrt(ln^2 e + pi^2) (negative).
+    pub beta: f64,
+    /// Damping factor giving restitution e when the normal force is kept from turning
+    /// attractive (`limit-force`); see [`beta_for_restitution_limited`].
+    pub beta_limited: f64,
+    pub friction: f64,
+    pub rolling_friction: f64,
+    pub cohesion_energy_density: f64,
+    pub damping_gamma_n: f64,
+}
+
+impl PairConstants {
+    pub fn new(a: &Material, b: &Material, i: &Interaction) -> Self {
+        let y_eff = 1.0
+            / ((1.0 - a.poisson * a.poisson) / a.youngs_modulus
+                + (1.0 - b.poisson * b.poisson) / b.youngs_modulus);
+        let g_eff = 1.0
+            / (2.0 * (2.0 - a.poisson) * (1.0 + a.poisson) / a.youngs_modulus
+                + 2.0 * (2.0 - b.poisson) * (1.0 + b.poisson) / b.youngs_modulus);
+        let ln_e = i.restitution.ln();
+        let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI * std::f64::consts::PI).sqrt();
+        PairConstants {
+            y_eff,
+            g_eff,
+            beta,
+            // Solved on demand (Materials::prepare_limit_force): it takes a few milliseconds.
+            beta_limited: f64::NAN,
+            friction: i.friction,
+            rolling_friction: i.rolling_friction,
+            cohesion_energy_density: i.cohesion_energy_density,
+            damping_gamma_n: i.damping_gamma_n,
+        }
+    }
+}
+
+/// All materials of a scene and the interaction of every pair.
+#[derive(Debug, Clone, Default)]
+pub struct Materials {
+    pub materials: Vec<Material>,
+    interactions: Vec<Option<Interaction>>,
+    table: Vec<PairConstants>,
+}
+
+impl Materials {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a material and returns its index.
+    pub fn add(&mut self, m: Material) -> Result<u16> {
+        if !(m.youngs_modulus.is_finite() && m.youngs_modulus > 0.0) {
+            return Err(Error::invalid(format!(
+                "material {}: Young's modulus must be positive and finite, found {}",
+                m.name, m.youngs_modulus
+            )));
+        }
+        if !(m.poisson > -1.0 && m.poisson < 0.5 + 1e-12) {
+            return Err(Error::invalid(format!(
+                "material {}: Poisson ratio must lie in (-1, 0.5], found {}",
+                m.name, m.poisson
+            )));
+        }
+        let n = self.materials.len();
+        self.materials.push(m);
+        let mut inter = vec![None; (n + 1) * (n + 1)];
+        for a in 0..n {
+            for b in 0..n {
+                inter[a * (n + 1) + b] = self.interactions[a * n + b].clone();
+            }
+        }
+        self.interactions = inter;
+        self.table = vec![PairConstants::default(); (n + 1) * (n + 1)];
+        self.rebuild();
+        Ok(n as u16)
+    }
+
+    /// Sets the interaction of materials a and b (symmetric).
+    pub fn set_interaction(&mut self, a: u16, b: u16, i: Interaction) -> Result<()> {
+        let n = self.materials.len();
+        let (a, b) = (a as usize, b as usize);
+        if a >= n || b >= n {
+            return Err(Error::invalid(format!("no material {} or {b}", a.max(b))));
+        }
+        let name = format!("{}-{}", self.materials[a].name, self.materials[b].name);
+        check_range(&name, "restitution", i.restitution, 0.05, 1.0)?;
+        check_range(&name, "friction", i.friction, 0.0, f64::MAX)?;
+        check_range(&name, "rolling friction", i.rolling_friction, 0.0, f64::MAX)?;
+        check_range(
+            &name,
+            "cohesion energy density",
+            i.cohesion_energy_density,
+            0.0,
+            f64::MAX,
+        )?;
+        check_range(&name, "damping gamma_n", i.damping_gamma_n, 0.0, f64::MAX)?;
+        self.interactions[a * n + b] = Some(i.clone());
+        self.interactions[b * n + a] = Some(i);
+        self.rebuild();
+        Ok(())
+    }
+
+    fn rebuild(&mut self) {
+        let n = self.materials.len();
+        for a in 0..n {
+            for b in 0..n {
+                if let Some(i) = &self.interactions[a * n + b] {
+                    self.table[a * n + b] =
+                        PairConstants::new(&self.materials[a], &self.materials[b], i);
+                }
+            }
+        }
+    }
+
+    /// Solves the damping factors used by `limit-force` for every defined pair.
+    pub fn prepare_limit_force(&mut self) {
+        let n = self.materials.len();
+        for k in 0..n * n {
+            if let Some(i) = &self.interactions[k] {
+                if self.table[k].beta_limited.is_nan() {
+                    self.table[k].beta_limited = beta_for_restitution_limited(i.restitution);
+                }
+            }
+        }
+    }
+
+    /// Every pair of materials that can meet must have an interaction.
+    pub fn check_complete(&self, pairs: impl Iterator<Item = (u16, u16)>) -> Result<()> {
+        let n = self.materials.len();
+        for (a, b) in pairs {
+            if self.interactions[a as usize * n + b as usize].is_none() {
+                return Err(Error::invalid(format!(
+                    "no interaction defined between materials {} and {}",
+                    self.materials[a as usize].name, self.materials[b as usize].name
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn count(&self) -> usize {
+        self.materials.len()
+    }
+
+    #[inline(always)]
+    pub fn pair(&self, a: u16, b: u16) -> &PairConstants {
+        &self.table[a as usize * self.materials.len() + b as usize]
+    }
+
+    pub fn interaction(&self, a: u16, b: u16) -> Option<&Interaction> {
+        self.interactions[a as usize * self.materials.len() + b as usize].as_ref()
+    }
+}
+
+fn check_range(pair: &str, what: &str, v: f64, lo: f64, hi: f64) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!(
+            "interaction {pair}: {what} must lie in [{lo}, {}], found {v}",
+            if hi == f64::MAX {
+                "inf".to_string()
+            } else {
+                hi.to_string()
+            }
+        )))
+    }
+}
+
+/// Restitution of a Hertz impact with LIGGGHTS' damping for damping factor `beta`, with the
+/// normal force clamped at zero (`limited`) or allowed to turn attractive near separation.
+///
+/// In units where the elastic force is X^(3/2), the impact obeys X'' = -X^(3/2) - z X^(1/4) X'
+/// with z = -sqrt(5) beta, X(0) = 0, X'(0) = 1, whatever the material, size and speed; so the
+/// restitution depends on beta alone and one integration tells it.
+pub fn hertz_restitution(beta: f64, limited: bool) -> f64 {
+    let z = -(5.0f64).sqrt() * beta;
+    let acc = |x: f64, v: f64| -> f64 {
+        let xp = x.max(0.0);
+        -(xp * xp.sqrt()) - z * xp.sqrt().sqrt() * v
+    };
+    let h = 2e-4;
+    let (mut x, mut v) = (0.0f64, 1.0f64);
+    for _ in 0..200_000 {
+        let (k1x, k1v) = (v, acc(x, v));
+        let (k2x, k2v) = (v + 0.5 * h * k1v, acc(x + 0.5 * h * k1x, v + 0.5 * h * k1v));
+        let (k3x, k3v) = (v + 0.5 * h * k2v, acc(x + 0.5 * h * k2x, v + 0.5 * h * k2v));
+        let (k4x, k4v) = (v + h * k3v, acc(x + h * k3x, v + h * k3v));
+        let xn = x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+        let vn = v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        if limited && vn < 0.0 && acc(xn, vn) >= 0.0 {
+            // The force would turn attractive: the bodies part with this speed.
+            return -vn;
+        }
+        if xn <= 0.0 && vn < 0.0 {
+            // Interpolate the speed at X = 0.
+            let f = x / (x - xn);
+            return -(v + f * (vn - v));
+        }
+        x = xn;
+        v = vn;
+    }
+    0.0
+}
+
+/// The damping factor that gives restitution `e` with the normal force clamped at zero, by
+/// bisection on [`hertz_restitution`]. Clamping removes the attraction at the end of the contact,
+/// so the same beta would give a larger restitution than LIGGGHTS' unclamped law.
+pub fn beta_for_restitution_limited(e: f64) -> f64 {
+    if e >= 1.0 {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = (-1.0f64, 0.0f64); // restitution falls as beta goes down
+    while hertz_restitution(lo, true) > e && lo > -1e3 {
+        lo *= 2.0;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if hertz_restitution(mid, true) > e {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn liggghts_damping_gives_the_input_restitution_and_the_limited_one_is_solved() {
+        for e in [0.1, 0.3, 0.5, 0.7, 0.9] {
+            let ln_e = f64::ln(e);
+            let beta = ln_e / (ln_e * ln_e + std::f64::consts::PI.powi(2)).sqrt();
+            let free = hertz_restitution(beta, false);
+            assert!(
+                (free - e).abs() < 0.003,
+                "e {e}: unclamped law gives {free}"
+            );
+            let clamped = hertz_restitution(beta, true);
+            assert!(
+                clamped > e + 1e-3,
+                "clamping must raise the restitution: {clamped}"
+            );
+            let b = beta_for_restitution_limited(e);
+            assert!((hertz_restitution(b, true) - e).abs() < 1e-6);
+        }
+    }
+}

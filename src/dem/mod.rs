@@ -1,0 +1,25 @@
+//! The embedded DEM engine.
+//!
+//! - [`particles`]: spheres in structure-of-arrays form.
+//! - [`material`]: materials, interactions and the per-pair constants of the contact law.
+//! - [`contact`]: the contact law as a sum of effects (Hertz-Mindlin as LIGGGHTS 3.8, EPSD2,
+//!   power-law damped normal models of seed 003, simplified JKR cohesion).
+//! - [`walls`]: analytic planes, rectangles, cylinders and orifice plates.
+//! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
+//! - [`sim`]: the time-step loop and blow-up checks; [`timestep`]: the Rayleigh time.
+
+pub mod contact;
+pub mod impact;
+pub mod material;
+pub mod neighbor;
+pub mod particles;
+pub mod sim;
+pub mod timestep;
+pub mod vec3;
+pub mod walls;
+
+pub use contact::ContactModel;
+pub use material::{Interaction, Material, Materials};
+pub use particles::Particles;
+pub use sim::{BlowUp, Scene, Simulation};
+pub use walls::{Shape, Wall};

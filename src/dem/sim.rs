@@ -1,0 +1,628 @@
+//! The time-step loop: velocity Verlet with rotation (as LIGGGHTS `fix nve/sphere`), neighbour
+//! list upkeep, particle-particle and particle-wall contacts, and the checks that turn a blown-up
+//! run into an error instead of numbers.
+
+use rayon::prelude::*;
+
+use super::contact::{Cohesion, Contact, ContactModel, History, Law, NormalForce, Rolling};
+use super::material::Materials;
+use super::neighbor::NeighborList;
+use super::particles::Particles;
+use super::timestep::rayleigh_time;
+use super::vec3::*;
+use super::walls::Wall;
+use crate::error::{Error, Result};
+use crate::with_law;
+
+/// Everything that defines a run.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub particles: Particles,
+    pub walls: Vec<Wall>,
+    pub materials: Materials,
+    pub model: ContactModel,
+    pub gravity: V3,
+    pub dt: f64,
+    /// Neighbour skin, m.
+    pub skin: f64,
+    /// Particles outside this box (lo, hi) make the run fail: they have left the experiment.
+    pub domain: (V3, V3),
+    /// Largest accepted dt as a fraction of the Rayleigh time.
+    pub max_dt_fraction: f64,
+}
+
+/// Why a run was stopped.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BlowUp {
+    NotFinite {
+        step: u64,
+        particle: u32,
+    },
+    LeftDomain {
+        step: u64,
+        particle: u32,
+        position: V3,
+    },
+    TooFast {
+        step: u64,
+        particle: u32,
+        speed: f64,
+    },
+}
+
+impl std::fmt::Display for BlowUp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BlowUp::NotFinite { step, particle } => {
+                write!(
+                    f,
+                    "step {step}: particle {particle} has a non-finite position or velocity"
+                )
+            }
+            BlowUp::LeftDomain {
+                step,
+                particle,
+                position,
+            } => {
+                write!(
+                    f,
+                    "step {step}: particle {particle} left the domain at {position:?}"
+                )
+            }
+            BlowUp::TooFast {
+                step,
+                particle,
+                speed,
+            } => write!(
+                f,
+                "step {step}: particle {particle} moves at {speed:.3e} m/s, beyond any speed the \
+                 scene can produce (energy is not conserved: time step too large?)"
+            ),
+        }
+    }
+}
+
+pub struct Simulation {
+    pub particles: Particles,
+    pub walls: Vec<Wall>,
+    pub materials: Materials,
+    pub model: ContactModel,
+    pub gravity: V3,
+    pub dt: f64,
+    pub domain: (V3, V3),
+    pub neighbors: NeighborList,
+    /// Contact history of every particle with every wall: `[i * n_walls + w]`.
+    pub wall_hist: Vec<History>,
+    pub step: u64,
+    pub time: f64,
+    /// Speed beyond which a particle signals a blow-up.
+    pub speed_limit: f64,
+    threads: usize,
+    buffers: Vec<(Vec<V3>, Vec<V3>)>,
+}
+
+impl Simulation {
+    /// Checks the scene and prepares the run. Refuses a time step above `max_dt_fraction` of the
+    /// Rayleigh time of the smallest particle.
+    pub fn new(scene: Scene) -> Result<Simulation> {
+        let Scene {
+            particles,
+            walls,
+            mut materials,
+            model,
+            gravity,
+            dt,
+            skin,
+            domain,
+            max_dt_fraction,
+        } = scene;
+        if model.limit_force {
+            materials.prepare_limit_force();
+        }
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::invalid(format!(
+                "time step must be positive, found {dt}"
+            )));
+        }
+        if !(skin.is_finite() && skin > 0.0) {
+            return Err(Error::invalid(format!(
+                "neighbour skin must be positive, found {skin}"
+            )));
+        }
+        let n_mat = materials.count() as u16;
+        if let Some(&m) = particles
+            .material
+            .iter()
+            .chain(walls.iter().map(|w| &w.material))
+            .find(|&&m| m >= n_mat)
+        {
+            return Err(Error::invalid(format!("material {m} is not defined")));
+        }
+        let mut pairs: Vec<(u16, u16)> = Vec::new();
+        let mut pm: Vec<u16> = particles.material.clone();
+        pm.sort_unstable();
+        pm.dedup();
+        for &a in &pm {
+            for &b in &pm {
+                pairs.push((a, b));
+            }
+            for w in &walls {
+                pairs.push((a, w.material));
+            }
+        }
+        materials.check_complete(pairs.into_iter())?;
+        if !particles.is_empty() {
+            let t_r = (0..particles.len())
+                .map(|i| {
+                    let mat = &materials.materials[particles.material[i] as usize];
+                    rayleigh_time(
+                        particles.r[i],
+                        particles.density(i),
+                        mat.youngs_modulus,
+                        mat.poisson,
+                    )
+                })
+                .fold(f64::INFINITY, f64::min);
+            if dt > max_dt_fraction * t_r {
+                return Err(Error::invalid(format!(
+                    "time step {dt:.3e} s is {:.1} % of the Rayleigh time {t_r:.3e} s of the smallest \
+                     particle; the limit is {:.0} %",
+                    100.0 * dt / t_r,
+                    100.0 * max_dt_fraction
+                )));
+            }
+        }
+        for (i, x) in particles.x.iter().enumerate() {
+            if !inside(*x, domain) {
+                return Err(Error::invalid(format!(
+                    "particle {i} starts outside the domain at {x:?}"
+                )));
+            }
+        }
+        // Fastest a particle could move: free fall across the domain, plus the fastest wall, with
+        // a wide margin. Beyond it, energy is being created.
+        let diag = norm(sub(domain.1, domain.0));
+        let wall_speed = walls.iter().map(|w| norm(w.velocity)).fold(0.0, f64::max);
+        let v0 = particles.v.iter().map(|v| norm(*v)).fold(0.0, f64::max);
+        let speed_limit = 10.0 * ((2.0 * norm(gravity) * diag).sqrt() + wall_speed + v0) + 1.0;
+        let n_walls = walls.len();
+        let wall_hist = vec![History::default(); particles.len() * n_walls];
+        let mut sim = Simulation {
+            particles,
+            walls,
+            materials,
+            model,
+            gravity,
+            dt,
+            domain,
+            neighbors: NeighborList::new(skin),
+            wall_hist,
+            step: 0,
+            time: 0.0,
+            speed_limit,
+            threads: 1,
+            buffers: Vec::new(),
+        };
+        sim.neighbors
+            .rebuild(&mut sim.particles, &mut sim.wall_hist, n_walls);
+        sim.compute_forces();
+        Ok(sim)
+    }
+
+    /// Number of threads for the force loop (1 = serial, no per-thread buffers). Uses the
+    /// current rayon pool.
+    pub fn set_threads(&mut self, threads: usize) {
+        self.threads = threads.max(1);
+        self.buffers.clear();
+    }
+
+    /// Advances `steps` time steps, checking for blow-ups every `check_every` steps.
+    pub fn run(&mut self, steps: u64) -> std::result::Result<(), BlowUp> {
+        let check_every = 50;
+        for s in 0..steps {
+            self.advance();
+            if (s + 1) % check_every == 0 || s + 1 == steps {
+                self.check()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// One velocity-Verlet step.
+    pub fn advance(&mut self) {
+        let dt = self.dt;
+        let half = 0.5 * dt;
+        {
+            let p = &mut self.particles;
+            for i in 0..p.len() {
+                let a = p.inv_m[i] * half;
+                let v = &mut p.v[i];
+                v[0] += a * p.f[i][0];
+                v[1] += a * p.f[i][1];
+                v[2] += a * p.f[i][2];
+                let x = &mut p.x[i];
+                x[0] += dt * v[0];
+                x[1] += dt * v[1];
+                x[2] += dt * v[2];
+                let b = p.inv_i[i] * half;
+                let w = &mut p.w[i];
+                w[0] += b * p.t[i][0];
+                w[1] += b * p.t[i][1];
+                w[2] += b * p.t[i][2];
+            }
+        }
+        for w in &mut self.walls {
+            if w.active {
+                w.advance(dt);
+            }
+        }
+        if self.neighbors.needs_rebuild(&self.particles.x) && self.positions_finite() {
+            let n_walls = self.walls.len();
+            self.neighbors
+                .rebuild(&mut self.particles, &mut self.wall_hist, n_walls);
+        }
+        self.compute_forces();
+        let p = &mut self.particles;
+        for i in 0..p.len() {
+            let a = p.inv_m[i] * half;
+            let v = &mut p.v[i];
+            v[0] += a * p.f[i][0];
+            v[1] += a * p.f[i][1];
+            v[2] += a * p.f[i][2];
+            let b = p.inv_i[i] * half;
+            let w = &mut p.w[i];
+            w[0] += b * p.t[i][0];
+            w[1] += b * p.t[i][1];
+            w[2] += b * p.t[i][2];
+        }
+        self.step += 1;
+        self.time += dt;
+    }
+
+    fn positions_finite(&self) -> bool {
+        self.particles
+            .x
+            .iter()
+            .all(|x| x.iter().all(|c| c.is_finite()))
+    }
+
+    /// Looks for NaN, particles outside the domain and impossible speeds.
+    pub fn check(&self) -> std::result::Result<(), BlowUp> {
+        let p = &self.particles;
+        let lim2 = self.speed_limit * self.speed_limit;
+        for i in 0..p.len() {
+            let (x, v) = (p.x[i], p.v[i]);
+            if !(x.iter().chain(&v).all(|c| c.is_finite())) {
+                return Err(BlowUp::NotFinite {
+                    step: self.step,
+                    particle: p.id[i],
+                });
+            }
+            if !inside(x, self.domain) {
+                return Err(BlowUp::LeftDomain {
+                    step: self.step,
+                    particle: p.id[i],
+                    position: x,
+                });
+            }
+            if norm2(v) > lim2 {
+                return Err(BlowUp::TooFast {
+                    step: self.step,
+                    particle: p.id[i],
+                    speed: norm(v),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Recomputes all forces and torques (gravity, contacts, walls).
+    pub fn compute_forces(&mut self) {
+        let model = self.model;
+        with_law!(model, |law| self.forces_with(&law));
+    }
+
+    fn forces_with<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
+        let n = self.particles.len();
+        let g = self.gravity;
+        {
+            let p = &mut self.particles;
+            for i in 0..n {
+                p.f[i] = scale(g, p.m[i]);
+                p.t[i] = [0.0; 3];
+            }
+        }
+        let dt = self.dt;
+        if self.threads <= 1 || n < 2 * self.threads {
+            let p = &mut self.particles;
+            let nl = &mut self.neighbors;
+            pair_rows(
+                law,
+                &self.materials,
+                dt,
+                0..n,
+                &nl.start,
+                &nl.nb,
+                &mut nl.hist,
+                P {
+                    x: &p.x,
+                    v: &p.v,
+                    w: &p.w,
+                    r: &p.r,
+                    m: &p.m,
+                    mat: &p.material,
+                },
+                &mut p.f,
+                &mut p.t,
+            );
+        } else {
+            let chunks = self.threads;
+            if self.buffers.len() != chunks || self.buffers[0].0.len() != n {
+                self.buffers = (0..chunks)
+                    .map(|_| (vec![[0.0; 3]; n], vec![[0.0; 3]; n]))
+                    .collect();
+            }
+            // Rows split so each chunk holds about the same number of list entries.
+            let start = &self.neighbors.start;
+            let total = *start.last().unwrap_or(&0) as usize;
+            let mut bounds = vec![0usize];
+            for c in 1..chunks {
+                let target = (total * c / chunks) as u32;
+                bounds.push(
+                    start
+                        .partition_point(|&s| s < target)
+                        .min(n)
+                        .max(*bounds.last().unwrap()),
+                );
+            }
+            bounds.push(n);
+            // Split the history so each chunk owns the entries of its rows.
+            let mut hist_parts = Vec::with_capacity(chunks);
+            let mut rest: &mut [History] = &mut self.neighbors.hist;
+            let mut offset = 0usize;
+            for c in 0..chunks {
+                let end = start[bounds[c + 1]] as usize;
+                let (a, b) = rest.split_at_mut(end - offset);
+                hist_parts.push(a);
+                rest = b;
+                offset = end;
+            }
+            let p = &self.particles;
+            let view = P {
+                x: &p.x,
+                v: &p.v,
+                w: &p.w,
+                r: &p.r,
+                m: &p.m,
+                mat: &p.material,
+            };
+            let materials = &self.materials;
+            let nb = &self.neighbors.nb;
+            self.buffers
+                .par_iter_mut()
+                .zip(hist_parts.into_par_iter())
+                .enumerate()
+                .for_each(|(c, ((bf, bt), h))| {
+                    for k in 0..n {
+                        bf[k] = [0.0; 3];
+                        bt[k] = [0.0; 3];
+                    }
+                    let rows = bounds[c]..bounds[c + 1];
+                    let base = start[rows.start] as usize;
+                    pair_rows_offset(law, materials, dt, rows, start, nb, h, base, view, bf, bt);
+                });
+            let bufs = &self.buffers;
+            let p = &mut self.particles;
+            p.f.par_iter_mut()
+                .zip(p.t.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (f, t))| {
+                    for (bf, bt) in bufs {
+                        add_assign(f, bf[i]);
+                        add_assign(t, bt[i]);
+                    }
+                });
+        }
+        self.wall_forces(law);
+    }
+
+    fn wall_forces<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
+        let n_walls = self.walls.len();
+        if n_walls == 0 {
+            return;
+        }
+        let dt = self.dt;
+        let p = &mut self.particles;
+        for i in 0..p.len() {
+            let ri = p.r[i];
+            for (wi, wall) in self.walls.iter().enumerate() {
+                let h = &mut self.wall_hist[i * n_walls + wi];
+                if !wall.active {
+                    *h = History::default();
+                    continue;
+                }
+                let Some(gap) = wall.gap(p.x[i], ri) else {
+                    *h = History::default();
+                    continue;
+                };
+                let overlap = ri - gap.distance;
+                let area = if C::ACTIVE {
+                    std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
+                } else {
+                    0.0
+                };
+                let lever = ri - 0.5 * overlap;
+                let c = Contact::new(
+                    gap.normal,
+                    overlap,
+                    ri,
+                    p.m[i],
+                    sub(p.v[i], wall.velocity),
+                    p.w[i],
+                    [0.0; 3],
+                    lever,
+                    0.0,
+                    area,
+                );
+                let pc = self.materials.pair(p.material[i], wall.material);
+                let out = law.force(&c, pc, h, dt);
+                add_assign(&mut p.f[i], out.force);
+                add_assign(&mut p.t[i], out.torque_i);
+            }
+        }
+    }
+
+    pub fn kinetic_energy(&self) -> (f64, f64) {
+        (
+            self.particles.translational_energy(),
+            self.particles.rotational_energy(),
+        )
+    }
+
+    /// Gravitational potential energy relative to the origin.
+    pub fn potential_energy(&self) -> f64 {
+        let p = &self.particles;
+        (0..p.len())
+            .map(|i| -p.m[i] * dot(self.gravity, p.x[i]))
+            .sum()
+    }
+
+    /// Elastic energy of the Hertz normal springs, (8/15) Y* sqrt(R*) delta^(5/2) per contact.
+    pub fn elastic_energy(&self) -> f64 {
+        let p = &self.particles;
+        let nl = &self.neighbors;
+        let mut u = 0.0;
+        for i in 0..p.len() {
+            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
+                let j = nl.nb[e] as usize;
+                let d = p.r[i] + p.r[j] - norm(sub(p.x[i], p.x[j]));
+                if d > 0.0 {
+                    let r_eff = p.r[i] * p.r[j] / (p.r[i] + p.r[j]);
+                    let y = self.materials.pair(p.material[i], p.material[j]).y_eff;
+                    u += 8.0 / 15.0 * y * r_eff.sqrt() * d.powf(2.5);
+                }
+            }
+            for w in self.walls.iter().filter(|w| w.active) {
+                if let Some(g) = w.gap(p.x[i], p.r[i]) {
+                    let d = p.r[i] - g.distance;
+                    let y = self.materials.pair(p.material[i], w.material).y_eff;
+                    u += 8.0 / 15.0 * y * p.r[i].sqrt() * d.powf(2.5);
+                }
+            }
+        }
+        u
+    }
+
+    /// Number of touching particle-particle contacts.
+    pub fn contact_count(&self) -> usize {
+        let p = &self.particles;
+        let nl = &self.neighbors;
+        let mut c = 0;
+        for i in 0..p.len() {
+            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
+                let j = nl.nb[e] as usize;
+                let s = p.r[i] + p.r[j];
+                if norm2(sub(p.x[i], p.x[j])) < s * s {
+                    c += 1;
+                }
+            }
+        }
+        c
+    }
+}
+
+fn inside(x: V3, (lo, hi): (V3, V3)) -> bool {
+    (0..3).all(|k| x[k] >= lo[k] && x[k] <= hi[k])
+}
+
+/// Read-only particle data for the pair loop.
+#[derive(Clone, Copy)]
+struct P<'a> {
+    x: &'a [V3],
+    v: &'a [V3],
+    w: &'a [V3],
+    r: &'a [f64],
+    m: &'a [f64],
+    mat: &'a [u16],
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
+    law: &Law<N, C, R>,
+    materials: &Materials,
+    dt: f64,
+    rows: std::ops::Range<usize>,
+    start: &[u32],
+    nb: &[u32],
+    hist: &mut [History],
+    p: P,
+    f: &mut [V3],
+    t: &mut [V3],
+) {
+    pair_rows_offset(law, materials, dt, rows, start, nb, hist, 0, p, f, t)
+}
+
+/// Contacts of rows `rows`; `hist` starts at list entry `base`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn pair_rows_offset<N: NormalForce, C: Cohesion, R: Rolling>(
+    law: &Law<N, C, R>,
+    materials: &Materials,
+    dt: f64,
+    rows: std::ops::Range<usize>,
+    start: &[u32],
+    nb: &[u32],
+    hist: &mut [History],
+    base: usize,
+    p: P,
+    f: &mut [V3],
+    t: &mut [V3],
+) {
+    for i in rows {
+        let (xi, ri, mi, mati) = (p.x[i], p.r[i], p.m[i], p.mat[i]);
+        for e in start[i] as usize..start[i + 1] as usize {
+            let j = nb[e] as usize;
+            let h = &mut hist[e - base];
+            let d = sub(xi, p.x[j]);
+            let rsum = ri + p.r[j];
+            let dist2 = norm2(d);
+            if dist2 >= rsum * rsum {
+                *h = History::default();
+                continue;
+            }
+            let rj = p.r[j];
+            let dist = dist2.sqrt();
+            let inv = 1.0 / dist;
+            let n = scale(d, inv);
+            let overlap = rsum - dist;
+            let r_eff = ri * rj / rsum;
+            let m_eff = mi * p.m[j] / (mi + p.m[j]);
+            let area = if C::ACTIVE {
+                // Area of the intersection circle of the two spheres.
+                let q = (dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) * (dist + ri + rj);
+                -std::f64::consts::PI / 4.0 * q * inv * inv
+            } else {
+                0.0
+            };
+            let c = Contact::new(
+                n,
+                overlap,
+                r_eff,
+                m_eff,
+                sub(p.v[i], p.v[j]),
+                p.w[i],
+                p.w[j],
+                ri - 0.5 * overlap,
+                rj - 0.5 * overlap,
+                area,
+            );
+            let pc = materials.pair(mati, p.mat[j]);
+            let out = law.force(&c, pc, h, dt);
+            add_assign(&mut f[i], out.force);
+            sub_assign(&mut f[j], out.force);
+            add_assign(&mut t[i], out.torque_i);
+            add_assign(&mut t[j], out.torque_j);
+        }
+    }
+}

@@ -1,0 +1,303 @@
+//! Whole-simulation physics on small scenes: energy conservation without damping, a sphere at rest
+//! on a plane, a rolling sphere stopped by EPSD2, and the guards against bad time steps and
+//! blow-ups.
+
+use mbgc::dem::contact::ContactModel;
+use mbgc::dem::walls::box_planes;
+use mbgc::dem::{Interaction, Material, Materials, Particles, Scene, Shape, Simulation, Wall};
+use rand::RngExt;
+
+fn materials(e: f64, mu: f64, mu_r: f64, youngs: f64) -> Materials {
+    let mut m = Materials::new();
+    let a = m
+        .add(Material {
+            name: "grain".into(),
+            youngs_modulus: youngs,
+            poisson: 0.3,
+        })
+        .unwrap();
+    m.set_interaction(
+        a,
+        a,
+        Interaction {
+            restitution: e,
+            friction: mu,
+            rolling_friction: mu_r,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    m
+}
+
+fn scene(
+    particles: Particles,
+    walls: Vec<Wall>,
+    materials: Materials,
+    model: ContactModel,
+    gravity: [f64; 3],
+    dt: f64,
+    domain: ([f64; 3], [f64; 3]),
+) -> Scene {
+    Scene {
+        particles,
+        walls,
+        materials,
+        model,
+        gravity,
+        dt,
+        skin: 1e-3,
+        domain,
+        max_dt_fraction: 0.3,
+    }
+}
+
+/// Elastic, frictionless spheres bouncing in a closed box without gravity: kinetic plus elastic
+/// energy stays constant through hundreds of collisions.
+#[test]
+fn energy_is_conserved_without_damping() {
+    let mut rng = mbgc::sampling::rng(11);
+    let mut p = Particles::new();
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let x = [
+                    0.01 + 0.02 * i as f64,
+                    0.01 + 0.02 * j as f64,
+                    0.01 + 0.02 * k as f64,
+                ];
+                let id = p
+                    .add(x, 0.004 + 0.002 * rng.random::<f64>(), 2500.0, 0)
+                    .unwrap();
+                p.v[id as usize] = [
+                    rng.random::<f64>() - 0.5,
+                    rng.random::<f64>() - 0.5,
+                    rng.random::<f64>() - 0.5,
+                ];
+            }
+        }
+    }
+    let lo = [0.0; 3];
+    let hi = [0.08; 3];
+    let walls = box_planes(lo, hi, 0);
+    let model = ContactModel::from_names(&["hertz"]).unwrap();
+    let mut sim = Simulation::new(scene(
+        p,
+        walls,
+        materials(1.0, 0.0, 0.0, 1e7),
+        model,
+        [0.0; 3],
+        1e-5,
+        ([-0.01; 3], [0.09; 3]),
+    ))
+    .unwrap();
+    let energy = |s: &Simulation| {
+        let (t, r) = s.kinetic_energy();
+        t + r + s.elastic_energy()
+    };
+    let e0 = energy(&sim);
+    let mut contacts = 0;
+    for _ in 0..100 {
+        sim.run(200).unwrap();
+        contacts += sim.contact_count();
+        let e = energy(&sim);
+        assert!((e - e0).abs() / e0 < 2e-4, "energy drifted: {e} vs {e0}");
+    }
+    assert!(
+        contacts > 50,
+        "the test must actually exercise collisions ({contacts})"
+    );
+}
+
+/// A sphere dropped on a plane comes to rest with the Hertz overlap of its weight:
+/// delta = (3 m g / (4 Y* sqrt R))^(2/3).
+#[test]
+fn sphere_comes_to_rest_on_a_plane_with_the_hertz_overlap() {
+    let (r, rho, youngs, nu) = (0.005, 2500.0, 1e7, 0.3);
+    let mut p = Particles::new();
+    p.add([0.0, 0.0, r + 0.001], r, rho, 0).unwrap();
+    let mut m = Materials::new();
+    let a = m
+        .add(Material {
+            name: "grain".into(),
+            youngs_modulus: youngs,
+            poisson: nu,
+        })
+        .unwrap();
+    let w = m
+        .add(Material {
+            name: "rigid".into(),
+            youngs_modulus: 1e40,
+            poisson: 0.0,
+        })
+        .unwrap();
+    m.set_interaction(
+        a,
+        w,
+        Interaction {
+            restitution: 0.3,
+            friction: 0.5,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    m.set_interaction(a, a, Interaction::default()).unwrap();
+    let plane = Wall::new(
+        "floor",
+        Shape::Plane {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+        },
+        w,
+    )
+    .unwrap();
+    let mut sim = Simulation::new(scene(
+        p,
+        vec![plane],
+        m,
+        ContactModel::default(),
+        [0.0, 0.0, -9.81],
+        2e-5,
+        ([-1.0; 3], [1.0; 3]),
+    ))
+    .unwrap();
+    sim.run(50_000).unwrap();
+    let mass = sim.particles.m[0];
+    let y_eff = youngs / (1.0 - nu * nu);
+    let want = (3.0 * mass * 9.81 / (4.0 * y_eff * r.sqrt())).powf(2.0 / 3.0);
+    let got = r - sim.particles.x[0][2];
+    println!("rest overlap {got:.6e}, Hertz {want:.6e}");
+    assert!((got - want).abs() / want < 0.01, "{got} vs {want}");
+    assert!(sim.particles.v[0][2].abs() < 1e-4);
+}
+
+/// A sphere rolling on a plane is stopped by the EPSD2 rolling resistance M = mu_r R m g: it
+/// decelerates at mu_r g / 1.4 and stops after 0.7 v0^2 / (mu_r g).
+#[test]
+fn rolling_sphere_stops_where_epsd2_says() {
+    let (r, v0, mu_r) = (0.005, 0.5, 0.1);
+    let mut p = Particles::new();
+    p.add([0.0, 0.0, r], r, 2500.0, 0).unwrap();
+    let mut m = materials(0.5, 0.5, mu_r, 1e7);
+    let w = m
+        .add(Material {
+            name: "rigid".into(),
+            youngs_modulus: 1e40,
+            poisson: 0.0,
+        })
+        .unwrap();
+    m.set_interaction(
+        0,
+        w,
+        Interaction {
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: mu_r,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let plane = Wall::new(
+        "floor",
+        Shape::Plane {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+        },
+        w,
+    )
+    .unwrap();
+    let mut sim = Simulation::new(scene(
+        p,
+        vec![plane],
+        m,
+        ContactModel::from_names(&["hertz", "epsd2"]).unwrap(),
+        [0.0, 0.0, -9.81],
+        5e-5,
+        ([-1.0; 3], [2.0; 3]),
+    ))
+    .unwrap();
+    // Let it settle onto the plane first, then start it rolling without slip.
+    sim.run(4000).unwrap();
+    let x0 = sim.particles.x[0][0];
+    sim.particles.v[0] = [v0, 0.0, 0.0];
+    sim.particles.w[0] = [0.0, v0 / r, 0.0];
+    let want = 0.7 * v0 * v0 / (mu_r * 9.81);
+    let mut stop = None;
+    let mut late_speed: f64 = 0.0;
+    for step in 0..200_000 {
+        sim.advance();
+        let v = sim.particles.v[0][0];
+        if stop.is_none() && v <= 0.0 {
+            stop = Some(sim.particles.x[0][0] - x0);
+        }
+        if step > 190_000 {
+            late_speed = late_speed.max(v.abs());
+        }
+    }
+    let got = stop.expect("the sphere must stop");
+    println!("stopping distance {got:.5} m, theory {want:.5} m; speed at the end {late_speed:.2e}");
+    assert!((got - want).abs() / want < 0.03, "{got} vs {want}");
+    assert!(
+        late_speed < 5e-3,
+        "it must stay (nearly) at rest: {late_speed}"
+    );
+}
+
+#[test]
+fn a_time_step_above_the_rayleigh_limit_is_refused() {
+    let mut p = Particles::new();
+    p.add([0.0, 0.0, 0.01], 0.005, 2500.0, 0).unwrap();
+    let s = scene(
+        p,
+        vec![],
+        materials(0.5, 0.5, 0.0, 1e7),
+        ContactModel::default(),
+        [0.0; 3],
+        1e-3,
+        ([-1.0; 3], [1.0; 3]),
+    );
+    let e = Simulation::new(s).err().expect("must refuse").to_string();
+    assert!(e.contains("Rayleigh"), "{e}");
+}
+
+#[test]
+fn a_run_that_blows_up_is_flagged_not_returned() {
+    // Two strongly overlapping spheres with a time step far beyond the stable one.
+    let mut p = Particles::new();
+    p.add([0.0, 0.0, 0.0], 0.005, 2500.0, 0).unwrap();
+    p.add([0.005, 0.0, 0.0], 0.005, 2500.0, 0).unwrap();
+    let mut s = scene(
+        p,
+        vec![],
+        materials(0.9, 0.5, 0.0, 1e9),
+        ContactModel::default(),
+        [0.0; 3],
+        2e-4,
+        ([-0.1; 3], [0.1; 3]),
+    );
+    s.max_dt_fraction = 100.0;
+    let mut sim = Simulation::new(s).unwrap();
+    let r = sim.run(1000);
+    assert!(r.is_err(), "expected a blow-up, got {:?}", sim.particles.x);
+    println!("{}", r.unwrap_err());
+}
+
+#[test]
+fn effects_are_chosen_by_name() {
+    let m = ContactModel::from_names(&["tsuji", "epsd2", "sjkr"]).unwrap();
+    assert_eq!(
+        m.normal,
+        mbgc::dem::contact::NormalKind::PowerDamped { alpha: 0.25 }
+    );
+    let e = ContactModel::from_names(&["hertz", "jkr-full"])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("jkr-full") && e.contains("expected one of"),
+        "{e}"
+    );
+    let e = ContactModel::from_names(&["hertz", "tsuji"])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("second normal force"), "{e}");
+}
