@@ -55,6 +55,10 @@ pub struct PairConstants {
     /// Damping factor giving restitution e when the normal force is kept from turning
     /// attractive (`limit-force`); see [`beta_for_restitution_limited`].
     pub beta_limited: f64,
+    /// sqrt(2 Y*) and sqrt(8 G*): the dashpots are -2 sqrt(5/6) beta sqrt(S m*) with
+    /// S = 2 Y* sqrt(R* d) (normal) or 8 G* sqrt(R* d) (tangential).
+    pub sqrt_2y: f64,
+    pub sqrt_8g: f64,
     pub friction: f64,
     pub rolling_friction: f64,
     pub cohesion_energy_density: f64,
@@ -77,6 +81,8 @@ impl PairConstants {
             beta,
             // Solved on demand (Materials::prepare_limit_force): it takes a few milliseconds.
             beta_limited: f64::NAN,
+            sqrt_2y: (2.0 * y_eff).sqrt(),
+            sqrt_8g: (8.0 * g_eff).sqrt(),
             friction: i.friction,
             rolling_friction: i.rolling_friction,
             cohesion_energy_density: i.cohesion_energy_density,

@@ -8,6 +8,7 @@
 //! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
 //! - [`sim`]: the time-step loop and blow-up checks; [`timestep`]: the Rayleigh time.
 
+pub mod bench;
 pub mod contact;
 pub mod impact;
 pub mod material;

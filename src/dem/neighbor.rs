@@ -51,6 +51,11 @@ impl NeighborList {
             .any(|(a, b)| norm2(sub(*a, *b)) > lim)
     }
 
+    /// Positions at the last build (empty before the first).
+    pub fn x_build(&self) -> &[V3] {
+        &self.x_build
+    }
+
     /// Number of list entries (pairs within the cutoff).
     pub fn pairs(&self) -> usize {
         self.nb.len()

@@ -97,6 +97,10 @@ pub struct Simulation {
     pub time: f64,
     /// Speed beyond which a particle signals a blow-up.
     pub speed_limit: f64,
+    /// Per wall, the particles within reach of it (r + skin) at the last list build.
+    wall_nb: Vec<Vec<u32>>,
+    /// How far each wall has moved since the last list build.
+    wall_moved: Vec<f64>,
     threads: usize,
     buffers: Vec<(Vec<V3>, Vec<V3>)>,
 }
@@ -200,11 +204,12 @@ impl Simulation {
             step: 0,
             time: 0.0,
             speed_limit,
+            wall_nb: vec![Vec::new(); n_walls],
+            wall_moved: vec![0.0; n_walls],
             threads: 1,
             buffers: Vec::new(),
         };
-        sim.neighbors
-            .rebuild(&mut sim.particles, &mut sim.wall_hist, n_walls);
+        sim.rebuild_lists();
         sim.compute_forces();
         Ok(sim)
     }
@@ -232,8 +237,14 @@ impl Simulation {
     pub fn advance(&mut self) {
         let dt = self.dt;
         let half = 0.5 * dt;
+        // One sweep: half kick, drift, displacement since the list build, and the force reset
+        // (gravity) for the coming force evaluation.
+        let mut max_disp2 = 0.0f64;
         {
+            let g = self.gravity;
             let p = &mut self.particles;
+            let xb = self.neighbors.x_build();
+            let have_build = xb.len() == p.len();
             for i in 0..p.len() {
                 let a = p.inv_m[i] * half;
                 let v = &mut p.v[i];
@@ -249,19 +260,32 @@ impl Simulation {
                 w[0] += b * p.t[i][0];
                 w[1] += b * p.t[i][1];
                 w[2] += b * p.t[i][2];
+                if have_build {
+                    max_disp2 = max_disp2.max(norm2(sub(*x, xb[i])));
+                }
+                p.f[i] = scale(g, p.m[i]);
+                p.t[i] = [0.0; 3];
+            }
+            if !have_build {
+                max_disp2 = f64::INFINITY;
             }
         }
-        for w in &mut self.walls {
-            if w.active {
+        let mut wall_moved = 0.0f64;
+        for (w, moved) in self.walls.iter_mut().zip(&mut self.wall_moved) {
+            if w.active && w.velocity != [0.0; 3] {
                 w.advance(dt);
+                *moved += norm(w.velocity) * dt;
+                wall_moved = wall_moved.max(*moved);
             }
         }
-        if self.neighbors.needs_rebuild(&self.particles.x) && self.positions_finite() {
-            let n_walls = self.walls.len();
-            self.neighbors
-                .rebuild(&mut self.particles, &mut self.wall_hist, n_walls);
+        // A moving wall uses up the skin too: rebuild before it can reach unlisted particles.
+        let skin = self.neighbors.skin;
+        // NaN compares false, so a blown-up particle does not trigger endless rebuilds.
+        if (wall_moved > 0.25 * skin || max_disp2 > 0.25 * skin * skin) && self.positions_finite() {
+            self.rebuild_lists();
         }
-        self.compute_forces();
+        let model = self.model;
+        with_law!(model, |law| self.contact_forces(&law));
         let p = &mut self.particles;
         for i in 0..p.len() {
             let a = p.inv_m[i] * half;
@@ -277,6 +301,37 @@ impl Simulation {
         }
         self.step += 1;
         self.time += dt;
+    }
+
+    /// Rebuilds the pair list (sorting the particles) and the wall lists.
+    fn rebuild_lists(&mut self) {
+        let n_walls = self.walls.len();
+        self.neighbors
+            .rebuild(&mut self.particles, &mut self.wall_hist, n_walls);
+        let skin = self.neighbors.skin;
+        let p = &self.particles;
+        for (wi, w) in self.walls.iter().enumerate() {
+            let list = &mut self.wall_nb[wi];
+            list.clear();
+            if w.active {
+                list.extend(
+                    (0..p.len())
+                        .filter(|&i| w.gap(p.x[i], p.r[i] + skin).is_some())
+                        .map(|i| i as u32),
+                );
+            }
+            self.wall_moved[wi] = 0.0;
+        }
+    }
+
+    /// Removes (or restores) a wall; its contact history is cleared.
+    pub fn set_wall_active(&mut self, wall: usize, active: bool) {
+        self.walls[wall].active = active;
+        let n_walls = self.walls.len();
+        for i in 0..self.particles.len() {
+            self.wall_hist[i * n_walls + wall] = History::default();
+        }
+        self.rebuild_lists();
     }
 
     fn positions_finite(&self) -> bool {
@@ -318,20 +373,19 @@ impl Simulation {
 
     /// Recomputes all forces and torques (gravity, contacts, walls).
     pub fn compute_forces(&mut self) {
+        let g = self.gravity;
+        let p = &mut self.particles;
+        for i in 0..p.len() {
+            p.f[i] = scale(g, p.m[i]);
+            p.t[i] = [0.0; 3];
+        }
         let model = self.model;
-        with_law!(model, |law| self.forces_with(&law));
+        with_law!(model, |law| self.contact_forces(&law));
     }
 
-    fn forces_with<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
+    /// Adds the contact forces (particles and walls) to the current forces.
+    fn contact_forces<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
         let n = self.particles.len();
-        let g = self.gravity;
-        {
-            let p = &mut self.particles;
-            for i in 0..n {
-                p.f[i] = scale(g, p.m[i]);
-                p.t[i] = [0.0; 3];
-            }
-        }
         let dt = self.dt;
         if self.threads <= 1 || n < 2 * self.threads {
             let p = &mut self.particles;
@@ -433,14 +487,14 @@ impl Simulation {
         }
         let dt = self.dt;
         let p = &mut self.particles;
-        for i in 0..p.len() {
-            let ri = p.r[i];
-            for (wi, wall) in self.walls.iter().enumerate() {
+        for (wi, wall) in self.walls.iter().enumerate() {
+            if !wall.active {
+                continue;
+            }
+            for &i in &self.wall_nb[wi] {
+                let i = i as usize;
+                let ri = p.r[i];
                 let h = &mut self.wall_hist[i * n_walls + wi];
-                if !wall.active {
-                    *h = History::default();
-                    continue;
-                }
                 let Some(gap) = wall.gap(p.x[i], ri) else {
                     *h = History::default();
                     continue;
@@ -588,7 +642,10 @@ fn pair_rows_offset<N: NormalForce, C: Cohesion, R: Rolling>(
             let rsum = ri + p.r[j];
             let dist2 = norm2(d);
             if dist2 >= rsum * rsum {
-                *h = History::default();
+                // Most separated pairs already have no history: skip the store.
+                if h.shear[0] != 0.0 || h.shear[1] != 0.0 || h.shear[2] != 0.0 || !h.is_zero() {
+                    *h = History::default();
+                }
                 continue;
             }
             let rj = p.r[j];

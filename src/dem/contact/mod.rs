@@ -50,6 +50,8 @@ pub struct Contact {
     pub m_eff: f64,
     /// sqrt(R* delta), shared by the Hertz and Mindlin stiffnesses.
     pub sqrt_rd: f64,
+    /// sqrt(sqrt(R* delta) m*), shared by the normal and tangential dashpots.
+    pub damp_root: f64,
     /// Normal relative velocity (v_i - v_j).n: negative while approaching.
     pub v_n: f64,
     /// Tangential relative velocity of the contact points.
@@ -86,12 +88,14 @@ impl Contact {
         let v_t = sub(v_t0, cross(w_sum, n));
         let w_rel = sub(w_i, w_j);
         let w_roll = sub(w_rel, scale(n, dot(w_rel, n)));
+        let sqrt_rd = (r_eff * overlap).sqrt();
         Contact {
             n,
             overlap,
             r_eff,
             m_eff,
-            sqrt_rd: (r_eff * overlap).sqrt(),
+            sqrt_rd,
+            damp_root: (sqrt_rd * m_eff).sqrt(),
             v_n,
             v_t,
             w_roll,

@@ -16,8 +16,8 @@ impl NormalForce for Hertz {
     #[inline(always)]
     fn normal(&self, c: &Contact, p: &PairConstants) -> f64 {
         let k_n = (4.0 / 3.0) * p.y_eff * c.sqrt_rd;
-        let s_n = 2.0 * p.y_eff * c.sqrt_rd;
-        let gamma_n = -2.0 * SQRT_5_6 * p.beta * (s_n * c.m_eff).sqrt();
+        // sqrt(S_n m*) = sqrt(2 Y*) sqrt(sqrt(R* d) m*)
+        let gamma_n = -2.0 * SQRT_5_6 * p.beta * p.sqrt_2y * c.damp_root;
         k_n * c.overlap - gamma_n * c.v_n
     }
 }

@@ -33,7 +33,7 @@ pub fn mindlin_history(
     sub_assign(xi, scale(c.n, xn));
     let k_t = 8.0 * p.g_eff * c.sqrt_rd;
     if strict {
-        let gamma_t = -2.0 * SQRT_5_6 * p.beta * (k_t * c.m_eff).sqrt();
+        let gamma_t = -2.0 * SQRT_5_6 * p.beta * p.sqrt_8g * c.damp_root;
         let mut f_t = sub(scale(*xi, -k_t), scale(c.v_t, gamma_t));
         let cap = p.friction * f_n.max(0.0);
         let mag2 = norm2(f_t);
@@ -57,7 +57,7 @@ pub fn mindlin_history(
             *xi = scale(f_t, -1.0 / k_t);
         }
     } else {
-        let gamma_t = -2.0 * SQRT_5_6 * p.beta * (k_t * c.m_eff).sqrt();
+        let gamma_t = -2.0 * SQRT_5_6 * p.beta * p.sqrt_8g * c.damp_root;
         sub_assign(&mut f_t, scale(c.v_t, gamma_t));
     }
     f_t
