@@ -23,6 +23,44 @@ pub enum BenchCommand {
     /// Seed 004 Figs. 7-8 (MID and COV of every method, 2-D and 10-D, many seeds), the
     /// extension check and design generation times; writes a Markdown report and a figure.
     Sampling(SamplingBenchArgs),
+    /// DEM throughput on a settled polydisperse box, per core, against LIGGGHTS on the identical
+    /// scene (`--vs liggghts`), with packing fraction and coordination number of both.
+    Dem(DemBenchArgs),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Reference {
+    Liggghts,
+}
+
+#[derive(Debug, Args)]
+pub struct DemBenchArgs {
+    #[arg(long, default_value_t = 3300)]
+    pub particles: usize,
+    /// Timed steps (after settling).
+    #[arg(long, default_value_t = 20000)]
+    pub steps: u64,
+    /// Settling steps before timing.
+    #[arg(long, default_value_t = 40000)]
+    pub settle: u64,
+    /// Threads for the multi-threaded timing (the per-core figure always uses one).
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Run the identical scene in this reference code too.
+    #[arg(long, value_enum)]
+    pub vs: Option<Reference>,
+    /// Seed of the initial packing.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Directory for the reference code's input deck, log and dump.
+    #[arg(long, default_value = "target/bench-dem")]
+    pub work_dir: PathBuf,
+    /// Write the results as a Markdown report (e.g. docs/dem_benchmark.md).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Print one JSON object as the last line.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -52,10 +90,135 @@ pub struct SamplingBenchArgs {
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
     match &a.what {
         BenchCommand::Sampling(s) => sampling(s),
+        BenchCommand::Dem(d) => dem(d),
     }
 }
 
 const DIMS: [usize; 2] = [2, 10];
+
+fn dem(a: &DemBenchArgs) -> anyhow::Result<()> {
+    use crate::dem::bench::{run_benchmark, BenchSpec};
+    if a.particles == 0 || a.steps == 0 || a.threads == 0 {
+        anyhow::bail!("--particles, --steps and --threads must be at least 1");
+    }
+    let spec = BenchSpec {
+        particles: a.particles,
+        seed: a.seed,
+        ..Default::default()
+    };
+    let liggghts = match a.vs {
+        Some(Reference::Liggghts) => {
+            if crate::dem::liggghts::find_binary().is_none() {
+                anyhow::bail!(
+                    "--vs liggghts: no LIGGGHTS binary on PATH (Debian: apt-get install liggghts)"
+                );
+            }
+            Some(a.work_dir.as_path())
+        }
+        None => None,
+    };
+    let rep = run_benchmark(&spec, a.settle, a.steps, a.threads, liggghts, |m| {
+        eprintln!("{m}")
+    })?;
+    let m = 1e6;
+    println!("scene: {} spheres d = {}-{} mm, box {:?} m, dt {} s, skin {} m; {} settle + {} timed steps",
+        rep.particles, spec.d_min * 1e3, spec.d_max * 1e3, spec.box_hi, spec.dt, spec.skin, rep.settle_steps, rep.timed_steps);
+    println!("mbgc      {:>8.2} M particle-steps/s per core (1 thread); {} threads: {:.2} M/s in all, speed-up {:.2}",
+        rep.mbgc_particle_steps_per_s / m, rep.threads, rep.mbgc_particle_steps_per_s_threads / m, rep.thread_speedup);
+    println!(
+        "mbgc      packing fraction {:.4}, coordination {:.3}, {} pairs in the list",
+        rep.packing_fraction_mbgc, rep.coordination_mbgc, rep.mbgc_pairs
+    );
+    if let (Some(l), Some(r), Some(phi), Some(z)) = (
+        rep.liggghts_particle_steps_per_s,
+        rep.ratio,
+        rep.packing_fraction_liggghts,
+        rep.coordination_liggghts,
+    ) {
+        println!("LIGGGHTS  {:>8.2} M particle-steps/s per core; packing fraction {phi:.4}, coordination {z:.3}", l / m);
+        println!(
+            "ratio mbgc / LIGGGHTS per core: {r:.2}; packing {:+.2} %, coordination {:+.2} %",
+            100.0 * (rep.packing_fraction_mbgc / phi - 1.0),
+            100.0 * (rep.coordination_mbgc / z - 1.0)
+        );
+    }
+    if let Some(path) = &a.report {
+        write_atomic(path, dem_report(a, &spec, &rep).as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    if a.json {
+        println!("{}", serde_json::to_string(&rep)?);
+    }
+    Ok(())
+}
+
+fn dem_report(
+    a: &DemBenchArgs,
+    spec: &crate::dem::bench::BenchSpec,
+    rep: &crate::dem::bench::BenchReport,
+) -> String {
+    let mut s = String::new();
+    let cmd = format!(
+        "cargo run --release -- bench dem --particles {} --settle {} --steps {} --threads {}{} --seed {} --report {}",
+        a.particles, a.settle, a.steps, a.threads,
+        if a.vs.is_some() { " --vs liggghts" } else { "" }, a.seed,
+        a.report.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
+    );
+    let _ = writeln!(s, "# DEM benchmark\n\nRegenerate with\n\n```\n{cmd}\n```\n");
+    let _ = writeln!(s, "Scene: {} polydisperse spheres (d uniform {}-{} mm) on a jittered lattice (seed {}), closed box {:?} m, \
+        rho {} kg/m3, E {:e} Pa, nu {}, e {}, mu {}, EPSD2 mu_r {}, dt {:e} s, neighbour skin {} m. Both codes start from the \
+        identical particles and positions (mbgc writes the LIGGGHTS data file and input script), settle {} steps and are \
+        then timed for {} steps. Packing fraction and coordination number are measured by the same code on both settled \
+        states, in a box 2 d_max away from the side walls and the floor, up to 2 d_max below the free surface.\n",
+        spec.particles, spec.d_min * 1e3, spec.d_max * 1e3, spec.seed, spec.box_hi, spec.density, spec.youngs_modulus,
+        spec.poisson, spec.restitution, spec.friction, spec.rolling_friction, spec.dt, spec.skin, rep.settle_steps, rep.timed_steps);
+    let _ = writeln!(s, "| | mbgc | LIGGGHTS |\n|---|---|---|");
+    let opt =
+        |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or_else(|| "not run".into());
+    let _ = writeln!(
+        s,
+        "| particle-steps/s per core (1 thread) | {:.2} M | {} |",
+        rep.mbgc_particle_steps_per_s / 1e6,
+        opt(rep.liggghts_particle_steps_per_s, &|v| format!(
+            "{:.2} M",
+            v / 1e6
+        ))
+    );
+    let _ = writeln!(
+        s,
+        "| packing fraction | {:.4} | {} |",
+        rep.packing_fraction_mbgc,
+        opt(rep.packing_fraction_liggghts, &|v| format!("{v:.4}"))
+    );
+    let _ = writeln!(
+        s,
+        "| coordination number | {:.3} | {} |",
+        rep.coordination_mbgc,
+        opt(rep.coordination_liggghts, &|v| format!("{v:.3}"))
+    );
+    let _ = writeln!(s);
+    if let (Some(r), Some(phi), Some(z)) = (
+        rep.ratio,
+        rep.packing_fraction_liggghts,
+        rep.coordination_liggghts,
+    ) {
+        let _ = writeln!(
+            s,
+            "- Speed ratio mbgc / LIGGGHTS per core: **{r:.2}** (target 2)."
+        );
+        let _ = writeln!(s, "- Packing fraction differs by {:+.2} % (target within 1 %), coordination number by {:+.2} % (target within 5 %).",
+            100.0 * (rep.packing_fraction_mbgc / phi - 1.0), 100.0 * (rep.coordination_mbgc / z - 1.0));
+    }
+    let _ = writeln!(s, "- {} threads: {:.2} M particle-steps/s in all, speed-up {:.2} over one thread (target 1.8).",
+        rep.threads, rep.mbgc_particle_steps_per_s_threads / 1e6, rep.thread_speedup);
+    if let Some(v) = &rep.liggghts_version {
+        let _ = writeln!(s, "- LIGGGHTS: {v}.");
+    }
+    for w in &rep.liggghts_warnings {
+        let _ = writeln!(s, "- LIGGGHTS warned: {w}");
+    }
+    s
+}
 
 fn sampling(a: &SamplingBenchArgs) -> anyhow::Result<()> {
     if a.n < 4 || a.seeds == 0 {

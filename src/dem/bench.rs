@@ -35,7 +35,7 @@ impl Default for BenchSpec {
         BenchSpec {
             particles: 3300,
             seed: 1,
-            box_hi: [0.12, 0.12, 0.36],
+            box_hi: super::liggghts::BENCHMARK_BOX,
             d_min: 7.5e-3,
             d_max: 10e-3,
             density: 2600.0,
@@ -45,49 +45,107 @@ impl Default for BenchSpec {
             friction: 0.5,
             rolling_friction: 0.3,
             dt: 2e-5,
-            skin: 1.5e-3,
+            skin: 2e-3,
             gravity: 9.81,
         }
     }
 }
 
-/// Initial positions and radii: a jittered lattice filling the box from the bottom, diameters
-/// uniform in [d_min, d_max], no overlaps. Deterministic for the seed.
+/// Initial positions and radii of the benchmark scene.
 pub fn initial_packing(spec: &BenchSpec) -> Result<(Vec<V3>, Vec<f64>)> {
-    let mut rng = crate::sampling::rng(spec.seed);
-    let pitch = spec.d_max * 1.05;
-    let per_axis = |len: f64| ((len - pitch) / pitch).floor() as usize + 1;
-    let (nx, ny) = (per_axis(spec.box_hi[0]), per_axis(spec.box_hi[1]));
-    let layers = spec.particles.div_ceil(nx * ny);
-    if (layers as f64) * pitch > spec.box_hi[2] {
+    jittered_lattice(
+        spec.particles,
+        [0.0; 3],
+        spec.box_hi,
+        spec.d_min,
+        spec.d_max,
+        spec.seed,
+    )
+}
+
+/// A loose initial state, reproducible from `seed`: `n` spheres with diameters uniform in
+/// `[d_min, d_max]` on a jittered lattice filling the box `[lo, hi]` from the bottom, with no
+/// overlaps between particles or with the walls. The lattice spacing is the largest that holds
+/// `n` sites (ties broken by fewest sites, so the box fills to the top: 10 x 10 x 33 for the
+/// benchmark's 3300 particles), and each site moves by up to 45 % of the free gap per axis.
+///
+/// The RNG draws, per particle, the diameter then the x, y, z jitter, so another code can
+/// rebuild the same state from the same seed.
+pub fn jittered_lattice(
+    n: usize,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    d_min: f64,
+    d_max: f64,
+    seed: u64,
+) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
+    if !(d_min > 0.0 && d_min <= d_max && d_max.is_finite()) {
         return Err(Error::invalid(format!(
-            "{} particles of {} mm do not fit the box",
-            spec.particles,
-            spec.d_max * 1e3
+            "jittered_lattice: diameters [{d_min}, {d_max}]: expected 0 < d_min <= d_max"
         )));
     }
-    let slack = 0.5 * (pitch - spec.d_max);
-    let mut x = Vec::with_capacity(spec.particles);
-    let mut r = Vec::with_capacity(spec.particles);
-    'fill: for k in 0..layers {
-        for j in 0..ny {
-            for i in 0..nx {
-                if x.len() == spec.particles {
-                    break 'fill;
+    let len: [f64; 3] = std::array::from_fn(|k| hi[k] - lo[k]);
+    if !len.iter().all(|l| *l > 0.0 && l.is_finite()) {
+        return Err(Error::invalid(format!(
+            "jittered_lattice: box {lo:?}..{hi:?}: expected finite bounds with lo < hi"
+        )));
+    }
+    let max_count = |k: usize| (len[k] / d_max).floor().min(1e6) as usize;
+    // (min spacing, sites, counts): largest min spacing, then fewest sites.
+    let mut best: Option<(f64, usize, [usize; 3])> = None;
+    for nx in 1..=max_count(0) {
+        for ny in 1..=max_count(1) {
+            let layer = nx * ny;
+            let nz = n.div_ceil(layer).max(1);
+            if nz > max_count(2) {
+                continue;
+            }
+            let s = (len[0] / nx as f64)
+                .min(len[1] / ny as f64)
+                .min(len[2] / nz as f64);
+            let sites = layer * nz;
+            let better = match best {
+                None => true,
+                Some((bs, bsites, _)) => {
+                    s > bs * (1.0 + 1e-12) || (s >= bs * (1.0 - 1e-12) && sites < bsites)
                 }
-                let jitter =
-                    |rng: &mut rand_chacha::ChaCha8Rng| slack * (2.0 * rng.random::<f64>() - 1.0);
-                let p = [
-                    0.5 * pitch + i as f64 * pitch + jitter(&mut rng),
-                    0.5 * pitch + j as f64 * pitch + jitter(&mut rng),
-                    0.5 * pitch + k as f64 * pitch + jitter(&mut rng),
-                ];
-                x.push(p);
-                r.push(0.5 * (spec.d_min + (spec.d_max - spec.d_min) * rng.random::<f64>()));
+            };
+            if better {
+                best = Some((s, sites, [nx, ny, nz]));
             }
         }
     }
-    Ok((x, r))
+    let Some((_, _, counts)) = best else {
+        return Err(Error::invalid(format!(
+            "jittered_lattice: {n} spheres of diameter up to {d_max} do not fit in the box \
+             {lo:?}..{hi:?} on a lattice"
+        )));
+    };
+    let spacing: [f64; 3] = std::array::from_fn(|k| len[k] / counts[k] as f64);
+    let jitter: [f64; 3] = std::array::from_fn(|k| 0.45 * (spacing[k] - d_max).max(0.0));
+    let mut rng = crate::sampling::rng(seed);
+    let mut positions = Vec::with_capacity(n);
+    let mut radii = Vec::with_capacity(n);
+    for i in 0..n {
+        let (ix, iy, iz) = (
+            i % counts[0],
+            (i / counts[0]) % counts[1],
+            i / (counts[0] * counts[1]),
+        );
+        let d = if d_max > d_min {
+            rng.random_range(d_min..=d_max)
+        } else {
+            d_min
+        };
+        let idx = [ix, iy, iz];
+        let p: [f64; 3] = std::array::from_fn(|k| {
+            let u: f64 = rng.random::<f64>() * 2.0 - 1.0;
+            lo[k] + (idx[k] as f64 + 0.5) * spacing[k] + u * jitter[k]
+        });
+        positions.push(p);
+        radii.push(0.5 * d);
+    }
+    Ok((positions, radii))
 }
 
 /// The mbgc scene for the spec, from given positions and radii.
@@ -131,4 +189,141 @@ pub fn scene(spec: &BenchSpec, x: &[V3], r: &[f64]) -> Result<Scene> {
         ),
         max_dt_fraction: 0.3,
     })
+}
+
+/// The same scene as a LIGGGHTS case (particles and walls of one material).
+pub fn liggghts_case(
+    spec: &BenchSpec,
+    positions: Vec<V3>,
+    radii: Vec<f64>,
+    settle_steps: u64,
+    timed_steps: u64,
+) -> super::liggghts::LiggghtsCase {
+    super::liggghts::LiggghtsCase {
+        positions,
+        radii,
+        density: spec.density,
+        youngs_modulus: spec.youngs_modulus,
+        poisson: spec.poisson,
+        restitution: spec.restitution,
+        friction: spec.friction,
+        rolling_friction: spec.rolling_friction,
+        wall_youngs_modulus: spec.youngs_modulus,
+        wall_restitution: spec.restitution,
+        wall_friction: spec.friction,
+        wall_rolling_friction: spec.rolling_friction,
+        box_lo: [0.0; 3],
+        box_hi: spec.box_hi,
+        gravity: spec.gravity,
+        dt: spec.dt,
+        skin: spec.skin,
+        settle_steps,
+        timed_steps,
+    }
+}
+
+/// Packing fraction and coordination number of a settled state, measured identically for every
+/// code: in a box 2 d_max away from the side walls and the floor, up to 2 d_max below the free
+/// surface (wall layers and the loose top are not bulk).
+pub fn settled_measures(spec: &BenchSpec, x: &[V3], r: &[f64]) -> (f64, f64, [V3; 2]) {
+    let m = 2.0 * spec.d_max;
+    let top = super::analysis::free_surface_height(x, r) - m;
+    let lo = [m, m, m];
+    let hi = [spec.box_hi[0] - m, spec.box_hi[1] - m, top.max(m + 1e-3)];
+    (
+        super::analysis::packing_fraction(x, r, lo, hi),
+        super::analysis::coordination_number_in(x, r, lo, hi),
+        [lo, hi],
+    )
+}
+
+/// What one benchmark run measured.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BenchReport {
+    pub particles: usize,
+    pub settle_steps: u64,
+    pub timed_steps: u64,
+    pub threads: usize,
+    /// One thread, after settling.
+    pub mbgc_particle_steps_per_s: f64,
+    /// With `threads` threads (equal to the above for one thread).
+    pub mbgc_particle_steps_per_s_threads: f64,
+    pub thread_speedup: f64,
+    pub mbgc_pairs: usize,
+    pub packing_fraction_mbgc: f64,
+    pub coordination_mbgc: f64,
+    pub liggghts_particle_steps_per_s: Option<f64>,
+    pub ratio: Option<f64>,
+    pub packing_fraction_liggghts: Option<f64>,
+    pub coordination_liggghts: Option<f64>,
+    pub liggghts_version: Option<String>,
+    pub liggghts_warnings: Vec<String>,
+}
+
+/// Settles the scene in mbgc, times it on one thread and on `threads` threads, and optionally
+/// runs the identical scene in LIGGGHTS (in `work_dir`).
+pub fn run_benchmark(
+    spec: &BenchSpec,
+    settle: u64,
+    timed: u64,
+    threads: usize,
+    liggghts_dir: Option<&std::path::Path>,
+    progress: impl Fn(&str),
+) -> Result<BenchReport> {
+    let (x, r) = initial_packing(spec)?;
+    let mut sim = super::Simulation::new(scene(spec, &x, &r)?)?;
+    progress(&format!("mbgc: settling {settle} steps"));
+    sim.set_threads(threads);
+    sim.run(settle)
+        .map_err(|e| Error::invalid(format!("mbgc settling blew up: {e}")))?;
+    let (xs, rs) = (sim.particles.x.clone(), sim.particles.r.clone());
+    let (phi, z, _) = settled_measures(spec, &xs, &rs);
+    let time = |sim: &mut super::Simulation, t: usize| -> Result<f64> {
+        sim.set_threads(t);
+        let start = std::time::Instant::now();
+        sim.run(timed)
+            .map_err(|e| Error::invalid(format!("mbgc timed run blew up: {e}")))?;
+        Ok(spec.particles as f64 * timed as f64 / start.elapsed().as_secs_f64())
+    };
+    progress(&format!("mbgc: timing {timed} steps on 1 thread"));
+    let one = time(&mut sim, 1)?;
+    let many = if threads > 1 {
+        progress(&format!("mbgc: timing {timed} steps on {threads} threads"));
+        time(&mut sim, threads)?
+    } else {
+        one
+    };
+    let mut rep = BenchReport {
+        particles: spec.particles,
+        settle_steps: settle,
+        timed_steps: timed,
+        threads,
+        mbgc_particle_steps_per_s: one,
+        mbgc_particle_steps_per_s_threads: many,
+        thread_speedup: many / one,
+        mbgc_pairs: sim.neighbors.pairs(),
+        packing_fraction_mbgc: phi,
+        coordination_mbgc: z,
+        liggghts_particle_steps_per_s: None,
+        ratio: None,
+        packing_fraction_liggghts: None,
+        coordination_liggghts: None,
+        liggghts_version: None,
+        liggghts_warnings: Vec::new(),
+    };
+    if let Some(dir) = liggghts_dir {
+        progress(&format!(
+            "LIGGGHTS: settling {settle} + timing {timed} steps (one process)"
+        ));
+        let case = liggghts_case(spec, x, r, settle, timed);
+        let res = super::liggghts::run(dir, &case)?;
+        let (phi_l, z_l, _) = settled_measures(spec, &res.settled_positions, &res.settled_radii);
+        rep.liggghts_particle_steps_per_s = Some(res.particle_steps_per_s);
+        rep.ratio = Some(one / res.particle_steps_per_s);
+        rep.packing_fraction_liggghts = Some(phi_l);
+        rep.coordination_liggghts = Some(z_l);
+        rep.liggghts_version = Some(res.version);
+        rep.liggghts_warnings = res.warnings;
+    }
+    Ok(rep)
 }

@@ -8,15 +8,19 @@
 //! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
 //! - [`sim`]: the time-step loop and blow-up checks; [`timestep`]: the Rayleigh time.
 
+pub mod analysis;
 pub mod bench;
 pub mod contact;
 pub mod impact;
+pub mod liggghts;
 pub mod material;
 pub mod neighbor;
 pub mod particles;
 pub mod sim;
+mod team;
 pub mod timestep;
 pub mod vec3;
+pub mod vtk;
 pub mod walls;
 
 pub use contact::ContactModel;

@@ -2,8 +2,6 @@
 //! list upkeep, particle-particle and particle-wall contacts, and the checks that turn a blown-up
 //! run into an error instead of numbers.
 
-use rayon::prelude::*;
-
 use super::contact::{Cohesion, Contact, ContactModel, History, Law, NormalForce, Rolling};
 use super::material::Materials;
 use super::neighbor::NeighborList;
@@ -98,11 +96,10 @@ pub struct Simulation {
     /// Speed beyond which a particle signals a blow-up.
     pub speed_limit: f64,
     /// Per wall, the particles within reach of it (r + skin) at the last list build.
-    wall_nb: Vec<Vec<u32>>,
+    pub(crate) wall_nb: Vec<Vec<u32>>,
     /// How far each wall has moved since the last list build.
-    wall_moved: Vec<f64>,
+    pub(crate) wall_moved: Vec<f64>,
     threads: usize,
-    buffers: Vec<(Vec<V3>, Vec<V3>)>,
 }
 
 impl Simulation {
@@ -207,28 +204,37 @@ impl Simulation {
             wall_nb: vec![Vec::new(); n_walls],
             wall_moved: vec![0.0; n_walls],
             threads: 1,
-            buffers: Vec::new(),
         };
         sim.rebuild_lists();
         sim.compute_forces();
         Ok(sim)
     }
 
-    /// Number of threads for the force loop (1 = serial, no per-thread buffers). Uses the
-    /// current rayon pool.
+    /// Number of threads for [`Simulation::run`] (1 = serial). More threads form a team that
+    /// lives for the whole run (see [`super::team`]).
     pub fn set_threads(&mut self, threads: usize) {
         self.threads = threads.max(1);
-        self.buffers.clear();
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
     }
 
     /// Advances `steps` time steps, checking for blow-ups every `check_every` steps.
     pub fn run(&mut self, steps: u64) -> std::result::Result<(), BlowUp> {
         let check_every = 50;
-        for s in 0..steps {
-            self.advance();
-            if (s + 1) % check_every == 0 || s + 1 == steps {
-                self.check()?;
+        let mut done = 0;
+        while done < steps {
+            let chunk = check_every.min(steps - done);
+            if self.threads > 1 && self.particles.len() >= 64 * self.threads {
+                super::team::run_steps(self, chunk, self.threads);
+            } else {
+                for _ in 0..chunk {
+                    self.advance();
+                }
             }
+            done += chunk;
+            self.check()?;
         }
         Ok(())
     }
@@ -304,7 +310,7 @@ impl Simulation {
     }
 
     /// Rebuilds the pair list (sorting the particles) and the wall lists.
-    fn rebuild_lists(&mut self) {
+    pub(crate) fn rebuild_lists(&mut self) {
         let n_walls = self.walls.len();
         self.neighbors
             .rebuild(&mut self.particles, &mut self.wall_hist, n_walls);
@@ -334,7 +340,7 @@ impl Simulation {
         self.rebuild_lists();
     }
 
-    fn positions_finite(&self) -> bool {
+    pub(crate) fn positions_finite(&self) -> bool {
         self.particles
             .x
             .iter()
@@ -383,147 +389,48 @@ impl Simulation {
         with_law!(model, |law| self.contact_forces(&law));
     }
 
-    /// Adds the contact forces (particles and walls) to the current forces.
+    /// Adds the contact forces (particles and walls) to the current forces (serial).
     fn contact_forces<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
         let n = self.particles.len();
-        let dt = self.dt;
-        if self.threads <= 1 || n < 2 * self.threads {
-            let p = &mut self.particles;
-            let nl = &mut self.neighbors;
-            pair_rows(
-                law,
-                &self.materials,
-                dt,
-                0..n,
-                &nl.start,
-                &nl.nb,
-                &mut nl.hist,
-                P {
-                    x: &p.x,
-                    v: &p.v,
-                    w: &p.w,
-                    r: &p.r,
-                    m: &p.m,
-                    mat: &p.material,
-                },
-                &mut p.f,
-                &mut p.t,
-            );
-        } else {
-            let chunks = self.threads;
-            if self.buffers.len() != chunks || self.buffers[0].0.len() != n {
-                self.buffers = (0..chunks)
-                    .map(|_| (vec![[0.0; 3]; n], vec![[0.0; 3]; n]))
-                    .collect();
-            }
-            // Rows split so each chunk holds about the same number of list entries.
-            let start = &self.neighbors.start;
-            let total = *start.last().unwrap_or(&0) as usize;
-            let mut bounds = vec![0usize];
-            for c in 1..chunks {
-                let target = (total * c / chunks) as u32;
-                bounds.push(
-                    start
-                        .partition_point(|&s| s < target)
-                        .min(n)
-                        .max(*bounds.last().unwrap()),
-                );
-            }
-            bounds.push(n);
-            // Split the history so each chunk owns the entries of its rows.
-            let mut hist_parts = Vec::with_capacity(chunks);
-            let mut rest: &mut [History] = &mut self.neighbors.hist;
-            let mut offset = 0usize;
-            for c in 0..chunks {
-                let end = start[bounds[c + 1]] as usize;
-                let (a, b) = rest.split_at_mut(end - offset);
-                hist_parts.push(a);
-                rest = b;
-                offset = end;
-            }
-            let p = &self.particles;
-            let view = P {
-                x: &p.x,
-                v: &p.v,
-                w: &p.w,
-                r: &p.r,
-                m: &p.m,
-                mat: &p.material,
-            };
-            let materials = &self.materials;
-            let nb = &self.neighbors.nb;
-            self.buffers
-                .par_iter_mut()
-                .zip(hist_parts.into_par_iter())
-                .enumerate()
-                .for_each(|(c, ((bf, bt), h))| {
-                    for k in 0..n {
-                        bf[k] = [0.0; 3];
-                        bt[k] = [0.0; 3];
-                    }
-                    let rows = bounds[c]..bounds[c + 1];
-                    let base = start[rows.start] as usize;
-                    pair_rows_offset(law, materials, dt, rows, start, nb, h, base, view, bf, bt);
-                });
-            let bufs = &self.buffers;
-            let p = &mut self.particles;
-            p.f.par_iter_mut()
-                .zip(p.t.par_iter_mut())
-                .enumerate()
-                .for_each(|(i, (f, t))| {
-                    for (bf, bt) in bufs {
-                        add_assign(f, bf[i]);
-                        add_assign(t, bt[i]);
-                    }
-                });
-        }
-        self.wall_forces(law);
-    }
-
-    fn wall_forces<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
-        let n_walls = self.walls.len();
-        if n_walls == 0 {
-            return;
-        }
-        let dt = self.dt;
         let p = &mut self.particles;
-        for (wi, wall) in self.walls.iter().enumerate() {
-            if !wall.active {
-                continue;
-            }
-            for &i in &self.wall_nb[wi] {
-                let i = i as usize;
-                let ri = p.r[i];
-                let h = &mut self.wall_hist[i * n_walls + wi];
-                let Some(gap) = wall.gap(p.x[i], ri) else {
-                    *h = History::default();
-                    continue;
-                };
-                let overlap = ri - gap.distance;
-                let area = if C::ACTIVE {
-                    std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
-                } else {
-                    0.0
-                };
-                let lever = ri - 0.5 * overlap;
-                let c = Contact::new(
-                    gap.normal,
-                    overlap,
-                    ri,
-                    p.m[i],
-                    sub(p.v[i], wall.velocity),
-                    p.w[i],
-                    [0.0; 3],
-                    lever,
-                    0.0,
-                    area,
-                );
-                let pc = self.materials.pair(p.material[i], wall.material);
-                let out = law.force(&c, pc, h, dt);
-                add_assign(&mut p.f[i], out.force);
-                add_assign(&mut p.t[i], out.torque_i);
-            }
-        }
+        let nl = &mut self.neighbors;
+        let view = P {
+            x: &p.x,
+            v: &p.v,
+            w: &p.w,
+            r: &p.r,
+            m: &p.m,
+            mat: &p.material,
+        };
+        pair_rows(
+            law,
+            &self.materials,
+            self.dt,
+            0..n,
+            &nl.start,
+            &nl.nb,
+            &mut nl.hist,
+            0,
+            view,
+            &mut p.f,
+            &mut p.t,
+        );
+        let walls = WallView {
+            walls: &self.walls,
+            lists: &self.wall_nb,
+        };
+        wall_contacts(
+            law,
+            &self.materials,
+            self.dt,
+            walls,
+            0..n,
+            0,
+            &mut self.wall_hist,
+            view,
+            &mut p.f,
+            &mut p.t,
+        );
     }
 
     pub fn kinetic_energy(&self) -> (f64, f64) {
@@ -589,38 +496,86 @@ fn inside(x: V3, (lo, hi): (V3, V3)) -> bool {
     (0..3).all(|k| x[k] >= lo[k] && x[k] <= hi[k])
 }
 
-/// Read-only particle data for the pair loop.
+/// Read-only particle data for the force loops.
 #[derive(Clone, Copy)]
-struct P<'a> {
-    x: &'a [V3],
-    v: &'a [V3],
-    w: &'a [V3],
-    r: &'a [f64],
-    m: &'a [f64],
-    mat: &'a [u16],
+pub(crate) struct P<'a> {
+    pub x: &'a [V3],
+    pub v: &'a [V3],
+    pub w: &'a [V3],
+    pub r: &'a [f64],
+    pub m: &'a [f64],
+    pub mat: &'a [u16],
 }
 
+/// The walls and, per wall, the particles within reach (ascending indices).
+#[derive(Clone, Copy)]
+pub(crate) struct WallView<'a> {
+    pub walls: &'a [Wall],
+    pub lists: &'a [Vec<u32>],
+}
+
+/// Wall contacts of the particles in `range`; `wall_hist` holds all particles' wall histories.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
+pub(crate) fn wall_contacts<N: NormalForce, C: Cohesion, R: Rolling>(
     law: &Law<N, C, R>,
     materials: &Materials,
     dt: f64,
-    rows: std::ops::Range<usize>,
-    start: &[u32],
-    nb: &[u32],
-    hist: &mut [History],
+    walls: WallView,
+    range: std::ops::Range<usize>,
+    hist_base: usize,
+    wall_hist: &mut [History],
     p: P,
     f: &mut [V3],
     t: &mut [V3],
 ) {
-    pair_rows_offset(law, materials, dt, rows, start, nb, hist, 0, p, f, t)
+    let n_walls = walls.walls.len();
+    for (wi, wall) in walls.walls.iter().enumerate() {
+        if !wall.active {
+            continue;
+        }
+        let list = &walls.lists[wi];
+        let lo = list.partition_point(|&i| (i as usize) < range.start);
+        let hi = list.partition_point(|&i| (i as usize) < range.end);
+        for &i in &list[lo..hi] {
+            let i = i as usize;
+            let ri = p.r[i];
+            let h = &mut wall_hist[i * n_walls + wi - hist_base];
+            let Some(gap) = wall.gap(p.x[i], ri) else {
+                *h = History::default();
+                continue;
+            };
+            let overlap = ri - gap.distance;
+            let area = if C::ACTIVE {
+                std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
+            } else {
+                0.0
+            };
+            let lever = ri - 0.5 * overlap;
+            let c = Contact::new(
+                gap.normal,
+                overlap,
+                ri,
+                p.m[i],
+                sub(p.v[i], wall.velocity),
+                p.w[i],
+                [0.0; 3],
+                lever,
+                0.0,
+                area,
+            );
+            let pc = materials.pair(p.mat[i], wall.material);
+            let out = law.force(&c, pc, h, dt);
+            add_assign(&mut f[i], out.force);
+            add_assign(&mut t[i], out.torque_i);
+        }
+    }
 }
 
 /// Contacts of rows `rows`; `hist` starts at list entry `base`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn pair_rows_offset<N: NormalForce, C: Cohesion, R: Rolling>(
+pub(crate) fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
     law: &Law<N, C, R>,
     materials: &Materials,
     dt: f64,
