@@ -311,3 +311,38 @@ fn bad_design_files_are_refused_naming_file_line_and_column() {
     let e = fails(&["metrics", s(&one)]);
     assert!(e.contains("one.csv") && e.contains("at least 2"), "{e}");
 }
+
+#[test]
+fn dem_bench_prints_the_json_fields() {
+    let out = ok(&[
+        "bench",
+        "dem",
+        "--particles",
+        "300",
+        "--settle",
+        "200",
+        "--steps",
+        "100",
+        "--threads",
+        "2",
+        "--json",
+    ]);
+    let j = last_json(&out);
+    for k in [
+        "mbgc_particle_steps_per_s",
+        "liggghts_particle_steps_per_s",
+        "ratio",
+        "threads",
+        "packing_fraction_mbgc",
+        "packing_fraction_liggghts",
+        "coordination_mbgc",
+        "coordination_liggghts",
+        "thread_speedup",
+    ] {
+        assert!(j.get(k).is_some(), "missing {k}");
+    }
+    assert!(j["mbgc_particle_steps_per_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(j["threads"], 2);
+    let e = fails(&["bench", "dem", "--particles", "0"]);
+    assert!(e.contains("--particles"), "{e}");
+}

@@ -302,29 +302,43 @@ fn effects_are_chosen_by_name() {
     assert!(e.contains("second normal force"), "{e}");
 }
 
-/// The thread team follows the serial trajectory: only the order of force sums differs, so after
-/// a few hundred steps of a dense, colliding scene the positions agree to round-off.
+/// The thread team computes the same forces as the serial loop; only the order of the force sums
+/// differs. Both runs reach the same contact-rich state serially (bit for bit), then one goes on
+/// with two threads: over a short window the trajectories agree to round-off. (Over thousands of
+/// colliding steps they part, as any two granular trajectories differing by round-off do.)
 #[test]
 fn threaded_run_matches_the_serial_run() {
     let spec = mbgc::dem::bench::BenchSpec {
         particles: 400,
+        box_hi: [0.06, 0.06, 0.12],
         ..Default::default()
     };
     let (x, r) = mbgc::dem::bench::initial_packing(&spec).unwrap();
     let mut serial = Simulation::new(mbgc::dem::bench::scene(&spec, &x, &r).unwrap()).unwrap();
     let mut team = Simulation::new(mbgc::dem::bench::scene(&spec, &x, &r).unwrap()).unwrap();
+    serial.run(15000).unwrap();
+    team.run(15000).unwrap();
+    assert_eq!(
+        serial.particles.x, team.particles.x,
+        "serial runs are deterministic"
+    );
+    assert!(
+        serial.contact_count() > 200,
+        "the scene must be in contact: {}",
+        serial.contact_count()
+    );
     team.set_threads(2);
-    serial.run(3000).unwrap();
-    team.run(3000).unwrap();
-    assert!(serial.contact_count() > 100, "the scene must be in contact");
-    let a = serial.particles.index_of_ids();
-    let b = team.particles.index_of_ids();
+    serial.run(200).unwrap();
+    team.run(200).unwrap();
     let mut worst: f64 = 0.0;
-    for id in 0..x.len() {
-        let (pa, pb) = (serial.particles.x[a[id]], team.particles.x[b[id]]);
+    for (pa, pb) in serial.particles.x.iter().zip(&team.particles.x) {
         worst = worst.max((0..3).map(|k| (pa[k] - pb[k]).abs()).fold(0.0, f64::max));
     }
-    println!("largest position difference after 3000 steps: {worst:.3e} m");
-    assert!(worst < 1e-9, "{worst}");
+    println!("largest position difference after 200 threaded steps: {worst:.3e} m");
+    assert!(worst < 1e-12, "{worst}");
     assert_eq!(serial.step, team.step);
+    assert_ne!(
+        serial.particles.v, team.particles.v,
+        "the team path must actually have run"
+    );
 }

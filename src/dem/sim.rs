@@ -251,6 +251,7 @@ impl Simulation {
             let p = &mut self.particles;
             let xb = self.neighbors.x_build();
             let have_build = xb.len() == p.len();
+            #[allow(clippy::needless_range_loop)] // one index over many parallel arrays
             for i in 0..p.len() {
                 let a = p.inv_m[i] * half;
                 let v = &mut p.v[i];
