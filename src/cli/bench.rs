@@ -217,6 +217,21 @@ fn dem_report(
     for w in &rep.liggghts_warnings {
         let _ = writeln!(s, "- LIGGGHTS warned: {w}");
     }
+    let _ = writeln!(s, "\n## How the numbers are taken\n");
+    let _ = writeln!(s, "- LIGGGHTS runs as one serial process (`OMP_NUM_THREADS=1`, no MPI) on the deck mbgc writes to \
+        `--work-dir`; its figure is its own \"Loop time\" of the timed run. mbgc's one-thread figure is the median of three \
+        segments of a third of the timed steps, alternated with the multi-thread segments from the same settled state: the \
+        shared machine's speed drifts by several percent, and alternating lets a slow spell hit both alike.");
+    let _ = writeln!(s, "- Both codes run the same contact law (Hertz, restitution damping, history tangential spring with \
+        LIGGGHTS' Coulomb cap, EPSD2), the same walls (six planes), the same time step and the same neighbour skin; they \
+        differ in the order of floating-point operations, so their settled packings are statistically, not bitwise, alike. \
+        Changing only the skin moves LIGGGHTS' own packing fraction by about 1 % on this scene, so agreement within that \
+        is the most one seed can show.");
+    let _ = writeln!(s, "- The Debian LIGGGHTS build has no optimised kernel for hertz + history + epsd2 (the whitelist \
+        warning above: its generic path, \"up to 20 % slower\" by its own log). That is the code seed 004 ran, so it is the \
+        reference; the ratio against its whitelisted hertz + history kernel would be lower by that margin.");
+    let _ = writeln!(s, "- Ratios mean something only within one run on one machine: `reference/peer_throughput.md` measured \
+        LIGGGHTS at 6.3 M on a faster machine.");
     s
 }
 

@@ -244,7 +244,7 @@ pub struct BenchReport {
     pub settle_steps: u64,
     pub timed_steps: u64,
     pub threads: usize,
-    /// One thread, after settling.
+    /// One thread, after settling (median of alternating segments).
     pub mbgc_particle_steps_per_s: f64,
     /// With `threads` threads (equal to the above for one thread).
     pub mbgc_particle_steps_per_s_threads: f64,
@@ -278,21 +278,39 @@ pub fn run_benchmark(
         .map_err(|e| Error::invalid(format!("mbgc settling blew up: {e}")))?;
     let (xs, rs) = (sim.particles.x.clone(), sim.particles.r.clone());
     let (phi, z, _) = settled_measures(spec, &xs, &rs);
+    // The machine's speed drifts: alternate one-thread and multi-thread segments from the same
+    // settled state and take the median of each, so a slow spell hits both alike.
+    let segments = 3u64;
+    let seg_steps = (timed / segments).max(1);
     let time = |sim: &mut super::Simulation, t: usize| -> Result<f64> {
         sim.set_threads(t);
         let start = std::time::Instant::now();
-        sim.run(timed)
+        sim.run(seg_steps)
             .map_err(|e| Error::invalid(format!("mbgc timed run blew up: {e}")))?;
-        Ok(spec.particles as f64 * timed as f64 / start.elapsed().as_secs_f64())
+        Ok(spec.particles as f64 * seg_steps as f64 / start.elapsed().as_secs_f64())
     };
-    progress(&format!("mbgc: timing {timed} steps on 1 thread"));
-    let one = time(&mut sim, 1)?;
-    let many = if threads > 1 {
-        progress(&format!("mbgc: timing {timed} steps on {threads} threads"));
-        time(&mut sim, threads)?
-    } else {
-        one
+    let (mut ones, mut manys) = (Vec::new(), Vec::new());
+    for k in 0..segments {
+        progress(&format!(
+            "mbgc: timing segment {}/{segments}: {seg_steps} steps on 1 thread{}",
+            k + 1,
+            if threads > 1 {
+                format!(", then on {threads}")
+            } else {
+                String::new()
+            }
+        ));
+        ones.push(time(&mut sim, 1)?);
+        if threads > 1 {
+            manys.push(time(&mut sim, threads)?);
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
     };
+    let one = median(&mut ones);
+    let many = if threads > 1 { median(&mut manys) } else { one };
     let mut rep = BenchReport {
         particles: spec.particles,
         settle_steps: settle,

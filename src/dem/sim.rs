@@ -223,18 +223,14 @@ impl Simulation {
     /// Advances `steps` time steps, checking for blow-ups every `check_every` steps.
     pub fn run(&mut self, steps: u64) -> std::result::Result<(), BlowUp> {
         let check_every = 50;
-        let mut done = 0;
-        while done < steps {
-            let chunk = check_every.min(steps - done);
-            if self.threads > 1 && self.particles.len() >= 64 * self.threads {
-                super::team::run_steps(self, chunk, self.threads);
-            } else {
-                for _ in 0..chunk {
-                    self.advance();
-                }
+        if self.threads > 1 && self.particles.len() >= 64 * self.threads {
+            return super::team::run_steps(self, steps, self.threads, check_every);
+        }
+        for s in 0..steps {
+            self.advance();
+            if (s + 1) % check_every == 0 || s + 1 == steps {
+                self.check()?;
             }
-            done += chunk;
-            self.check()?;
         }
         Ok(())
     }

@@ -8,8 +8,9 @@
 //!    moved since the list build; thread 0 moves the walls. Barrier. If the skin is used up,
 //!    thread 0 rebuilds the lists while the others wait at a second barrier.
 //! 2. each thread computes the contacts of its rows of the half list (balanced by entries) and
-//!    the wall contacts of its particles; thread 0 accumulates into the particle forces, the
-//!    others into their own buffers. Barrier.
+//!    the wall contacts of its particles; thread 0 accumulates into the particle forces (reset to
+//!    gravity by their owners in phase 1), the others into their own buffers, which they clear
+//!    only from the lowest index they can write. Barrier.
 //! 3. each thread adds the buffers into its particles' forces and applies the second half kick.
 //!    No barrier: the next step's first phase touches only the thread's own particles.
 //!
@@ -20,14 +21,27 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use super::contact::{Cohesion, History, Law, NormalForce, Rolling};
-use super::sim::{pair_rows, wall_contacts, Simulation, WallView, P};
+use super::sim::{pair_rows, wall_contacts, BlowUp, Simulation, WallView, P};
 use super::vec3::*;
 use crate::with_law;
+use std::sync::atomic::AtomicBool;
 
-/// Runs `steps` steps of `sim` with `threads` threads.
-pub(crate) fn run_steps(sim: &mut Simulation, steps: u64, threads: usize) {
+/// Runs `steps` steps of `sim` with `threads` threads, checking for blow-ups every
+/// `check_every` steps and after the last one.
+pub(crate) fn run_steps(
+    sim: &mut Simulation,
+    steps: u64,
+    threads: usize,
+    check_every: u64,
+) -> Result<(), BlowUp> {
     let model = sim.model;
-    with_law!(model, |law| run_with(sim, &law, steps, threads))
+    with_law!(model, |law| run_with(
+        sim,
+        &law,
+        steps,
+        threads,
+        check_every
+    ))
 }
 
 struct SpinBarrier {
@@ -119,12 +133,18 @@ struct Shared {
     raw: UnsafeCell<Raw>,
     /// Row bounds of the half list per thread (T + 1 entries).
     rows: UnsafeCell<Vec<usize>>,
+    /// Per thread, the lowest particle index it can write in phase 2: a row i only touches
+    /// j > i, and walls touch the thread's own particles. Buffers are valid from there on.
+    low: UnsafeCell<Vec<usize>>,
     barrier: SpinBarrier,
     /// Per thread, the largest squared displacement since the list build (f64 bits).
     disp: Vec<AtomicU64>,
     wall_moved: AtomicU64,
     /// Force and torque buffers of threads 1..T.
     bufs: Vec<UnsafeCell<(Vec<V3>, Vec<V3>)>>,
+    /// Set by thread 0 when a check failed; everybody stops at the same step.
+    abort: AtomicBool,
+    failure: UnsafeCell<Option<BlowUp>>,
 }
 
 // SAFETY: every access through the raw pointers follows the phase discipline of the module
@@ -146,18 +166,28 @@ fn row_bounds(start: &[u32], threads: usize) -> Vec<usize> {
     b
 }
 
+fn lowest_written(rows: &[usize], parts: &[Range<usize>]) -> Vec<usize> {
+    parts
+        .iter()
+        .enumerate()
+        .map(|(t, p)| rows[t].min(p.start))
+        .collect()
+}
+
 fn run_with<N: NormalForce, C: Cohesion, R: Rolling>(
     sim: &mut Simulation,
     law: &Law<N, C, R>,
     steps: u64,
     threads: usize,
-) {
+    check_every: u64,
+) -> Result<(), BlowUp> {
     let n = sim.particles.len();
     let parts: Vec<Range<usize>> = (0..threads)
         .map(|t| n * t / threads..n * (t + 1) / threads)
         .collect();
     let raw = Raw::new(sim);
     let rows = row_bounds(&sim.neighbors.start, threads);
+    let low = lowest_written(&rows, &parts);
     let gravity = sim.gravity;
     let dt = sim.dt;
     let skin = sim.neighbors.skin;
@@ -165,12 +195,15 @@ fn run_with<N: NormalForce, C: Cohesion, R: Rolling>(
         sim: sim as *mut Simulation,
         raw: UnsafeCell::new(raw),
         rows: UnsafeCell::new(rows),
+        low: UnsafeCell::new(low),
         barrier: SpinBarrier::new(threads),
         disp: (0..threads).map(|_| AtomicU64::new(0)).collect(),
         wall_moved: AtomicU64::new(0),
         bufs: (1..threads)
             .map(|_| UnsafeCell::new((vec![[0.0; 3]; n], vec![[0.0; 3]; n])))
             .collect(),
+        abort: AtomicBool::new(false),
+        failure: UnsafeCell::new(None),
     };
     let ctx = Ctx {
         sh: &shared,
@@ -181,6 +214,9 @@ fn run_with<N: NormalForce, C: Cohesion, R: Rolling>(
         gravity,
         dt,
         skin,
+        check_every,
+        start_step: sim.step,
+        start_time: sim.time,
     };
     std::thread::scope(|s| {
         for t in 1..threads {
@@ -189,8 +225,10 @@ fn run_with<N: NormalForce, C: Cohesion, R: Rolling>(
         }
         ctx.worker(0);
     });
-    sim.step += steps;
-    sim.time += steps as f64 * dt;
+    match shared.failure.into_inner() {
+        Some(b) => Err(b),
+        None => Ok(()),
+    }
 }
 
 struct Ctx<'a, N, C, R> {
@@ -202,6 +240,9 @@ struct Ctx<'a, N, C, R> {
     gravity: V3,
     dt: f64,
     skin: f64,
+    check_every: u64,
+    start_step: u64,
+    start_time: f64,
 }
 
 // SAFETY: as for `Shared`; the law is plain data.
@@ -213,7 +254,7 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Ctx<'_, N, C, R> {
         let own = self.parts[t].clone();
         let (dt, half, g) = (self.dt, 0.5 * self.dt, self.gravity);
         let lim2 = 0.25 * self.skin * self.skin;
-        for _ in 0..self.steps {
+        for s in 0..self.steps {
             // Phase 1: half kick and drift of own particles.
             // SAFETY: own particle range only; nobody else touches it in this phase.
             unsafe {
@@ -237,6 +278,9 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Ctx<'_, N, C, R> {
                     w[1] += b * tq[1];
                     w[2] += b * tq[2];
                     md = md.max(norm2(sub(*x, *raw.x_build.add(i))));
+                    // Forces restart from gravity; thread 0 accumulates onto them in phase 2.
+                    *raw.f.add(i) = scale(g, *raw.m.add(i));
+                    *raw.t.add(i) = [0.0; 3];
                 }
                 sh.disp[t].store(md.to_bits(), Ordering::Relaxed);
                 if t == 0 {
@@ -270,6 +314,7 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Ctx<'_, N, C, R> {
                         }
                         *sh.raw.get() = Raw::new(sim);
                         *sh.rows.get() = row_bounds(&sim.neighbors.start, self.threads);
+                        *sh.low.get() = lowest_written(&*sh.rows.get(), self.parts);
                     }
                 }
                 sh.barrier.wait();
@@ -285,18 +330,15 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Ctx<'_, N, C, R> {
                 let rows = &*sh.rows.get();
                 let rows = rows[t]..rows[t + 1];
                 let (f_out, t_out): (&mut [V3], &mut [V3]) = if t == 0 {
-                    let f = std::slice::from_raw_parts_mut(raw.f, n);
-                    let tq = std::slice::from_raw_parts_mut(raw.t, n);
-                    let m = std::slice::from_raw_parts(raw.m, n);
-                    for i in 0..n {
-                        f[i] = scale(g, m[i]);
-                        tq[i] = [0.0; 3];
-                    }
-                    (f, tq)
+                    (
+                        std::slice::from_raw_parts_mut(raw.f, n),
+                        std::slice::from_raw_parts_mut(raw.t, n),
+                    )
                 } else {
+                    let lo = (&*sh.low.get())[t];
                     let b = &mut *sh.bufs[t - 1].get();
-                    b.0.iter_mut().for_each(|x| *x = [0.0; 3]);
-                    b.1.iter_mut().for_each(|x| *x = [0.0; 3]);
+                    b.0[lo..].iter_mut().for_each(|x| *x = [0.0; 3]);
+                    b.1[lo..].iter_mut().for_each(|x| *x = [0.0; 3]);
                     (&mut b.0[..], &mut b.1[..])
                 };
                 let view = P {
@@ -356,13 +398,16 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Ctx<'_, N, C, R> {
             // the next step's first barrier.
             unsafe {
                 let raw = *sh.raw.get();
+                let low = &*sh.low.get();
                 for i in own.clone() {
                     let f = &mut *raw.f.add(i);
                     let tq = &mut *raw.t.add(i);
-                    for b in &sh.bufs {
-                        let b = &*b.get();
-                        add_assign(f, b.0[i]);
-                        add_assign(tq, b.1[i]);
+                    for (b, &lo) in sh.bufs.iter().zip(&low[1..]) {
+                        if i >= lo {
+                            let b = &*b.get();
+                            add_assign(f, b.0[i]);
+                            add_assign(tq, b.1[i]);
+                        }
                     }
                     let a = *raw.inv_m.add(i) * half;
                     let v = &mut *raw.v.add(i);
@@ -374,6 +419,27 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Ctx<'_, N, C, R> {
                     w[0] += b * tq[0];
                     w[1] += b * tq[1];
                     w[2] += b * tq[2];
+                }
+            }
+
+            let done = s + 1;
+            if done % self.check_every == 0 || done == self.steps {
+                sh.barrier.wait();
+                if t == 0 {
+                    // SAFETY: the others wait at the barrier below.
+                    unsafe {
+                        let sim = &mut *sh.sim;
+                        sim.step = self.start_step + done;
+                        sim.time = self.start_time + done as f64 * dt;
+                        if let Err(b) = sim.check() {
+                            *sh.failure.get() = Some(b);
+                            sh.abort.store(true, Ordering::Relaxed);
+                        }
+                    }
+                }
+                sh.barrier.wait();
+                if sh.abort.load(Ordering::Relaxed) {
+                    return;
                 }
             }
         }
