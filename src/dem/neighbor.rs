@@ -187,16 +187,22 @@ impl NeighborList {
 
         // Forward half stencil: neighbour cells with a larger linear index, in increasing order,
         // so every row comes out sorted.
-        let mut stencil: Vec<(i64, i64, i64)> = Vec::with_capacity(13);
-        for dz in 0..=1i64 {
-            for dy in -1..=1i64 {
-                for dx in -1..=1i64 {
-                    if (dz, dy, dx) > (0, 0, 0) {
-                        stencil.push((dz, dy, dx));
-                    }
-                }
-            }
-        }
+        const STENCIL: [(i64, i64, i64); 13] = [
+            (0, 0, 1),
+            (0, 1, -1),
+            (0, 1, 0),
+            (0, 1, 1),
+            (1, -1, -1),
+            (1, -1, 0),
+            (1, -1, 1),
+            (1, 0, -1),
+            (1, 0, 0),
+            (1, 0, 1),
+            (1, 1, -1),
+            (1, 1, 0),
+            (1, 1, 1),
+        ];
+        let stencil = &STENCIL;
         self.start.clear();
         self.new_nb.clear();
         let skin = self.skin;
@@ -219,7 +225,7 @@ impl NeighborList {
                     self.new_nb.push(j as u32);
                 }
             }
-            for &(dz, dy, dx) in &stencil {
+            for &(dz, dy, dx) in stencil {
                 let (jx, jy, jz) = (ix as i64 + dx, iy as i64 + dy, iz as i64 + dz);
                 if jx < 0
                     || jy < 0

@@ -41,6 +41,11 @@ pub enum BlowUp {
         particle: u32,
         position: V3,
     },
+    EnergyGrowth {
+        step: u64,
+        kinetic: f64,
+        budget: f64,
+    },
     TooFast {
         step: u64,
         particle: u32,
@@ -67,6 +72,12 @@ impl std::fmt::Display for BlowUp {
                     "step {step}: particle {particle} left the domain at {position:?}"
                 )
             }
+            BlowUp::EnergyGrowth { step, kinetic, budget } => write!(
+                f,
+                "step {step}: kinetic energy {kinetic:.3e} J exceeds all the energy the scene \
+                 started with ({budget:.3e} J: kinetic, elastic and potential down to the domain \
+                 floor); the integration is creating energy (time step too large?)"
+            ),
             BlowUp::TooFast {
                 step,
                 particle,
@@ -95,6 +106,9 @@ pub struct Simulation {
     pub time: f64,
     /// Speed beyond which a particle signals a blow-up.
     pub speed_limit: f64,
+    /// Energy the scene starts with (kinetic, elastic, and potential down to the domain floor);
+    /// without moving walls or cohesion, the kinetic energy can never exceed it.
+    pub energy_budget: f64,
     /// Per wall, the particles within reach of it (r + skin) at the last list build.
     pub(crate) wall_nb: Vec<Vec<u32>>,
     /// How far each wall has moved since the last list build.
@@ -201,12 +215,20 @@ impl Simulation {
             step: 0,
             time: 0.0,
             speed_limit,
+            energy_budget: 0.0,
             wall_nb: vec![Vec::new(); n_walls],
             wall_moved: vec![0.0; n_walls],
             threads: 1,
         };
         sim.rebuild_lists();
         sim.compute_forces();
+        let floor = sim.domain.0;
+        let potential: f64 = (0..sim.particles.len())
+            .map(|i| -sim.particles.m[i] * dot(sim.gravity, sub(sim.particles.x[i], floor)).min(0.0))
+            .sum::<f64>()
+            .abs();
+        let (kt, kr) = sim.kinetic_energy();
+        sim.energy_budget = kt + kr + sim.elastic_energy() + potential;
         Ok(sim)
     }
 
@@ -347,6 +369,15 @@ impl Simulation {
     /// Looks for NaN, particles outside the domain and impossible speeds.
     pub fn check(&self) -> std::result::Result<(), BlowUp> {
         let p = &self.particles;
+        let closed = self.walls.iter().all(|w| w.velocity == [0.0; 3])
+            && self.model.cohesion == super::contact::CohesionKind::None;
+        if closed {
+            let (kt, kr) = self.kinetic_energy();
+            // A wide margin: this is a guard against runaway integration, not a balance.
+            if kt + kr > 1.5 * self.energy_budget + 1e-12 {
+                return Err(BlowUp::EnergyGrowth { step: self.step, kinetic: kt + kr, budget: self.energy_budget });
+            }
+        }
         let lim2 = self.speed_limit * self.speed_limit;
         for i in 0..p.len() {
             let (x, v) = (p.x[i], p.v[i]);
