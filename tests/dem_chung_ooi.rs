@@ -30,6 +30,7 @@ fn impact(b: Body, partner: Option<Body>, v: [f64; 3], e: f64, mu: f64) -> Impac
     Impact {
         body: b,
         partner,
+        wall_youngs_modulus: None,
         velocity: v,
         spin: [0.0; 3],
         partner_velocity: [0.0; 3],

@@ -25,6 +25,8 @@ pub struct Impact {
     /// The partner: `None` for a rigid plane (z = 0, normal +z); a second sphere otherwise, placed
     /// on the +x side of the first and moving with `partner_velocity`.
     pub partner: Option<Body>,
+    /// Young's modulus of the plane (`None`: rigid). The plane's Poisson ratio is the body's.
+    pub wall_youngs_modulus: Option<f64>,
     pub velocity: V3,
     pub spin: V3,
     pub partner_velocity: V3,

@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod bench;
 pub mod contact;
+pub mod experiments;
 pub mod impact;
 pub mod liggghts;
 pub mod material;

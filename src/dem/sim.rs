@@ -72,7 +72,11 @@ impl std::fmt::Display for BlowUp {
                     "step {step}: particle {particle} left the domain at {position:?}"
                 )
             }
-            BlowUp::EnergyGrowth { step, kinetic, budget } => write!(
+            BlowUp::EnergyGrowth {
+                step,
+                kinetic,
+                budget,
+            } => write!(
                 f,
                 "step {step}: kinetic energy {kinetic:.3e} J exceeds all the energy the scene \
                  started with ({budget:.3e} J: kinetic, elastic and potential down to the domain \
@@ -224,7 +228,9 @@ impl Simulation {
         sim.compute_forces();
         let floor = sim.domain.0;
         let potential: f64 = (0..sim.particles.len())
-            .map(|i| -sim.particles.m[i] * dot(sim.gravity, sub(sim.particles.x[i], floor)).min(0.0))
+            .map(|i| {
+                -sim.particles.m[i] * dot(sim.gravity, sub(sim.particles.x[i], floor)).min(0.0)
+            })
             .sum::<f64>()
             .abs();
         let (kt, kr) = sim.kinetic_energy();
@@ -375,7 +381,11 @@ impl Simulation {
             let (kt, kr) = self.kinetic_energy();
             // A wide margin: this is a guard against runaway integration, not a balance.
             if kt + kr > 1.5 * self.energy_budget + 1e-12 {
-                return Err(BlowUp::EnergyGrowth { step: self.step, kinetic: kt + kr, budget: self.energy_budget });
+                return Err(BlowUp::EnergyGrowth {
+                    step: self.step,
+                    kinetic: kt + kr,
+                    budget: self.energy_budget,
+                });
             }
         }
         let lim2 = self.speed_limit * self.speed_limit;
