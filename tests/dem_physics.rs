@@ -342,3 +342,48 @@ fn threaded_run_matches_the_serial_run() {
         "the team path must actually have run"
     );
 }
+
+/// Removing particles keeps the others' contacts (and their history) and changes nothing else.
+#[test]
+fn removing_particles_keeps_the_rest_of_the_packing() {
+    let spec = mbgc::dem::bench::BenchSpec {
+        particles: 300,
+        box_hi: [0.06, 0.06, 0.12],
+        ..Default::default()
+    };
+    let (x, r) = mbgc::dem::bench::initial_packing(&spec).unwrap();
+    let mut sim = Simulation::new(mbgc::dem::bench::scene(&spec, &x, &r).unwrap()).unwrap();
+    sim.run(15000).unwrap();
+    let top = sim.particles.x.iter().map(|x| x[2]).fold(0.0, f64::max);
+    let contacts_below = |s: &Simulation| {
+        let mut c = 0;
+        for i in 0..s.particles.len() {
+            for e in s.neighbors.start[i] as usize..s.neighbors.start[i + 1] as usize {
+                let j = s.neighbors.nb[e] as usize;
+                let d = s.particles.r[i] + s.particles.r[j];
+                let dx: f64 = (0..3)
+                    .map(|k| (s.particles.x[i][k] - s.particles.x[j][k]).powi(2))
+                    .sum();
+                if dx < d * d
+                    && s.particles.x[i][2] < top - 0.03
+                    && s.particles.x[j][2] < top - 0.03
+                    && !s.neighbors.hist[e].is_zero()
+                {
+                    c += 1;
+                }
+            }
+        }
+        c
+    };
+    let before = contacts_below(&sim);
+    let n0 = sim.particles.len();
+    let cut: Vec<bool> = sim.particles.x.iter().map(|x| x[2] > top - 0.01).collect();
+    let removed = sim.remove_particles(&cut);
+    assert!(removed > 0 && sim.particles.len() == n0 - removed);
+    assert_eq!(
+        contacts_below(&sim),
+        before,
+        "contacts with history away from the cut survive"
+    );
+    sim.run(500).unwrap();
+}

@@ -93,9 +93,29 @@ impl Particles {
         apply(&mut self.id, &mut s.u32, order);
     }
 
-    /// Index of each particle id (inverse of `id`).
+    /// Keeps the particles whose `keep` flag is set, in order.
+    pub fn retain(&mut self, keep: &[bool]) {
+        fn apply<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
+            let mut k = keep.iter();
+            v.retain(|_| *k.next().expect("one flag per particle"));
+        }
+        apply(&mut self.x, keep);
+        apply(&mut self.v, keep);
+        apply(&mut self.w, keep);
+        apply(&mut self.f, keep);
+        apply(&mut self.t, keep);
+        apply(&mut self.r, keep);
+        apply(&mut self.m, keep);
+        apply(&mut self.inv_m, keep);
+        apply(&mut self.inv_i, keep);
+        apply(&mut self.material, keep);
+        apply(&mut self.id, keep);
+    }
+
+    /// Index of each particle id (inverse of `id`); ids of removed particles map to usize::MAX.
     pub fn index_of_ids(&self) -> Vec<usize> {
-        let mut idx = vec![0; self.len()];
+        let max_id = self.id.iter().copied().max().map_or(0, |m| m as usize + 1);
+        let mut idx = vec![usize::MAX; max_id];
         for (k, &id) in self.id.iter().enumerate() {
             idx[id as usize] = k;
         }

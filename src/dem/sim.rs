@@ -355,6 +355,56 @@ impl Simulation {
         }
     }
 
+    /// Removes the particles whose flag in `remove` (one per particle, current order) is set:
+    /// material struck off a fill, or that has left an experiment. The contact history of the
+    /// remaining pairs is kept. Returns the number removed.
+    pub fn remove_particles(&mut self, remove: &[bool]) -> usize {
+        let n = self.particles.len();
+        assert_eq!(remove.len(), n, "one flag per particle");
+        let keep: Vec<bool> = remove.iter().map(|r| !r).collect();
+        let removed = keep.iter().filter(|k| !**k).count();
+        if removed == 0 {
+            return 0;
+        }
+        let p = &self.particles;
+        let nl = &self.neighbors;
+        let mut carried = std::collections::HashMap::new();
+        for i in 0..n {
+            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
+                let j = nl.nb[e] as usize;
+                if keep[i] && keep[j] && !nl.hist[e].is_zero() {
+                    carried.insert((p.id[i], p.id[j]), nl.hist[e]);
+                }
+            }
+        }
+        let n_walls = self.walls.len();
+        let mut k = 0;
+        self.wall_hist.retain(|_| {
+            let i = k / n_walls.max(1);
+            k += 1;
+            keep[i]
+        });
+        self.particles.retain(&keep);
+        self.neighbors = NeighborList::new(self.neighbors.skin);
+        self.rebuild_lists();
+        let p = &self.particles;
+        let nl = &mut self.neighbors;
+        for i in 0..p.len() {
+            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
+                let j = nl.nb[e] as usize;
+                if let Some(h) = carried.get(&(p.id[i], p.id[j])) {
+                    nl.hist[e] = *h;
+                } else if let Some(h) = carried.get(&(p.id[j], p.id[i])) {
+                    nl.hist[e] = History {
+                        shear: scale(h.shear, -1.0),
+                        rolling: scale(h.rolling, -1.0),
+                    };
+                }
+            }
+        }
+        removed
+    }
+
     /// Removes (or restores) a wall; its contact history is cleared.
     pub fn set_wall_active(&mut self, wall: usize, active: bool) {
         self.walls[wall].active = active;

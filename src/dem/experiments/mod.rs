@@ -6,6 +6,7 @@
 //! returns named responses with diagnostics. [`Experiment::check`] refuses an impossible set before
 //! anything runs.
 
+pub mod shear_box;
 pub mod wall_impact;
 
 use std::path::PathBuf;

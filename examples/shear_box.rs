@@ -1,0 +1,33 @@
+//! One shear-box run with a side-view picture:
+//! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png]
+use mbgc::dem::experiments::{shear_box::ShearBox, Experiment, ParamSet, RunOptions};
+
+fn main() {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let f = |i: usize, d: f64| a.get(i).map(|s| s.parse().expect("number")).unwrap_or(d);
+    let p = ParamSet::from_pairs(&[
+        ("E_p", f(5, 5e6)),
+        ("E_w", f(5, 5e6)),
+        ("nu_p", 0.3),
+        ("e_pp", 0.6),
+        ("e_pw", 0.6),
+        ("mu_pp", f(1, 0.5)),
+        ("mu_pw", 0.363),
+        ("mu_r_pp", f(2, 0.3)),
+        ("mu_r_pw", 0.3),
+        ("rho_p", 2600.0),
+        ("d50", f(3, 5.0)),
+        ("sigma_ln", f(4, 0.1)),
+    ]);
+    let sb = ShearBox {
+        box_scale: f(0, 6.0),
+        ..Default::default()
+    };
+    let opts = RunOptions {
+        picture: a.get(6).map(Into::into),
+        threads: 1,
+        ..Default::default()
+    };
+    let o = sb.run(&p, 1, &opts).expect("run");
+    println!("{:?}\n{:?}", o.responses, o.diagnostics);
+}

@@ -1,0 +1,608 @@
+//! The scaled shear box of seed 004 (after Roessler et al. 2019): a box is filled and struck off
+//! level, one side wall (the flap) is removed, the material flows out until it rests, and the
+//! angle of the remaining flank is measured.
+//!
+//! Geometry: base l = w = 100 mm, h = 150 mm, scaled by S = k d_max / min(l, w, h), k = 10 by
+//! default (`box_scale`), so the smallest side is k particle diameters whatever the PSD: the
+//! responses are meant to be scale-free, and the particle count stays about the same across the
+//! parameter space. The PSD is the log-normal of (d50, sigma_ln) drawn by number and truncated at
+//! the Q3 quantiles 1 % and 99 % (`psd::default_range`): the log-normal tails are unbounded, and a
+//! single particle from the far tail would set d_max and with it the box size.
+//!
+//! Responses: `bulk_density` (particle mass inside the box after striking off / box volume, with
+//! the exact volume of spheres cut by the rim), `shear_angle` (degrees, least-squares line through
+//! the top of the remaining flank), `flank_r2` and `flank_curvature` (largest gap between a
+//! quadratic and the line over the flank, relative to the flank's height: seed 004 traced its
+//! metamodel outliers to curved flanks).
+
+use std::path::Path;
+use std::time::Instant;
+
+use rand::RngExt;
+
+use super::{materials_from, Diagnostics, Experiment, Outcome, ParamSet, RunOptions, RHO_RANGE};
+use crate::dem::analysis::sphere_box_volume;
+use crate::dem::contact::ContactModel;
+use crate::dem::particles::Particles;
+use crate::dem::sim::{Scene, Simulation};
+use crate::dem::timestep::rayleigh_time;
+use crate::dem::vec3::V3;
+use crate::dem::walls::{Shape, Wall};
+use crate::error::{Error, Result};
+use crate::psd::{default_range, draw_by_number, Distribution, LogNormal};
+
+pub const BASE_MM: [f64; 3] = [100.0, 100.0, 150.0];
+const G: f64 = 9.81;
+
+#[derive(Debug, Clone)]
+pub struct ShearBox {
+    /// k: the smallest box side in units of d_max.
+    pub box_scale: f64,
+    /// Time step as a fraction of the Rayleigh time (seed 004: 0.25).
+    pub dt_fraction: f64,
+    /// Largest number of particles accepted (the run is refused above).
+    pub max_particles: usize,
+}
+
+impl Default for ShearBox {
+    fn default() -> Self {
+        ShearBox {
+            box_scale: 10.0,
+            dt_fraction: 0.25,
+            max_particles: 200_000,
+        }
+    }
+}
+
+/// Box and particles of one parameter set.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    /// l, w, h in m.
+    pub size: V3,
+    /// Particle diameters in m, in insertion order.
+    pub diameters: Vec<f64>,
+    pub d_min: f64,
+    pub d_max: f64,
+}
+
+impl ShearBox {
+    /// Draws the particles and sizes the box. Overfills by a margin so that the settled bed
+    /// surely reaches the rim (it is struck off there).
+    pub fn layout(&self, p: &ParamSet, seed: u64) -> Result<Layout> {
+        let d50_mm = p.require("d50", 1e-3, 1e4)?;
+        let sigma = p.optional("sigma_ln", 0.0, 0.0, 2.0)?;
+        if !(self.box_scale >= 3.0 && self.box_scale.is_finite()) {
+            return Err(Error::invalid(format!(
+                "box scale k = {}: expected at least 3 particle diameters across the box",
+                self.box_scale
+            )));
+        }
+        let (diam_mm, d_min_mm, d_max_mm) = if sigma < 1e-6 {
+            (vec![d50_mm], d50_mm, d50_mm)
+        } else {
+            let dist = Distribution::LogNormal(LogNormal::new(d50_mm, sigma)?);
+            let (lo, hi) = default_range(&dist);
+            // Number needed: solid volume of 0.78 box volumes (a loose bed of packing 0.55-0.65
+            // then stands 20-40 % above the rim); the number-based mean volume comes from a
+            // first draw.
+            let probe = draw_by_number(&dist, (Some(lo), Some(hi)), 2000, seed, "shear box PSD")?;
+            (probe.diameters_mm, lo, hi)
+        };
+        let scale = self.box_scale * d_max_mm / BASE_MM[0].min(BASE_MM[1]).min(BASE_MM[2]);
+        let size = [
+            BASE_MM[0] * scale * 1e-3,
+            BASE_MM[1] * scale * 1e-3,
+            BASE_MM[2] * scale * 1e-3,
+        ];
+        let v_box = size[0] * size[1] * size[2];
+        let mean_vol = diam_mm.iter().map(|d| (d * 1e-3).powi(3)).sum::<f64>()
+            / diam_mm.len() as f64
+            * std::f64::consts::PI
+            / 6.0;
+        let n = (0.78 * v_box / mean_vol).ceil() as usize;
+        if n > self.max_particles {
+            return Err(Error::invalid(format!(
+                "parameter sigma_ln = {sigma}: the box would hold about {n} particles (limit {}); \
+                 lower the box scale k",
+                self.max_particles
+            )));
+        }
+        let diameters = if sigma < 1e-6 {
+            vec![d50_mm * 1e-3; n]
+        } else {
+            let dist = Distribution::LogNormal(LogNormal::new(d50_mm, sigma)?);
+            draw_by_number(
+                &dist,
+                (Some(d_min_mm), Some(d_max_mm)),
+                n,
+                seed ^ 0x5eed,
+                "shear box PSD",
+            )?
+            .diameters_mm
+            .into_iter()
+            .map(|d| d * 1e-3)
+            .collect()
+        };
+        Ok(Layout {
+            size,
+            diameters,
+            d_min: d_min_mm * 1e-3,
+            d_max: d_max_mm * 1e-3,
+        })
+    }
+}
+
+/// The flank profile and its fits.
+#[derive(Debug, Clone, Default)]
+pub struct Flank {
+    /// (x, top height) of each column on the flank.
+    pub points: Vec<(f64, f64)>,
+    pub slope: f64,
+    pub intercept: f64,
+    pub r2: f64,
+    pub curvature: f64,
+}
+
+/// Top surface of the remaining material in columns of width ~d_max across the box (away from
+/// the side walls), keeping the columns on the slope: below the struck-off rim and above the
+/// floor by a particle.
+pub fn measure_flank(p: &Particles, size: V3, d_max: f64) -> Flank {
+    let nx = ((size[0] / d_max).floor() as usize).max(1);
+    let ny = ((size[1] / d_max).floor() as usize).max(1);
+    let (bx, by) = (size[0] / nx as f64, size[1] / ny as f64);
+    let mut top = vec![f64::NAN; nx * ny];
+    for i in 0..p.len() {
+        let x = p.x[i];
+        if x[0] < 0.0 || x[0] >= size[0] || x[1] < 0.0 || x[1] >= size[1] || x[2] < 0.0 {
+            continue;
+        }
+        let (ix, iy) = ((x[0] / bx) as usize, (x[1] / by) as usize);
+        let t = &mut top[iy.min(ny - 1) * nx + ix.min(nx - 1)];
+        let z = x[2] + p.r[i];
+        if t.is_nan() || z > *t {
+            *t = z;
+        }
+    }
+    let mut points = Vec::new();
+    for ix in 0..nx {
+        // Skip the columns against the side walls: wall friction holds them up.
+        let ys: Vec<f64> = (1..ny.saturating_sub(1).max(1))
+            .filter_map(|iy| {
+                let t = top[iy * nx + ix];
+                (!t.is_nan()).then_some(t)
+            })
+            .collect();
+        if ys.is_empty() {
+            continue;
+        }
+        let z = ys.iter().sum::<f64>() / ys.len() as f64;
+        if z < size[2] - 0.5 * d_max && z > 1.5 * d_max {
+            points.push(((ix as f64 + 0.5) * bx, z));
+        }
+    }
+    let mut f = Flank {
+        points,
+        ..Default::default()
+    };
+    if f.points.len() < 3 {
+        f.slope = f64::NAN;
+        f.r2 = f64::NAN;
+        f.curvature = f64::NAN;
+        return f;
+    }
+    let n = f.points.len() as f64;
+    let mx = f.points.iter().map(|p| p.0).sum::<f64>() / n;
+    let mz = f.points.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = f.points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxz: f64 = f.points.iter().map(|p| (p.0 - mx) * (p.1 - mz)).sum();
+    let szz: f64 = f.points.iter().map(|p| (p.1 - mz).powi(2)).sum();
+    f.slope = sxz / sxx;
+    f.intercept = mz - f.slope * mx;
+    f.r2 = if szz > 0.0 {
+        1.0 - f
+            .points
+            .iter()
+            .map(|p| (p.1 - f.intercept - f.slope * p.0).powi(2))
+            .sum::<f64>()
+            / szz
+    } else {
+        1.0
+    };
+    f.curvature = quadratic_gap(&f.points, f.slope, f.intercept);
+    f
+}
+
+/// Largest gap between the least-squares quadratic and the line over the points, relative to the
+/// height the line spans there.
+fn quadratic_gap(pts: &[(f64, f64)], slope: f64, intercept: f64) -> f64 {
+    // Normal equations of z = a + b x + c x^2 in centred x, solved by Cramer's rule.
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let s = |k: i32| pts.iter().map(|p| (p.0 - mx).powi(k)).sum::<f64>();
+    let t = |k: i32| pts.iter().map(|p| (p.0 - mx).powi(k) * p.1).sum::<f64>();
+    let (s0, s1, s2, s3, s4) = (n, s(1), s(2), s(3), s(4));
+    let (t0, t1, t2) = (t(0), t(1), t(2));
+    let det3 = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let a = [[s0, s1, s2], [s1, s2, s3], [s2, s3, s4]];
+    let d = det3(a);
+    if d.abs() < 1e-300 {
+        return 0.0;
+    }
+    let ca = det3([[t0, s1, s2], [t1, s2, s3], [t2, s3, s4]]) / d;
+    let cb = det3([[s0, t0, s2], [s1, t1, s3], [s2, t2, s4]]) / d;
+    let cc = det3([[s0, s1, t0], [s1, s2, t1], [s2, s3, t2]]) / d;
+    let (xmin, xmax) = pts
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.0), b.max(p.0))
+        });
+    let height = (slope * (xmax - xmin)).abs().max(1e-12);
+    pts.iter()
+        .map(|p| {
+            let u = p.0 - mx;
+            let quad = ca + cb * u + cc * u * u;
+            (quad - (intercept + slope * p.0)).abs()
+        })
+        .fold(0.0, f64::max)
+        / height
+}
+
+/// Translational rms speed of the particles.
+fn rms_speed(p: &Particles) -> f64 {
+    let (mut e, mut m) = (0.0, 0.0);
+    for i in 0..p.len() {
+        e += p.m[i] * (p.v[i][0].powi(2) + p.v[i][1].powi(2) + p.v[i][2].powi(2));
+        m += p.m[i];
+    }
+    if m > 0.0 {
+        (e / m).sqrt()
+    } else {
+        0.0
+    }
+}
+
+impl Experiment for ShearBox {
+    fn name(&self) -> &'static str {
+        "shear-box"
+    }
+
+    fn parameters(&self) -> Vec<&'static str> {
+        vec![
+            "E_p", "E_w", "nu_p", "e_pp", "e_pw", "mu_pp", "mu_pw", "mu_r_pp", "mu_r_pw", "rho_p",
+            "d50", "sigma_ln",
+        ]
+    }
+
+    fn responses(&self) -> Vec<&'static str> {
+        vec![
+            "shear_angle",
+            "bulk_density",
+            "flank_r2",
+            "flank_curvature",
+            "outflow_fraction",
+        ]
+    }
+
+    fn check(&self, p: &ParamSet) -> Result<()> {
+        materials_from(p)?;
+        p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
+        self.layout(p, 0).map(|_| ())
+    }
+
+    fn run(&self, p: &ParamSet, seed: u64, opts: &RunOptions) -> Result<Outcome> {
+        let clock = Instant::now();
+        let (materials, grain, wall_mat) = materials_from(p)?;
+        let rho = p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
+        let lay = self.layout(p, seed)?;
+        let [l, w, h] = lay.size;
+        let mut warnings = Vec::new();
+
+        // Particles on a jittered lattice in a column over the box, drawn sizes in order.
+        let pitch = lay.d_max * 1.02;
+        let (nx, ny) = (
+            ((l / pitch).floor() as usize).max(1),
+            ((w / pitch).floor() as usize).max(1),
+        );
+        let layers = lay.diameters.len().div_ceil(nx * ny);
+        let col_top = layers as f64 * pitch + pitch;
+        let mut rng = crate::sampling::rng(seed);
+        let mut particles = Particles::new();
+        for (k, &d) in lay.diameters.iter().enumerate() {
+            let (ix, iy, iz) = (k % nx, (k / nx) % ny, k / (nx * ny));
+            let slack = 0.45 * (pitch - d);
+            let mut j = || slack * (2.0 * rng.random::<f64>() - 1.0);
+            let x = [
+                (ix as f64 + 0.5) * (l / nx as f64)
+                    + j()
+                        .min(0.5 * (l / nx as f64 - d))
+                        .max(-0.5 * (l / nx as f64 - d)),
+                (iy as f64 + 0.5) * (w / ny as f64)
+                    + j()
+                        .min(0.5 * (w / ny as f64 - d))
+                        .max(-0.5 * (w / ny as f64 - d)),
+                (iz as f64 + 0.5) * pitch + j(),
+            ];
+            particles.add(x, 0.5 * d, rho, grain)?;
+        }
+        let n0 = particles.len();
+
+        // Floor, back wall, two side walls and the flap, tall enough for the falling column.
+        let wall_h = col_top.max(h) + lay.d_max;
+        let rect = |name: &str, center: V3, u: V3, v: V3, hu: f64, hv: f64| {
+            Wall::new(
+                name,
+                Shape::Rect {
+                    center,
+                    u,
+                    v,
+                    half_u: hu,
+                    half_v: hv,
+                },
+                wall_mat,
+            )
+        };
+        let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+        let walls = vec![
+            rect("floor", [0.5 * l, 0.5 * w, 0.0], ex, ey, 0.5 * l, 0.5 * w)?,
+            rect(
+                "back",
+                [0.0, 0.5 * w, 0.5 * wall_h],
+                ey,
+                ez,
+                0.5 * w,
+                0.5 * wall_h,
+            )?,
+            rect(
+                "side_lo",
+                [0.5 * l, 0.0, 0.5 * wall_h],
+                ex,
+                ez,
+                0.5 * l,
+                0.5 * wall_h,
+            )?,
+            rect(
+                "side_hi",
+                [0.5 * l, w, 0.5 * wall_h],
+                ex,
+                ez,
+                0.5 * l,
+                0.5 * wall_h,
+            )?,
+            rect(
+                "flap",
+                [l, 0.5 * w, 0.5 * wall_h],
+                ey,
+                ez,
+                0.5 * w,
+                0.5 * wall_h,
+            )?,
+        ];
+        let flap = 4;
+        let mat = &materials.materials[grain as usize];
+        let dt =
+            self.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, mat.youngs_modulus, mat.poisson);
+        let margin = 4.0 * lay.d_max + 0.5 * h;
+        let scene = Scene {
+            particles,
+            walls,
+            materials,
+            model: ContactModel::default(),
+            gravity: [0.0, 0.0, -G],
+            dt,
+            skin: 0.2 * lay.d_min,
+            domain: (
+                [-margin - l, -margin, -margin - h],
+                [2.0 * l + margin, w + margin, wall_h + margin],
+            ),
+            max_dt_fraction: self.dt_fraction + 1e-9,
+        };
+        let mut sim = Simulation::new(scene)?;
+        sim.set_threads(opts.threads.max(1));
+        let blew =
+            |e: crate::dem::BlowUp| Error::invalid(format!("shear box: the DEM run blew up: {e}"));
+
+        // Fill: let the column fall and come to rest (translational speed; EPSD2 keeps particles
+        // rocking, so rotational energy is no rest criterion).
+        let v_rest = 0.01 * (G * lay.d_max).sqrt();
+        let chunk = ((0.01 / dt).ceil() as u64).max(10);
+        let fall = (2.0 * col_top / G).sqrt();
+        let max_fill = ((fall + 40.0 * (h / G).sqrt()) / dt) as u64;
+        let mut filled = false;
+        while sim.step < max_fill {
+            sim.run(chunk).map_err(blew)?;
+            if sim.time > fall && rms_speed(&sim.particles) < v_rest {
+                filled = true;
+                break;
+            }
+        }
+        if !filled {
+            warnings.push("filling did not come to rest within the time limit".into());
+        }
+        // Strike off at the rim, then let the bed relax a little.
+        let cut: Vec<bool> = sim.particles.x.iter().map(|x| x[2] > h).collect();
+        sim.remove_particles(&cut);
+        sim.run(chunk).map_err(blew)?;
+        let in_box = |x: V3, r: f64| sphere_box_volume(x, r, [0.0; 3], [l, w, h]);
+        let mass_in: f64 = (0..sim.particles.len())
+            .map(|i| rho * in_box(sim.particles.x[i], sim.particles.r[i]))
+            .sum();
+        let bulk_density = mass_in / (l * w * h);
+        let n_filled = sim.particles.len();
+        if let Some(dir) = &opts.vtk_dir {
+            crate::dem::vtk::write_vtk(
+                &dir.join("shear_box_filled.vtk"),
+                &sim.particles,
+                "shear box after filling",
+            )?;
+        }
+
+        // Open the flap; material that falls off the floor's edge leaves the scene.
+        sim.set_wall_active(flap, false);
+        let open_time = sim.time;
+        let max_flow = sim.step + (60.0 * (h / G).sqrt() / dt) as u64;
+        let mut quiet = 0;
+        let mut stopped = false;
+        let mut left = 0;
+        let mut left_mass = 0.0;
+        while sim.step < max_flow {
+            sim.run(chunk).map_err(blew)?;
+            let gone: Vec<bool> = sim
+                .particles
+                .x
+                .iter()
+                .map(|x| x[2] < -2.0 * lay.d_max)
+                .collect();
+            left_mass += (0..gone.len())
+                .filter(|&i| gone[i])
+                .map(|i| sim.particles.m[i])
+                .sum::<f64>();
+            let removed = sim.remove_particles(&gone);
+            left += removed;
+            let in_motion = sim.particles.x.iter().zip(&sim.particles.v).any(|(x, v)| {
+                x[0] <= l && (v[0].powi(2) + v[2].powi(2)).sqrt() > 0.05 * (G * lay.d_max).sqrt()
+            });
+            quiet = if removed == 0 && !in_motion && rms_speed(&sim.particles) < v_rest {
+                quiet + 1
+            } else {
+                0
+            };
+            if sim.time - open_time > 4.0 * (h / G).sqrt() && quiet >= 5 {
+                stopped = true;
+                break;
+            }
+        }
+        if !stopped {
+            warnings.push("outflow did not come to rest within the time limit".into());
+        }
+        // Material still on its way out (beyond the flap line, above the floor level) is not flank.
+        let flank = measure_flank(&sim.particles, lay.size, lay.d_max);
+        if flank.points.len() < 3 {
+            warnings.push(format!(
+                "only {} flank columns: no shear angle",
+                flank.points.len()
+            ));
+        }
+        let shear_angle = (-flank.slope).atan().to_degrees();
+        if let Some(path) = &opts.picture {
+            side_view(path, &sim.particles, lay.size, &flank)?;
+        }
+        if let Some(dir) = &opts.vtk_dir {
+            crate::dem::vtk::write_vtk(
+                &dir.join("shear_box_final.vtk"),
+                &sim.particles,
+                "shear box at rest",
+            )?;
+        }
+        let outside = sim
+            .particles
+            .x
+            .iter()
+            .filter(|x| x[0] < -lay.d_max || x[1] < -lay.d_max || x[1] > w + lay.d_max)
+            .count();
+        if outside > 0 {
+            return Err(Error::invalid(format!(
+                "shear box: {outside} particles escaped through a wall"
+            )));
+        }
+        // Every particle is in the box, on its way out past the flap, or removed below the floor.
+        if n_filled != sim.particles.len() + left {
+            return Err(Error::invalid("shear box: particle bookkeeping failed"));
+        }
+        let mass_left: f64 = sim.particles.m.iter().sum();
+        let outflow_fraction = 1.0 - mass_left / (mass_left + left_mass);
+        let _ = n0;
+        Ok(Outcome {
+            responses: vec![
+                ("shear_angle".into(), shear_angle),
+                ("bulk_density".into(), bulk_density),
+                ("flank_r2".into(), flank.r2),
+                ("flank_curvature".into(), flank.curvature),
+                ("outflow_fraction".into(), outflow_fraction),
+            ],
+            diagnostics: Diagnostics {
+                settled: filled && stopped,
+                steps: sim.step,
+                particles: n_filled,
+                wall_time_s: clock.elapsed().as_secs_f64(),
+                warnings,
+            },
+        })
+    }
+}
+
+/// Side view (x-z) of the particles left in the box, with the fitted flank line.
+pub fn side_view(path: &Path, p: &Particles, size: V3, flank: &Flank) -> Result<()> {
+    use plotters::coord::Shift;
+    use plotters::prelude::*;
+    fn draw<DB: DrawingBackend>(
+        root: &DrawingArea<DB, Shift>,
+        p: &Particles,
+        size: V3,
+        flank: &Flank,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let title = format!(
+            "shear box, side view: flank {:.1} deg (R^2 {:.3})",
+            (-flank.slope).atan().to_degrees(),
+            flank.r2
+        );
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(45)
+            .build_cartesian_2d(
+                -0.1 * size[0]..1.3 * size[0],
+                -0.05 * size[2]..1.05 * size[2],
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc("x / m")
+            .y_desc("z / m")
+            .draw()?;
+        let px_per_m = 700.0 / (1.4 * size[0]);
+        chart.draw_series(
+            (0..p.len())
+                .filter(|&i| p.x[i][2] > -0.05 * size[2])
+                .map(|i| {
+                    Circle::new(
+                        (p.x[i][0], p.x[i][2]),
+                        ((p.r[i] * px_per_m) as i32).max(1),
+                        RGBColor(120, 120, 120).mix(0.35).filled(),
+                    )
+                }),
+        )?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![
+                (0.0, 0.0),
+                (0.0, size[2]),
+                (size[0], size[2]),
+                (size[0], 0.0),
+                (0.0, 0.0),
+            ],
+            BLACK,
+        )))?;
+        if flank.slope.is_finite() {
+            let (x0, x1) = flank
+                .points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+                    (a.min(q.0), b.max(q.0))
+                });
+            chart.draw_series(std::iter::once(PathElement::new(
+                vec![
+                    (x0, flank.intercept + flank.slope * x0),
+                    (x1, flank.intercept + flank.slope * x1),
+                ],
+                RED.stroke_width(2),
+            )))?;
+            chart.draw_series(flank.points.iter().map(|q| Cross::new(*q, 4, RED)))?;
+        }
+        Ok(())
+    }
+    crate::draw_figure!(path, (800, 640), draw(p, size, flank))
+}
