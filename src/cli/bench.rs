@@ -26,6 +26,30 @@ pub enum BenchCommand {
     /// DEM throughput on a settled polydisperse box, per core, against LIGGGHTS on the identical
     /// scene (`--vs liggghts`), with packing fraction and coordination number of both.
     Dem(DemBenchArgs),
+    /// Shear box: mbgc against LIGGGHTS replaying the identical runs (low, mid and high
+    /// friction, several seeds), and the cost of a run for several PSDs and moduli.
+    ShearBox(ShearBoxBenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ShearBoxBenchArgs {
+    /// Box scale k for the comparison runs.
+    #[arg(long, default_value_t = 6.0)]
+    pub box_scale: f64,
+    /// Seeds per parameter set (1..=seeds).
+    #[arg(long, default_value_t = 5)]
+    pub seeds: u64,
+    /// Run the identical cases in LIGGGHTS.
+    #[arg(long, value_enum)]
+    pub vs: Option<Reference>,
+    /// Skip the cost table.
+    #[arg(long)]
+    pub no_cost: bool,
+    #[arg(long, default_value = "target/bench-shear-box")]
+    pub work_dir: PathBuf,
+    /// Markdown report (e.g. docs/experiments.md).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -91,6 +115,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
     match &a.what {
         BenchCommand::Sampling(s) => sampling(s),
         BenchCommand::Dem(d) => dem(d),
+        BenchCommand::ShearBox(b) => shear_box(b),
     }
 }
 
@@ -497,3 +522,105 @@ distance between points; their MID is only somewhat better than random and their
 - The maximin LHS is optimised for a smooth version of the same maximin criterion over the whole \
 design at once, so as a one-shot design it can match or beat FSSF-f on COV; it cannot be extended.
 ";
+
+fn shear_box_params(mu_pp: f64, mu_r_pp: f64, mu_pw: f64, mu_r_pw: f64, d50: f64, sigma: f64, e: f64) -> crate::dem::experiments::ParamSet {
+    crate::dem::experiments::ParamSet::from_pairs(&[
+        ("E_p", e), ("E_w", e), ("nu_p", 0.3), ("e_pp", 0.6), ("e_pw", 0.6), ("mu_pp", mu_pp), ("mu_pw", mu_pw),
+        ("mu_r_pp", mu_r_pp), ("mu_r_pw", mu_r_pw), ("rho_p", 2600.0), ("d50", d50), ("sigma_ln", sigma),
+    ])
+}
+
+fn mean_sd(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let sd = if v.len() > 1 { (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { 0.0 };
+    (m, sd)
+}
+
+fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
+    use crate::dem::experiments::{shear_box::ShearBox, shear_box_liggghts::replay, Experiment, RunOptions};
+    if a.seeds == 0 {
+        anyhow::bail!("--seeds must be at least 1");
+    }
+    if a.vs.is_some() && crate::dem::liggghts::find_binary().is_none() {
+        anyhow::bail!("--vs liggghts: no LIGGGHTS binary on PATH (Debian: apt-get install liggghts)");
+    }
+    let sets = [
+        ("low friction", shear_box_params(0.1, 0.05, 0.2, 0.05, 5.0, 0.1, 5e6)),
+        ("mid friction", shear_box_params(0.5, 0.3, 0.363, 0.3, 5.0, 0.1, 5e6)),
+        ("high friction", shear_box_params(0.9, 0.6, 0.6, 0.5, 5.0, 0.1, 5e6)),
+    ];
+    let sb = ShearBox { box_scale: a.box_scale, ..Default::default() };
+    let mut s = String::new();
+    let cmd = format!(
+        "cargo run --release -- bench shear-box --box-scale {} --seeds {}{}{} --report {}",
+        a.box_scale, a.seeds, if a.vs.is_some() { " --vs liggghts" } else { "" }, if a.no_cost { " --no-cost" } else { "" },
+        a.report.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
+    );
+    let _ = writeln!(s, "# Calibration experiments\n\nRegenerate with\n\n```\n{cmd}\n```\n");
+    let _ = writeln!(s, "## Shear box: mbgc against LIGGGHTS 3.8\n");
+    let _ = writeln!(s, "Each run is made by mbgc (its own rest criteria decide when the fill is at rest and when the outflow has \
+        stopped), then replayed in LIGGGHTS from the identical particles and positions with the same schedule: fill, strike \
+        off at the rim, relax, remove the flap, remove what fell below the floor every chunk (`src/dem/experiments/shear_box_liggghts.rs` \
+        writes the data file, the walls as STL meshes (the flap as a plane: LIGGGHTS takes one mesh wall fix) and the input \
+        script). Both final states are measured by the same code. Box scale k = {}, E = 5e6 Pa, e = 0.6, rho_p = 2600, \
+        d50 = 5 mm, sigma_ln = 0.1, seeds 1..={}. Granular outflow is chaotic: two codes (or two seeds) differ run by run by \
+        a few degrees, so the comparison is of means over seeds, with the standard error of the difference.\n", a.box_scale, a.seeds);
+    let _ = writeln!(s, "| set | mu_pp, mu_r_pp, mu_pw, mu_r_pw | shear angle mbgc (deg) | LIGGGHTS | difference +- s.e. | bulk density mbgc (kg/m3) | LIGGGHTS | difference |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+    for (name, p) in &sets {
+        let (mut am, mut al, mut rm, mut rl, mut da) = (vec![], vec![], vec![], vec![], vec![]);
+        for seed in 1..=a.seeds {
+            eprintln!("{name}: seed {seed}");
+            let (o, rec) = sb.run_recorded(p, seed, &RunOptions::default())?;
+            am.push(o.get("shear_angle").unwrap_or(f64::NAN));
+            rm.push(o.get("bulk_density").unwrap_or(f64::NAN));
+            if a.vs.is_some() {
+                let l = replay(&a.work_dir.join(format!("{}-{seed}", name.replace(' ', "-"))), p, &rec)?;
+                al.push(l.shear_angle);
+                rl.push(l.bulk_density);
+                da.push(am.last().copied().unwrap_or(f64::NAN) - l.shear_angle);
+            }
+        }
+        let fr = |k: &str| p.get(k).unwrap_or(f64::NAN);
+        let (ma, sa) = mean_sd(&am);
+        let (mr, _) = mean_sd(&rm);
+        if a.vs.is_some() {
+            let (la, ls) = mean_sd(&al);
+            let (lr, _) = mean_sd(&rl);
+            let (_, sd_diff) = mean_sd(&da);
+            let se = sd_diff / (a.seeds as f64).sqrt();
+            let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | {la:.2} (sd {ls:.2}) | {:+.2} +- {se:.2} | {mr:.1} | {lr:.1} | {:+.2} % |",
+                fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"), ma - la, 100.0 * (mr / lr - 1.0));
+            println!("{name}: shear angle mbgc {ma:.2} LIGGGHTS {la:.2} ({:+.2} +- {se:.2}); bulk density mbgc {mr:.1} LIGGGHTS {lr:.1} ({:+.2} %)", ma - la, 100.0 * (mr / lr - 1.0));
+        } else {
+            let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | not run | | {mr:.1} | not run | |", fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"));
+        }
+    }
+    if !a.no_cost {
+        let _ = writeln!(s, "\n## Cost of a shear-box run (mbgc, one thread)\n");
+        let _ = writeln!(s, "Mid friction (mu_pp 0.5, mu_r_pp 0.3), rho_p 2600, seed 1; dt = 0.25 Rayleigh time of the smallest particle. \
+            The particle count follows the PSD's width (the box is k d_max wide, the particles are counted by number), the step \
+            count follows the modulus (dt ~ 1/sqrt(E)).\n");
+        let _ = writeln!(s, "| k | d50 (mm) | sigma_ln | E (Pa) | particles | steps | wall time (s) | shear angle | bulk density |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+        for k in [6.0, 10.0] {
+            for (d50, sigma) in [(5.0, 0.1), (5.0, 0.3), (11.16, 0.26)] {
+                for e in [5e6, 5e7] {
+                    eprintln!("cost: k {k} d50 {d50} sigma {sigma} E {e:e}");
+                    let sb = ShearBox { box_scale: k, ..Default::default() };
+                    let o = sb.run(&shear_box_params(0.5, 0.3, 0.363, 0.3, d50, sigma, e), 1, &RunOptions::default())?;
+                    let _ = writeln!(s, "| {k} | {d50} | {sigma} | {e:e} | {} | {} | {:.1} | {:.2} | {:.1} |", o.diagnostics.particles,
+                        o.diagnostics.steps, o.diagnostics.wall_time_s, o.get("shear_angle").unwrap_or(f64::NAN), o.get("bulk_density").unwrap_or(f64::NAN));
+                }
+            }
+        }
+    }
+    if let Some(path) = &a.report {
+        write_atomic(path, s.as_bytes())?;
+        println!("wrote {}", path.display());
+    } else {
+        println!("{s}");
+    }
+    Ok(())
+}

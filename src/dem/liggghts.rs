@@ -347,39 +347,7 @@ pub fn run_with_binary(binary: &Path, dir: &Path, case: &LiggghtsCase) -> Result
             std::fs::remove_file(stale).map_err(|e| Error::io(stale, e))?;
         }
     }
-    // One process, one thread. `-screen none` makes LIGGGHTS 3.8 crash in some fixes, so the
-    // screen goes to /dev/null and everything is read from the log.
-    let out = Command::new(binary)
-        .args(["-in", INPUT_FILE, "-log", LOG_FILE, "-screen", "/dev/null"])
-        .current_dir(dir)
-        .env("OMP_NUM_THREADS", "1")
-        .output()
-        .map_err(|e| {
-            Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display()))
-        })?;
-    let log_text = std::fs::read_to_string(&log).unwrap_or_default();
-    if !out.status.success() {
-        let error_line = log_text
-            .lines()
-            .find(|l| l.starts_with("ERROR"))
-            .map(str::to_owned)
-            .unwrap_or_else(|| {
-                let stderr = String::from_utf8_lossy(&out.stderr);
-                let tail: Vec<&str> = stderr.lines().rev().take(5).collect();
-                tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
-            });
-        return Err(Error::invalid(format!(
-            "LIGGGHTS ({}) failed with {} in {}: {}",
-            binary.display(),
-            out.status,
-            dir.display(),
-            if error_line.is_empty() {
-                format!("no ERROR line in {}", log.display())
-            } else {
-                error_line
-            }
-        )));
-    }
+    run_deck(binary, dir, INPUT_FILE, LOG_FILE)?;
     let log_text = crate::error::read_to_string(&log)?;
     let n = case.positions.len();
     let parsed = parse_log(&log.display().to_string(), &log_text, n, case.timed_steps)?;
@@ -396,6 +364,64 @@ pub fn run_with_binary(binary: &Path, dir: &Path, case: &LiggghtsCase) -> Result
         version: parsed.version,
         warnings: parsed.warnings,
     })
+}
+
+/// Runs LIGGGHTS on the input script `input` in `dir` (one process, one thread), writing the log
+/// to `log`; an error quotes the log's ERROR line.
+pub fn run_deck(binary: &Path, dir: &Path, input: &str, log: &str) -> Result<()> {
+    // `-screen none` makes LIGGGHTS 3.8 crash in some fixes, so the screen goes to /dev/null and
+    // everything is read from the log.
+    let out = Command::new(binary)
+        .args(["-in", input, "-log", log, "-screen", "/dev/null"])
+        .current_dir(dir)
+        .env("OMP_NUM_THREADS", "1")
+        .output()
+        .map_err(|e| Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display())))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let log_path = dir.join(log);
+    let log_text = std::fs::read_to_string(&log_path).unwrap_or_default();
+    let error_line = log_text
+        .lines()
+        .find(|l| l.starts_with("ERROR"))
+        .map(str::to_owned)
+        .unwrap_or_else(|| {
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            let tail: Vec<&str> = stderr.lines().rev().take(5).collect();
+            tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
+        });
+    Err(Error::invalid(format!(
+        "LIGGGHTS ({}) failed with {} in {}: {}",
+        binary.display(),
+        out.status,
+        dir.display(),
+        if error_line.is_empty() { format!("no ERROR line in {}", log_path.display()) } else { error_line }
+    )))
+}
+
+/// Rows `(id, radius, position)` of a `write_dump ... custom ... id radius x y z` file, whatever
+/// atoms it holds (atoms may have been deleted).
+pub fn parse_dump_rows(file: &str, text: &str) -> Result<Vec<(usize, f64, [f64; 3])>> {
+    let mut lines = text.lines();
+    lines
+        .by_ref()
+        .find(|l| l.starts_with("ITEM: ATOMS"))
+        .filter(|l| l.split_whitespace().skip(2).eq(["id", "radius", "x", "y", "z"]))
+        .ok_or_else(|| Error::input(file, "ITEM: ATOMS", "columns 'id radius x y z'"))?;
+    let mut rows = Vec::new();
+    for (k, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(|w| w.parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| Error::input(file, format!("atom row {}", k + 1), "5 numbers: id radius x y z"))?;
+        if v.len() != 5 || v.iter().any(|x| !x.is_finite()) || v[0] < 1.0 {
+            return Err(Error::input(file, format!("atom row {}", k + 1), "5 finite numbers: id radius x y z"));
+        }
+        rows.push((v[0] as usize, v[1], [v[2], v[3], v[4]]));
+    }
+    Ok(rows)
 }
 
 /// What [`run`] reads from a LIGGGHTS log.

@@ -7,6 +7,7 @@
 //! anything runs.
 
 pub mod shear_box;
+pub mod shear_box_liggghts;
 pub mod wall_impact;
 
 use std::path::PathBuf;

@@ -132,6 +132,25 @@ impl ShearBox {
     }
 }
 
+/// How a run went, so that another code can replay it: the initial particles and the schedule.
+#[derive(Debug, Clone)]
+pub struct RunRecord {
+    pub layout: Layout,
+    pub initial_positions: Vec<V3>,
+    pub dt: f64,
+    pub skin: f64,
+    /// Steps from the start to the strike-off.
+    pub fill_steps: u64,
+    /// Steps between strike-off and opening the flap (relaxation).
+    pub relax_steps: u64,
+    /// Steps with the flap open; particles below the floor are removed every `chunk` steps.
+    pub flow_steps: u64,
+    pub chunk: u64,
+    /// Particles below this height are removed (m).
+    pub removal_height: f64,
+    pub domain: (V3, V3),
+}
+
 /// The flank profile and its fits.
 #[derive(Debug, Clone, Default)]
 pub struct Flank {
@@ -294,6 +313,13 @@ impl Experiment for ShearBox {
     }
 
     fn run(&self, p: &ParamSet, seed: u64, opts: &RunOptions) -> Result<Outcome> {
+        self.run_recorded(p, seed, opts).map(|(o, _)| o)
+    }
+}
+
+impl ShearBox {
+    /// Runs the experiment and also returns what another code needs to replay it.
+    pub fn run_recorded(&self, p: &ParamSet, seed: u64, opts: &RunOptions) -> Result<(Outcome, RunRecord)> {
         let clock = Instant::now();
         let (materials, grain, wall_mat) = materials_from(p)?;
         let rho = p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
@@ -328,7 +354,7 @@ impl Experiment for ShearBox {
             ];
             particles.add(x, 0.5 * d, rho, grain)?;
         }
-        let n0 = particles.len();
+        let initial_positions = particles.x.clone();
 
         // Floor, back wall, two side walls and the flap, tall enough for the falling column.
         let wall_h = col_top.max(h) + lay.d_max;
@@ -386,6 +412,8 @@ impl Experiment for ShearBox {
         let dt =
             self.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, mat.youngs_modulus, mat.poisson);
         let margin = 4.0 * lay.d_max + 0.5 * h;
+        let domain = ([-margin - l, -margin, -margin - h], [2.0 * l + margin, w + margin, wall_h + margin]);
+        let skin = 0.2 * lay.d_min;
         let scene = Scene {
             particles,
             walls,
@@ -422,6 +450,7 @@ impl Experiment for ShearBox {
         if !filled {
             warnings.push("filling did not come to rest within the time limit".into());
         }
+        let fill_steps = sim.step;
         // Strike off at the rim, then let the bed relax a little.
         let cut: Vec<bool> = sim.particles.x.iter().map(|x| x[2] > h).collect();
         sim.remove_particles(&cut);
@@ -442,6 +471,7 @@ impl Experiment for ShearBox {
 
         // Open the flap; material that falls off the floor's edge leaves the scene.
         sim.set_wall_active(flap, false);
+        let open_step = sim.step;
         let open_time = sim.time;
         let max_flow = sim.step + (60.0 * (h / G).sqrt() / dt) as u64;
         let mut quiet = 0;
@@ -514,8 +544,19 @@ impl Experiment for ShearBox {
         }
         let mass_left: f64 = sim.particles.m.iter().sum();
         let outflow_fraction = 1.0 - mass_left / (mass_left + left_mass);
-        let _ = n0;
-        Ok(Outcome {
+        let record = RunRecord {
+            layout: lay.clone(),
+            initial_positions,
+            dt,
+            skin,
+            fill_steps,
+            relax_steps: chunk,
+            flow_steps: sim.step - open_step,
+            chunk,
+            removal_height: -2.0 * lay.d_max,
+            domain,
+        };
+        let outcome = Outcome {
             responses: vec![
                 ("shear_angle".into(), shear_angle),
                 ("bulk_density".into(), bulk_density),
@@ -530,7 +571,8 @@ impl Experiment for ShearBox {
                 wall_time_s: clock.elapsed().as_secs_f64(),
                 warnings,
             },
-        })
+        };
+        Ok((outcome, record))
     }
 }
 
