@@ -5,6 +5,7 @@
 //! ([`psd`]) turn sieve data into the two PSD inputs of the metamodel; later stages simulate,
 //! fit, and calibrate.
 
+pub mod campaign;
 pub mod cli;
 pub mod dem;
 pub mod error;

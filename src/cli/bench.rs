@@ -523,41 +523,88 @@ distance between points; their MID is only somewhat better than random and their
 design at once, so as a one-shot design it can match or beat FSSF-f on COV; it cannot be extended.
 ";
 
-fn shear_box_params(mu_pp: f64, mu_r_pp: f64, mu_pw: f64, mu_r_pw: f64, d50: f64, sigma: f64, e: f64) -> crate::dem::experiments::ParamSet {
+fn shear_box_params(
+    mu_pp: f64,
+    mu_r_pp: f64,
+    mu_pw: f64,
+    mu_r_pw: f64,
+    d50: f64,
+    sigma: f64,
+    e: f64,
+) -> crate::dem::experiments::ParamSet {
     crate::dem::experiments::ParamSet::from_pairs(&[
-        ("E_p", e), ("E_w", e), ("nu_p", 0.3), ("e_pp", 0.6), ("e_pw", 0.6), ("mu_pp", mu_pp), ("mu_pw", mu_pw),
-        ("mu_r_pp", mu_r_pp), ("mu_r_pw", mu_r_pw), ("rho_p", 2600.0), ("d50", d50), ("sigma_ln", sigma),
+        ("E_p", e),
+        ("E_w", e),
+        ("nu_p", 0.3),
+        ("e_pp", 0.6),
+        ("e_pw", 0.6),
+        ("mu_pp", mu_pp),
+        ("mu_pw", mu_pw),
+        ("mu_r_pp", mu_r_pp),
+        ("mu_r_pw", mu_r_pw),
+        ("rho_p", 2600.0),
+        ("d50", d50),
+        ("sigma_ln", sigma),
     ])
 }
 
 fn mean_sd(v: &[f64]) -> (f64, f64) {
     let n = v.len() as f64;
     let m = v.iter().sum::<f64>() / n;
-    let sd = if v.len() > 1 { (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { 0.0 };
+    let sd = if v.len() > 1 {
+        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+    } else {
+        0.0
+    };
     (m, sd)
 }
 
 fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
-    use crate::dem::experiments::{shear_box::ShearBox, shear_box_liggghts::replay, Experiment, RunOptions};
+    use crate::dem::experiments::{
+        shear_box::ShearBox, shear_box_liggghts::replay, Experiment, RunOptions,
+    };
     if a.seeds == 0 {
         anyhow::bail!("--seeds must be at least 1");
     }
     if a.vs.is_some() && crate::dem::liggghts::find_binary().is_none() {
-        anyhow::bail!("--vs liggghts: no LIGGGHTS binary on PATH (Debian: apt-get install liggghts)");
+        anyhow::bail!(
+            "--vs liggghts: no LIGGGHTS binary on PATH (Debian: apt-get install liggghts)"
+        );
     }
     let sets = [
-        ("low friction", shear_box_params(0.1, 0.05, 0.2, 0.05, 5.0, 0.1, 5e6)),
-        ("mid friction", shear_box_params(0.5, 0.3, 0.363, 0.3, 5.0, 0.1, 5e6)),
-        ("high friction", shear_box_params(0.9, 0.6, 0.6, 0.5, 5.0, 0.1, 5e6)),
+        (
+            "low friction",
+            shear_box_params(0.3, 0.1, 0.3, 0.1, 5.0, 0.1, 5e6),
+        ),
+        (
+            "mid friction",
+            shear_box_params(0.5, 0.3, 0.363, 0.3, 5.0, 0.1, 5e6),
+        ),
+        (
+            "high friction",
+            shear_box_params(0.9, 0.6, 0.6, 0.5, 5.0, 0.1, 5e6),
+        ),
     ];
-    let sb = ShearBox { box_scale: a.box_scale, ..Default::default() };
+    let sb = ShearBox {
+        box_scale: a.box_scale,
+        ..Default::default()
+    };
     let mut s = String::new();
     let cmd = format!(
         "cargo run --release -- bench shear-box --box-scale {} --seeds {}{}{} --report {}",
-        a.box_scale, a.seeds, if a.vs.is_some() { " --vs liggghts" } else { "" }, if a.no_cost { " --no-cost" } else { "" },
-        a.report.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
+        a.box_scale,
+        a.seeds,
+        if a.vs.is_some() { " --vs liggghts" } else { "" },
+        if a.no_cost { " --no-cost" } else { "" },
+        a.report
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default()
     );
-    let _ = writeln!(s, "# Calibration experiments\n\nRegenerate with\n\n```\n{cmd}\n```\n");
+    let _ = writeln!(
+        s,
+        "# Calibration experiments\n\nRegenerate with\n\n```\n{cmd}\n```\n"
+    );
     let _ = writeln!(s, "## Shear box: mbgc against LIGGGHTS 3.8\n");
     let _ = writeln!(s, "Each run is made by mbgc (its own rest criteria decide when the fill is at rest and when the outflow has \
         stopped), then replayed in LIGGGHTS from the identical particles and positions with the same schedule: fill, strike \
@@ -576,7 +623,12 @@ fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
             am.push(o.get("shear_angle").unwrap_or(f64::NAN));
             rm.push(o.get("bulk_density").unwrap_or(f64::NAN));
             if a.vs.is_some() {
-                let l = replay(&a.work_dir.join(format!("{}-{seed}", name.replace(' ', "-"))), p, &rec)?;
+                let l = replay(
+                    &a.work_dir
+                        .join(format!("{}-{seed}", name.replace(' ', "-"))),
+                    p,
+                    &rec,
+                )?;
                 al.push(l.shear_angle);
                 rl.push(l.bulk_density);
                 da.push(am.last().copied().unwrap_or(f64::NAN) - l.shear_angle);
@@ -608,10 +660,24 @@ fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
             for (d50, sigma) in [(5.0, 0.1), (5.0, 0.3), (11.16, 0.26)] {
                 for e in [5e6, 5e7] {
                     eprintln!("cost: k {k} d50 {d50} sigma {sigma} E {e:e}");
-                    let sb = ShearBox { box_scale: k, ..Default::default() };
-                    let o = sb.run(&shear_box_params(0.5, 0.3, 0.363, 0.3, d50, sigma, e), 1, &RunOptions::default())?;
-                    let _ = writeln!(s, "| {k} | {d50} | {sigma} | {e:e} | {} | {} | {:.1} | {:.2} | {:.1} |", o.diagnostics.particles,
-                        o.diagnostics.steps, o.diagnostics.wall_time_s, o.get("shear_angle").unwrap_or(f64::NAN), o.get("bulk_density").unwrap_or(f64::NAN));
+                    let sb = ShearBox {
+                        box_scale: k,
+                        ..Default::default()
+                    };
+                    let o = sb.run(
+                        &shear_box_params(0.5, 0.3, 0.363, 0.3, d50, sigma, e),
+                        1,
+                        &RunOptions::default(),
+                    )?;
+                    let _ = writeln!(
+                        s,
+                        "| {k} | {d50} | {sigma} | {e:e} | {} | {} | {:.1} | {:.2} | {:.1} |",
+                        o.diagnostics.particles,
+                        o.diagnostics.steps,
+                        o.diagnostics.wall_time_s,
+                        o.get("shear_angle").unwrap_or(f64::NAN),
+                        o.get("bulk_density").unwrap_or(f64::NAN)
+                    );
                 }
             }
         }

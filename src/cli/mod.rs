@@ -3,9 +3,11 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+pub mod campaign;
 pub mod metrics;
 pub mod psd;
 pub mod sample;
+pub mod simulate;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -26,6 +28,10 @@ pub enum Command {
     Metrics(metrics::MetricsArgs),
     /// Particle size distributions: fit sieve data, draw particle sets.
     Psd(psd::PsdArgs),
+    /// Run a calibration experiment for every row of a design (resumable, shardable).
+    Simulate(simulate::SimulateArgs),
+    /// Campaign tables: merge shards, report progress.
+    Campaign(campaign::CampaignArgs),
     /// Benchmarks and reproduction reports.
     Bench(bench::BenchArgs),
 }
@@ -35,6 +41,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sample(a) => sample::run(&a),
         Command::Metrics(a) => metrics::run(&a),
         Command::Psd(a) => psd::run(&a),
+        Command::Simulate(a) => simulate::run(&a),
+        Command::Campaign(a) => campaign::run(&a),
         Command::Bench(a) => bench::run(&a),
     }
 }

@@ -376,7 +376,9 @@ pub fn run_deck(binary: &Path, dir: &Path, input: &str, log: &str) -> Result<()>
         .current_dir(dir)
         .env("OMP_NUM_THREADS", "1")
         .output()
-        .map_err(|e| Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display())))?;
+        .map_err(|e| {
+            Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display()))
+        })?;
     if out.status.success() {
         return Ok(());
     }
@@ -396,7 +398,11 @@ pub fn run_deck(binary: &Path, dir: &Path, input: &str, log: &str) -> Result<()>
         binary.display(),
         out.status,
         dir.display(),
-        if error_line.is_empty() { format!("no ERROR line in {}", log_path.display()) } else { error_line }
+        if error_line.is_empty() {
+            format!("no ERROR line in {}", log_path.display())
+        } else {
+            error_line
+        }
     )))
 }
 
@@ -407,7 +413,11 @@ pub fn parse_dump_rows(file: &str, text: &str) -> Result<Vec<(usize, f64, [f64; 
     lines
         .by_ref()
         .find(|l| l.starts_with("ITEM: ATOMS"))
-        .filter(|l| l.split_whitespace().skip(2).eq(["id", "radius", "x", "y", "z"]))
+        .filter(|l| {
+            l.split_whitespace()
+                .skip(2)
+                .eq(["id", "radius", "x", "y", "z"])
+        })
         .ok_or_else(|| Error::input(file, "ITEM: ATOMS", "columns 'id radius x y z'"))?;
     let mut rows = Vec::new();
     for (k, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
@@ -415,9 +425,19 @@ pub fn parse_dump_rows(file: &str, text: &str) -> Result<Vec<(usize, f64, [f64; 
             .split_whitespace()
             .map(|w| w.parse::<f64>())
             .collect::<std::result::Result<_, _>>()
-            .map_err(|_| Error::input(file, format!("atom row {}", k + 1), "5 numbers: id radius x y z"))?;
+            .map_err(|_| {
+                Error::input(
+                    file,
+                    format!("atom row {}", k + 1),
+                    "5 numbers: id radius x y z",
+                )
+            })?;
         if v.len() != 5 || v.iter().any(|x| !x.is_finite()) || v[0] < 1.0 {
-            return Err(Error::input(file, format!("atom row {}", k + 1), "5 finite numbers: id radius x y z"));
+            return Err(Error::input(
+                file,
+                format!("atom row {}", k + 1),
+                "5 finite numbers: id radius x y z",
+            ));
         }
         rows.push((v[0] as usize, v[1], [v[2], v[3], v[4]]));
     }

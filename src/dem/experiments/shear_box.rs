@@ -319,7 +319,12 @@ impl Experiment for ShearBox {
 
 impl ShearBox {
     /// Runs the experiment and also returns what another code needs to replay it.
-    pub fn run_recorded(&self, p: &ParamSet, seed: u64, opts: &RunOptions) -> Result<(Outcome, RunRecord)> {
+    pub fn run_recorded(
+        &self,
+        p: &ParamSet,
+        seed: u64,
+        opts: &RunOptions,
+    ) -> Result<(Outcome, RunRecord)> {
         let clock = Instant::now();
         let (materials, grain, wall_mat) = materials_from(p)?;
         let rho = p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
@@ -412,7 +417,10 @@ impl ShearBox {
         let dt =
             self.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, mat.youngs_modulus, mat.poisson);
         let margin = 4.0 * lay.d_max + 0.5 * h;
-        let domain = ([-margin - l, -margin, -margin - h], [2.0 * l + margin, w + margin, wall_h + margin]);
+        let domain = (
+            [-margin - l, -margin, -margin - h],
+            [2.0 * l + margin, w + margin, wall_h + margin],
+        );
         let skin = 0.2 * lay.d_min;
         let scene = Scene {
             particles,

@@ -1,0 +1,27 @@
+//! Campaigns: a calibration experiment run for every row of a design, into a table that survives
+//! crashes, restarts and cluster job arrays.
+//!
+//! - [`registry`]: experiments by command-line name, built with [`ExperimentSettings`].
+//! - [`plan`]: the design read and checked row by row, `--set` constants, `--shard`, run ids and
+//!   seeds ([`identity`]).
+//! - [`runner`]: worker threads, one appending writer, resume.
+//! - [`table`]: the table's columns, lines, and reading it back (incomplete last line).
+//! - [`merge`] and [`status`].
+
+pub mod identity;
+pub mod merge;
+pub mod plan;
+pub mod registry;
+pub mod runner;
+#[doc(hidden)]
+pub mod sleep_test;
+pub mod status;
+pub mod table;
+
+pub use identity::{row_seed, run_id};
+pub use merge::{merge, merge_tables, MergeSummary};
+pub use plan::{parse_set, Plan, PlannedRun, Shard};
+pub use registry::{experiment_by_name, experiment_names, ExperimentSettings};
+pub use runner::{run_campaign, CampaignOptions, Summary};
+pub use status::{meta_path, status, Meta, Status};
+pub use table::{read_table, Table};

@@ -1,0 +1,328 @@
+//! What a campaign will run: the design read and checked row by row, `--set` constants added,
+//! each row's run id and seed derived, and the rows of this shard selected. Nothing is written and
+//! nothing runs until a whole plan has been built, so a bad row stops the campaign before it
+//! starts.
+
+use std::collections::HashSet;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use super::identity::{row_seed, run_id};
+use super::registry::ExperimentSettings;
+use super::table;
+use crate::dem::experiments::{Experiment, ParamSet};
+use crate::error::{Error, Result};
+use crate::sampling::design::read_numeric_csv;
+
+/// `--shard K/N`: the rows with `row % N == K - 1` (K is 1-based, rows 0-based).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    pub fn parse(s: &str) -> Result<Shard> {
+        let bad = || {
+            Error::invalid(format!(
+                "--shard {s}: expected K/N with whole numbers 1 <= K <= N, e.g. --shard 2/8"
+            ))
+        };
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: usize = k.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+
+    pub fn contains(&self, row: usize) -> bool {
+        row % self.count == self.index - 1
+    }
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// `--set name=value`.
+pub fn parse_set(s: &str) -> Result<(String, f64)> {
+    let bad = |why: &str| Error::invalid(format!("--set {s}: {why}"));
+    let (name, value) = s
+        .split_once('=')
+        .ok_or_else(|| bad("expected NAME=VALUE, e.g. --set impact_speed=3.9"))?;
+    let name = name.trim();
+    if name.is_empty() {
+        return Err(bad("empty parameter name"));
+    }
+    let v: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| bad(&format!("expected a number after '=', found \"{value}\"")))?;
+    if !v.is_finite() {
+        return Err(bad("expected a finite number"));
+    }
+    Ok((name.to_string(), v))
+}
+
+/// One design row, ready to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedRun {
+    /// 0-based index of the row in the design.
+    pub row: usize,
+    /// Line of the row in the design file: `row + 2` (header on line 1), the numbering of
+    /// `read_numeric_csv`'s own messages (blank lines, which the CSV reader skips, are not
+    /// counted).
+    pub line: u64,
+    pub run_id: String,
+    /// Seed handed to [`Experiment::run`]: [`row_seed`] of the campaign seed and the row.
+    pub seed: u64,
+    /// Inputs in table order: design columns, then `--set` constants.
+    pub params: ParamSet,
+}
+
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub experiment: String,
+    pub design: PathBuf,
+    /// Campaign seed (`--seed`).
+    pub seed: u64,
+    pub set: Vec<(String, f64)>,
+    pub settings: ExperimentSettings,
+    pub shard: Option<Shard>,
+    /// Input columns of the table: the design's columns in design order, then `--set` names.
+    pub inputs: Vec<String>,
+    pub responses: Vec<String>,
+    /// Every row of the design (all shards), in design order, so that a resumed table can be
+    /// checked against the row it claims to hold.
+    pub rows: Vec<PlannedRun>,
+}
+
+impl Plan {
+    /// Reads `design` and checks every row (all shards) with [`Experiment::check`]; the first bad
+    /// row is refused naming the file, its line and the parameter.
+    pub fn new(
+        experiment: &dyn Experiment,
+        design: &Path,
+        set: &[(String, f64)],
+        seed: u64,
+        settings: &ExperimentSettings,
+        shard: Option<Shard>,
+    ) -> Result<Plan> {
+        let file = design.display().to_string();
+        let (header, values) = read_numeric_csv(design)?;
+        if values.is_empty() {
+            return Err(Error::input(
+                &file,
+                "rows",
+                "expected at least one design row after the header",
+            ));
+        }
+        let responses: Vec<String> = experiment
+            .responses()
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let reserved = |name: &str| {
+            table::FIXED_COLUMNS.contains(&name)
+                || table::DIAGNOSTIC_COLUMNS.contains(&name)
+                || responses.iter().any(|r| r == name)
+        };
+        for h in &header {
+            if reserved(h) {
+                return Err(Error::input(
+                    &file,
+                    format!("column {h}"),
+                    format!(
+                        "clashes with the output column {h} of the campaign table; rename the \
+                         design column"
+                    ),
+                ));
+            }
+        }
+        for (i, (name, v)) in set.iter().enumerate() {
+            if set[..i].iter().any(|(n, _)| n == name) {
+                return Err(Error::invalid(format!("--set {name}: given twice")));
+            }
+            if header.contains(name) {
+                return Err(Error::input(
+                    &file,
+                    format!("column {name}"),
+                    format!(
+                        "also given as --set {name}={v}; a parameter comes either from the \
+                         design or from --set: drop one"
+                    ),
+                ));
+            }
+            if reserved(name) {
+                return Err(Error::invalid(format!(
+                    "--set {name}: clashes with the output column {name} of the campaign table"
+                )));
+            }
+        }
+        let needed = experiment.parameters();
+        for p in &needed {
+            if !header.iter().any(|h| h == p) && !set.iter().any(|(n, _)| n == p) {
+                return Err(Error::input(
+                    &file,
+                    format!("column {p}"),
+                    format!(
+                        "missing; {} needs {}: add a column {p} or pass --set {p}=VALUE",
+                        experiment.name(),
+                        needed.join(", ")
+                    ),
+                ));
+            }
+        }
+        let mut rows = Vec::with_capacity(values.len());
+        let mut ids = HashSet::with_capacity(values.len());
+        for (row, v) in values.iter().enumerate() {
+            let line = row as u64 + 2;
+            let mut params = ParamSet::new();
+            for (name, &x) in header.iter().zip(v) {
+                params.set(name, x);
+            }
+            for (name, x) in set {
+                params.set(name, *x);
+            }
+            experiment.check(&params).map_err(|e| {
+                Error::input(
+                    &file,
+                    format!("line {line} (row {row})"),
+                    format!("{e}; nothing was run"),
+                )
+            })?;
+            let seed = row_seed(seed, row as u64);
+            let run_id = run_id(experiment.name(), &params, seed, settings);
+            // Different rows have different seeds, so equal ids would be a hash collision.
+            if !ids.insert(run_id.clone()) {
+                return Err(Error::invalid(format!(
+                    "{file}: line {line} (row {row}): run id {run_id} collides with an earlier \
+                     row; change --seed"
+                )));
+            }
+            rows.push(PlannedRun {
+                row,
+                line,
+                run_id,
+                seed,
+                params,
+            });
+        }
+        Ok(Plan {
+            experiment: experiment.name().to_string(),
+            design: design.to_path_buf(),
+            seed,
+            set: set.to_vec(),
+            settings: *settings,
+            shard,
+            inputs: header
+                .into_iter()
+                .chain(set.iter().map(|(n, _)| n.clone()))
+                .collect(),
+            responses,
+            rows,
+        })
+    }
+
+    /// The table header: fixed columns, inputs, responses, diagnostics.
+    pub fn columns(&self) -> Vec<String> {
+        table::columns(&self.inputs, &self.responses)
+    }
+
+    /// Rows of this shard (all rows without `--shard`).
+    pub fn selected(&self) -> impl Iterator<Item = &PlannedRun> {
+        self.rows
+            .iter()
+            .filter(|r| self.shard.is_none_or(|s| s.contains(r.row)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::sleep_test::SleepTest;
+
+    #[test]
+    fn shard_parsing_accepts_k_of_n_and_refuses_the_rest_naming_the_option() {
+        assert_eq!(Shard::parse("2/3").unwrap(), Shard { index: 2, count: 3 });
+        assert_eq!(Shard::parse("1/1").unwrap().to_string(), "1/1");
+        for bad in ["0/3", "4/3", "x/y", "3", "1/0", "-1/3", "1/3/4", ""] {
+            let e = Shard::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("--shard"), "{bad}: {e}");
+        }
+        let s = Shard { index: 2, count: 3 };
+        assert_eq!(
+            (0..9).filter(|&r| s.contains(r)).collect::<Vec<_>>(),
+            [1, 4, 7]
+        );
+    }
+
+    #[test]
+    fn set_parsing() {
+        assert_eq!(
+            parse_set("impact_speed=3.9").unwrap(),
+            ("impact_speed".into(), 3.9)
+        );
+        assert_eq!(parse_set("x=-1e3").unwrap(), ("x".into(), -1e3));
+        for bad in ["x", "=3", "x=", "x=abc", "x=NaN", "x=inf"] {
+            let e = parse_set(bad).unwrap_err().to_string();
+            assert!(e.contains("--set"), "{bad}: {e}");
+        }
+    }
+
+    fn design(text: &str) -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("d.csv");
+        std::fs::write(&p, text).unwrap();
+        (dir, p)
+    }
+
+    fn plan(text: &str, set: &[(&str, f64)]) -> Result<Plan> {
+        let (_dir, p) = design(text);
+        let set: Vec<(String, f64)> = set.iter().map(|(n, v)| (n.to_string(), *v)).collect();
+        Plan::new(
+            &SleepTest,
+            &p,
+            &set,
+            1,
+            &ExperimentSettings::default(),
+            None,
+        )
+    }
+
+    #[test]
+    fn columns_are_design_then_set_and_rows_are_checked() {
+        let p = plan("y,extra,x\n1,5,2\n\n3,6,4\n", &[("sleep_ms", 0.0)]).unwrap();
+        assert_eq!(p.inputs, ["y", "extra", "x", "sleep_ms"]);
+        assert_eq!(p.rows.len(), 2);
+        assert_eq!(p.rows[1].line, 3, "numbered like read_numeric_csv");
+        assert_eq!(
+            p.rows[1].params.iter().collect::<Vec<_>>(),
+            [("y", 3.0), ("extra", 6.0), ("x", 4.0), ("sleep_ms", 0.0)]
+        );
+        assert_eq!(
+            p.columns()[..8],
+            ["run_id", "row", "status", "seed", "y", "extra", "x", "sleep_ms"]
+        );
+
+        let e = plan("x,y\n1,2\n1,-2\n", &[]).unwrap_err().to_string();
+        assert!(
+            e.contains("d.csv") && e.contains("line 3 (row 1)") && e.contains("parameter y"),
+            "{e}"
+        );
+        let e = plan("x\n1\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("column y") && e.contains("--set y="), "{e}");
+        let e = plan("x,y\n1,2\n", &[("y", 1.0)]).unwrap_err().to_string();
+        assert!(e.contains("column y") && e.contains("--set y=1"), "{e}");
+        let e = plan("x,y,status\n1,2,0\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("column status"), "{e}");
+        let e = plan("x,y\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("d.csv: rows"), "{e}");
+        let e = plan("x,y\n1,2\n", &[("f", 1.0)]).unwrap_err().to_string();
+        assert!(e.contains("--set f"), "{e}");
+    }
+}

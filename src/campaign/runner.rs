@@ -1,0 +1,391 @@
+//! Runs a plan: worker threads (one run each) send finished lines over a channel to the calling
+//! thread, the only writer, which appends each line with one `write_all` and `sync_data`. A kill
+//! at any moment therefore loses at most the runs in flight and leaves at worst an incomplete last
+//! line, which the next start truncates before redoing that run.
+
+use std::collections::HashSet;
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::plan::{Plan, PlannedRun};
+use super::status::Meta;
+use super::table::{self, csv_line, read_table, DONE, FAILED};
+use crate::dem::experiments::{Experiment, Outcome, RunOptions};
+use crate::error::{write_atomic, Error, Result};
+
+#[derive(Debug, Clone)]
+pub struct CampaignOptions {
+    /// The table; an existing one is resumed.
+    pub out: PathBuf,
+    /// Worker threads, each running one run at a time.
+    pub threads: usize,
+    /// Each run gets `vtk_dir/<run_id>/` for its snapshots.
+    pub vtk_dir: Option<PathBuf>,
+    /// Progress bar on stderr (hidden anyway when stderr is not a terminal).
+    pub progress: bool,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Rows of this shard (all design rows without a shard).
+    pub planned: usize,
+    /// Rows already in the table (done or failed) and therefore not run again.
+    pub skipped: usize,
+    pub done: usize,
+    pub failed: usize,
+    /// Bytes of an incomplete last line removed from the table before resuming.
+    pub truncated_bytes: u64,
+    pub threads: usize,
+    pub elapsed_s: f64,
+}
+
+/// Runs every row of the plan's shard that the table does not hold yet.
+pub fn run_campaign(
+    experiment: &dyn Experiment,
+    plan: &Plan,
+    opts: &CampaignOptions,
+) -> Result<Summary> {
+    if opts.threads == 0 {
+        return Err(Error::invalid("--threads: expected at least 1"));
+    }
+    if experiment.name() != plan.experiment {
+        return Err(Error::invalid(format!(
+            "the plan was made for {} but the experiment is {}",
+            plan.experiment,
+            experiment.name()
+        )));
+    }
+    let t0 = Instant::now();
+    let (present, truncated_bytes) = prepare_table(plan, &opts.out)?;
+    let selected: Vec<&PlannedRun> = plan.selected().collect();
+    let todo: Vec<&PlannedRun> = selected
+        .iter()
+        .copied()
+        .filter(|r| !present.contains(r.run_id.as_str()))
+        .collect();
+    let threads = opts.threads.min(todo.len()).max(1);
+    let mut summary = Summary {
+        planned: selected.len(),
+        skipped: selected.len() - todo.len(),
+        done: 0,
+        failed: 0,
+        truncated_bytes,
+        threads,
+        elapsed_s: 0.0,
+    };
+    if todo.is_empty() {
+        summary.elapsed_s = t0.elapsed().as_secs_f64();
+        return Ok(summary);
+    }
+    let mut file = OpenOptions::new()
+        .append(true)
+        .open(&opts.out)
+        .map_err(|e| Error::io(&opts.out, e))?;
+    let bar = progress_bar(opts.progress, todo.len(), summary.skipped);
+
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<(bool, Result<Vec<u8>>)>();
+    let mut write_error = None;
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, stop, todo) = (&next, &stop, &todo);
+            s.spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(run) = todo.get(i) else { break };
+                    let (failed, line) = execute(experiment, plan, run, opts.vtk_dir.as_deref());
+                    if tx.send((failed, line)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        for (failed, line) in rx {
+            if let Err(e) = line.and_then(|l| append(&mut file, &opts.out, &l)) {
+                // Workers finish the runs in flight, whose lines are then dropped (and redone
+                // on the next start); no new run starts.
+                stop.store(true, Ordering::Relaxed);
+                write_error = Some(e);
+                break;
+            }
+            if failed {
+                summary.failed += 1;
+            } else {
+                summary.done += 1;
+            }
+            bar.inc(1);
+        }
+    });
+    if let Some(e) = write_error {
+        bar.abandon();
+        return Err(e);
+    }
+    bar.finish();
+    summary.elapsed_s = t0.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// Creates the table (header only) or checks an existing one against the plan, writes the
+/// sidecar, and truncates an incomplete last line. Returns the run ids already present. Nothing
+/// is modified when the table belongs to another campaign.
+fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashSet<String>, u64)> {
+    let file = out.display().to_string();
+    let columns = plan.columns();
+    let mut present = HashSet::new();
+    let exists = out.exists();
+    let table = if exists { Some(read_table(out)?) } else { None };
+    if let Some(t) = &table {
+        if t.header.is_empty() && t.partial_len > 0 {
+            return Err(Error::input(
+                &file,
+                "header",
+                "no complete header line: not a campaign table; choose another --out or \
+                 remove the file",
+            ));
+        }
+        if !t.header.is_empty() && t.header != columns {
+            return Err(header_mismatch(&file, &columns, &t.header));
+        }
+        for (line, rec) in &t.records {
+            let field = || format!("line {line}");
+            let row: usize = rec[1].parse().map_err(|_| {
+                Error::input(
+                    &file,
+                    field(),
+                    format!("row: expected a row number, found \"{}\"", &rec[1]),
+                )
+            })?;
+            if rec[2] != *DONE && rec[2] != *FAILED {
+                return Err(Error::input(
+                    &file,
+                    field(),
+                    format!("status: expected done or failed, found \"{}\"", &rec[2]),
+                ));
+            }
+            let Some(planned) = plan.rows.get(row) else {
+                return Err(Error::input(
+                    &file,
+                    field(),
+                    format!(
+                        "row {row} is beyond the {} rows of {}: the table comes from another \
+                         design; choose another --out",
+                        plan.rows.len(),
+                        plan.design.display()
+                    ),
+                ));
+            };
+            if planned.run_id != rec[0] {
+                return Err(Error::input(
+                    &file,
+                    field(),
+                    format!(
+                        "row {row} has run_id {}, but {} on this design with this --seed, --set \
+                         and --box-scale gives {}: the table comes from another campaign; choose \
+                         another --out",
+                        &rec[0], plan.experiment, planned.run_id
+                    ),
+                ));
+            }
+            present.insert(rec[0].to_string());
+        }
+    }
+    Meta::of(plan).write(out)?;
+    match &table {
+        Some(t) if !t.header.is_empty() => {
+            if t.partial_len > 0 {
+                let f = OpenOptions::new()
+                    .write(true)
+                    .open(out)
+                    .map_err(|e| Error::io(out, e))?;
+                f.set_len(t.complete_len)
+                    .and_then(|()| f.sync_all())
+                    .map_err(|e| Error::io(out, e))?;
+            }
+        }
+        // New (or empty) table: the header appears whole or not at all.
+        _ => write_atomic(out, &csv_line(&columns)?)?,
+    }
+    Ok((present, table.map(|t| t.partial_len).unwrap_or(0)))
+}
+
+fn header_mismatch(file: &str, want: &[String], found: &[String]) -> Error {
+    let k = want
+        .iter()
+        .zip(found)
+        .position(|(a, b)| a != b)
+        .unwrap_or(want.len().min(found.len()));
+    let at = |h: &[String]| h.get(k).map(|s| s.as_str()).unwrap_or("(none)").to_string();
+    Error::input(
+        file,
+        "header",
+        format!(
+            "the table has other columns than this campaign (other experiment, design columns or \
+             --set): column {} is {} in the file but {} here ({} vs {} columns); choose another \
+             --out or remove the file",
+            k + 1,
+            at(found),
+            at(want),
+            found.len(),
+            want.len()
+        ),
+    )
+}
+
+/// One run, its failures and panics included, as a table line.
+fn execute(
+    experiment: &dyn Experiment,
+    plan: &Plan,
+    run: &PlannedRun,
+    vtk_dir: Option<&Path>,
+) -> (bool, Result<Vec<u8>>) {
+    let opts = RunOptions {
+        vtk_dir: vtk_dir.map(|d| d.join(&run.run_id)),
+        picture: None,
+        threads: 1,
+    };
+    let result: std::result::Result<Outcome, String> = match catch_unwind(AssertUnwindSafe(|| {
+        experiment.run(&run.params, run.seed, &opts)
+    })) {
+        Ok(Ok(o)) => match plan.responses.iter().find(|r| o.get(r).is_none()) {
+            None => Ok(o),
+            Some(r) => Err(format!("the experiment returned no response {r}")),
+        },
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(payload) => Err(format!("panic: {}", panic_message(payload.as_ref()))),
+    };
+    (
+        result.is_err(),
+        table::run_line(run, &plan.responses, &result),
+    )
+}
+
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "(no message)".into()
+    }
+}
+
+fn append(file: &mut File, path: &Path, line: &[u8]) -> Result<()> {
+    // One write of the whole line, then to disk before the next: a crash leaves whole lines and
+    // at most one incomplete last line.
+    file.write_all(line)
+        .and_then(|()| file.sync_data())
+        .map_err(|e| Error::io(path, e))
+}
+
+fn progress_bar(show: bool, len: usize, skipped: usize) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} runs {msg}({per_sec}, ETA {eta})",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    if skipped > 0 {
+        bar.set_message(format!("(+{skipped} already done) "));
+    }
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::plan::Shard;
+    use crate::campaign::registry::ExperimentSettings;
+    use crate::campaign::sleep_test::SleepTest;
+
+    fn setup(design: &str, shard: Option<Shard>) -> (tempfile::TempDir, Plan, CampaignOptions) {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path().join("design.csv");
+        std::fs::write(&d, design).unwrap();
+        let plan = Plan::new(
+            &SleepTest,
+            &d,
+            &[],
+            1,
+            &ExperimentSettings::default(),
+            shard,
+        )
+        .unwrap();
+        let opts = CampaignOptions {
+            out: dir.path().join("out.csv"),
+            threads: 2,
+            vtk_dir: None,
+            progress: false,
+        };
+        (dir, plan, opts)
+    }
+
+    #[test]
+    fn failures_and_panics_become_failed_rows_and_resume_skips_everything() {
+        let (_dir, plan, opts) =
+            setup("x,y,fail,panic\n1,1,0,0\n2,1,1,0\n3,1,0,1\n4,1,0,0\n", None);
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.planned, s.done, s.failed, s.skipped), (4, 2, 2, 0));
+        let t = read_table(&opts.out).unwrap();
+        let err = table::column(&t.header, "error").unwrap();
+        let by_row = |row: &str| {
+            t.records
+                .iter()
+                .find(|(_, r)| &r[1] == row)
+                .unwrap()
+                .1
+                .clone()
+        };
+        assert_eq!(&by_row("1")[2], "failed");
+        assert!(by_row("1")[err].contains(",\nsecond line"));
+        assert_eq!(&by_row("2")[2], "failed");
+        assert!(by_row("2")[err].starts_with("panic: sleep-test: panic on request"));
+        assert_eq!(&by_row("3")[2], "done");
+
+        let before = std::fs::read(&opts.out).unwrap();
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.skipped, s.done, s.failed), (4, 0, 0));
+        assert_eq!(std::fs::read(&opts.out).unwrap(), before);
+    }
+
+    #[test]
+    fn an_incomplete_last_line_is_cut_and_its_run_redone() {
+        let (_dir, plan, opts) = setup("x,y\n1,1\n2,1\n3,1\n", None);
+        run_campaign(&SleepTest, &plan, &opts).unwrap();
+        let full = std::fs::read(&opts.out).unwrap();
+        let last_start = full[..full.len() - 1]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .unwrap()
+            + 1;
+        std::fs::write(&opts.out, &full[..last_start + 7]).unwrap();
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.truncated_bytes, s.skipped, s.done), (7, 2, 1));
+        assert_eq!(std::fs::read(&opts.out).unwrap(), full);
+    }
+
+    #[test]
+    fn shards_run_only_their_rows() {
+        let (_dir, plan, opts) = setup(
+            "x,y\n1,1\n2,1\n3,1\n4,1\n5,1\n",
+            Some(Shard { index: 2, count: 2 }),
+        );
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.planned, s.done), (2, 2));
+        let t = read_table(&opts.out).unwrap();
+        let rows: HashSet<&str> = t.records.iter().map(|(_, r)| &r[1]).collect();
+        assert_eq!(rows, HashSet::from(["1", "3"]));
+    }
+}

@@ -1,0 +1,161 @@
+//! Progress of a table: runs done, failed and remaining.
+//!
+//! `mbgc simulate` writes a sidecar `<out>.meta.json` before it runs anything, holding the
+//! experiment, the design (path as given and row count), the shard, the seed, the `--set`
+//! constants and the settings. Status counts the remaining rows from it, or from `--design`
+//! (needed for a merged table, which has no sidecar).
+
+use std::collections::{BTreeMap, HashSet};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::plan::{Plan, Shard};
+use super::table::{self, read_table, DONE, FAILED};
+use crate::error::{read_to_string, write_atomic, Error, Result};
+use crate::sampling::design::read_numeric_csv;
+
+/// The sidecar of a table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Meta {
+    pub experiment: String,
+    /// The design path as given on the command line.
+    pub design: String,
+    pub design_rows: usize,
+    /// `K/N`, or null for the whole design.
+    pub shard: Option<String>,
+    /// Rows this table is meant to hold (the shard's rows).
+    pub rows: usize,
+    pub seed: u64,
+    /// `--set` constants (their column order is the table header's).
+    pub set: BTreeMap<String, f64>,
+    pub box_scale: Option<f64>,
+}
+
+/// `<out>.meta.json`, beside the table.
+pub fn meta_path(out: &Path) -> PathBuf {
+    let mut name = out.file_name().unwrap_or_default().to_os_string();
+    name.push(".meta.json");
+    out.with_file_name(name)
+}
+
+impl Meta {
+    pub fn of(plan: &Plan) -> Meta {
+        Meta {
+            experiment: plan.experiment.clone(),
+            design: plan.design.display().to_string(),
+            design_rows: plan.rows.len(),
+            shard: plan.shard.map(|s| s.to_string()),
+            rows: plan.selected().count(),
+            seed: plan.seed,
+            set: plan.set.iter().cloned().collect(),
+            box_scale: plan.settings.box_scale,
+        }
+    }
+
+    pub fn write(&self, out: &Path) -> Result<()> {
+        let text = serde_json::to_string_pretty(self)
+            .map_err(|e| Error::invalid(format!("sidecar of {}: {e}", out.display())))?;
+        write_atomic(&meta_path(out), format!("{text}\n").as_bytes())
+    }
+
+    /// The sidecar of `out`, if there is one.
+    pub fn read(out: &Path) -> Result<Option<Meta>> {
+        let path = meta_path(out);
+        if !path.exists() {
+            return Ok(None);
+        }
+        let m: Meta = serde_json::from_str(&read_to_string(&path)?).map_err(|e| {
+            Error::input(
+                path.display(),
+                "JSON",
+                format!("{e}; not a campaign sidecar (remove it and pass --design)"),
+            )
+        })?;
+        Ok(Some(m))
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Status {
+    pub out: String,
+    pub experiment: Option<String>,
+    /// Runs in the table with status done / failed.
+    pub done: usize,
+    pub failed: usize,
+    /// Rows of the design (this shard's rows) not in the table yet; None when neither a sidecar
+    /// nor `--design` gives the design's size.
+    pub remaining: Option<usize>,
+    pub total: Option<usize>,
+    /// An incomplete last line is present (its run counts as remaining).
+    pub partial_line: bool,
+}
+
+/// Counts the runs of a table. `design` overrides the sidecar's row count; the sidecar's shard,
+/// if any, still applies.
+pub fn status(out: &Path, design: Option<&Path>) -> Result<Status> {
+    let file = out.display().to_string();
+    let t = read_table(out)?;
+    if !table::is_campaign_header(&t.header) {
+        return Err(Error::input(
+            &file,
+            "header",
+            "expected a campaign table (run_id,row,status,seed,...,error)",
+        ));
+    }
+    let meta = Meta::read(out)?;
+    let (mut done, mut failed) = (0, 0);
+    let mut rows = HashSet::new();
+    for (line, r) in &t.records {
+        match &r[2] {
+            s if s == DONE => done += 1,
+            s if s == FAILED => failed += 1,
+            s => {
+                return Err(Error::input(
+                    &file,
+                    format!("line {line}"),
+                    format!("status: expected done or failed, found \"{s}\""),
+                ))
+            }
+        }
+        let row: usize = r[1].parse().map_err(|_| {
+            Error::input(
+                &file,
+                format!("line {line}"),
+                format!("row: expected a row number, found \"{}\"", &r[1]),
+            )
+        })?;
+        rows.insert(row);
+    }
+    let shard = match meta.as_ref().and_then(|m| m.shard.as_deref()) {
+        Some(s) => Some(
+            Shard::parse(s)
+                .map_err(|e| Error::input(meta_path(out).display(), "shard", e.to_string()))?,
+        ),
+        None => None,
+    };
+    let design_rows = match (design, &meta) {
+        (Some(d), _) => Some(read_numeric_csv(d)?.1.len()),
+        (None, Some(m)) => Some(m.design_rows),
+        (None, None) => None,
+    };
+    let (total, remaining) = match design_rows {
+        Some(n) => {
+            let planned: Vec<usize> = (0..n)
+                .filter(|&r| shard.is_none_or(|s| s.contains(r)))
+                .collect();
+            let remaining = planned.iter().filter(|r| !rows.contains(r)).count();
+            (Some(planned.len()), Some(remaining))
+        }
+        None => (None, None),
+    };
+    Ok(Status {
+        out: file,
+        experiment: meta.map(|m| m.experiment),
+        done,
+        failed,
+        remaining,
+        total,
+        partial_line: t.partial_len > 0,
+    })
+}

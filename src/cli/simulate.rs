@@ -1,0 +1,115 @@
+//! `mbgc simulate`: a calibration experiment for every row of a design, appended to a table that
+//! a restart of the same command resumes.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::campaign::{
+    experiment_by_name, parse_set, run_campaign, CampaignOptions, ExperimentSettings, Plan, Shard,
+};
+
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Design CSV: a header of parameter names, one run per row (extra columns are carried along).
+    #[arg(long, value_name = "CSV")]
+    pub design: PathBuf,
+    /// Experiment run on every row (wall-impact).
+    #[arg(long)]
+    pub experiment: String,
+    /// Output table; if it exists, the campaign resumes where it stopped.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+    /// Worker threads, one run each [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Run only the rows with row % N == K - 1 (rows 0-based, K 1-based), for job arrays.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Campaign seed; row r runs with a seed derived from this seed and r only.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Constant parameter for every row, e.g. --set impact_speed=3.9 (repeatable); a design
+    /// column of the same name is an error.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Directory for VTK snapshots, one subdirectory per run id (experiments that write them).
+    #[arg(long, value_name = "DIR")]
+    pub vtk: Option<PathBuf>,
+    /// Size factor of the experiment's box (shear box, hopper); other experiments ignore it.
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
+    pub box_scale: Option<f64>,
+}
+
+pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
+    let settings = ExperimentSettings {
+        box_scale: a.box_scale,
+    };
+    let experiment = experiment_by_name(&a.experiment, &settings)?;
+    let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
+    let set = a
+        .set
+        .iter()
+        .map(|s| parse_set(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    let threads = match a.threads {
+        Some(0) => anyhow::bail!("--threads: expected at least 1"),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let plan = Plan::new(
+        experiment.as_ref(),
+        &a.design,
+        &set,
+        a.seed,
+        &settings,
+        shard,
+    )?;
+    let s = run_campaign(
+        experiment.as_ref(),
+        &plan,
+        &CampaignOptions {
+            out: a.out.clone(),
+            threads,
+            vtk_dir: a.vtk.clone(),
+            progress: true,
+        },
+    )?;
+    if s.truncated_bytes > 0 {
+        eprintln!(
+            "{}: removed an incomplete last line ({} bytes, an interrupted write); its run was \
+             redone",
+            a.out.display(),
+            s.truncated_bytes
+        );
+    }
+    let ran = s.done + s.failed;
+    println!(
+        "{}: {} on {} ({} rows{}): {} already in the table, ran {ran} ({} done, {} failed) in \
+         {:.2} s{}",
+        a.out.display(),
+        plan.experiment,
+        a.design.display(),
+        plan.rows.len(),
+        shard
+            .map(|k| format!(", shard {k}: {}", s.planned))
+            .unwrap_or_default(),
+        s.skipped,
+        s.done,
+        s.failed,
+        s.elapsed_s,
+        if ran > 0 {
+            format!(
+                ", {:.1} runs/s on {} threads",
+                ran as f64 / s.elapsed_s,
+                s.threads
+            )
+        } else {
+            String::new()
+        }
+    );
+    if s.failed > 0 {
+        println!("failed runs have status=failed and their reason in the error column");
+    }
+    Ok(())
+}

@@ -1,0 +1,706 @@
+//! Campaigns end to end through the binary: `simulate` with wall-impact, kill and resume, shards
+//! merged against a full run, failures, status, and every bad input naming the file and field.
+//! The hidden `sleep-test` experiment (MBGC_TEST_EXPERIMENTS=1) makes runs slow, failing or
+//! panicking on request; it reports a nominal wall time, so its tables are reproducible to the
+//! byte.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn command(args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_mbgc"));
+    c.args(args).env("MBGC_TEST_EXPERIMENTS", "1");
+    c
+}
+
+fn mbgc(args: &[&str]) -> Output {
+    command(args).output().expect("run mbgc")
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = mbgc(args);
+    assert!(
+        o.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// Runs a command that must fail and returns its error message.
+fn fails(args: &[&str]) -> String {
+    let o = mbgc(args);
+    assert!(!o.status.success(), "{args:?} should fail");
+    let e = String::from_utf8(o.stderr).unwrap();
+    assert!(!e.contains("panicked"), "{e}");
+    e
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn last_json(stdout: &str) -> serde_json::Value {
+    serde_json::from_str(stdout.lines().last().unwrap()).unwrap()
+}
+
+fn arg_refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+/// Header and records of a table (an incomplete last line, if any, as a short record).
+fn read(path: &Path) -> (Vec<String>, Vec<HashMap<String, String>>) {
+    let mut rdr = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_path(path)
+        .unwrap();
+    let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
+    let rows = rdr
+        .records()
+        .filter_map(|r| r.ok())
+        .map(|r| {
+            header
+                .iter()
+                .cloned()
+                .zip(r.iter().map(String::from))
+                .collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+/// Every field but the measured wall time, sorted by row.
+fn without_wall_time(path: &Path) -> Vec<Vec<(String, String)>> {
+    let (header, rows) = read(path);
+    let mut out: Vec<Vec<(String, String)>> = rows
+        .iter()
+        .map(|r| {
+            header
+                .iter()
+                .filter(|h| *h != "wall_time_s")
+                .map(|h| (h.clone(), r[h].clone()))
+                .collect()
+        })
+        .collect();
+    out.sort_by_key(|r| r[1].1.parse::<usize>().unwrap());
+    out
+}
+
+/// Wall-impact constants (the ones the designs below do not vary).
+const WALL_SET: [&str; 10] = [
+    "--set",
+    "E_p=380e9",
+    "--set",
+    "nu_p=0.23",
+    "--set",
+    "E_w=1e13",
+    "--set",
+    "e_pw=0.98",
+    "--set",
+    "impact_speed=3.9",
+];
+
+/// 12 rows varying impact_angle and mu_pw; rho_p and d50 as constant design columns.
+fn wall_design(dir: &Path) -> PathBuf {
+    let mut t = String::from("impact_angle,mu_pw,rho_p,d50\n");
+    for i in 0..12 {
+        t += &format!("{},{},4000,5\n", 10 + 6 * i, 0.05 + 0.03 * i as f64);
+    }
+    write(dir, "wall.csv", &t)
+}
+
+fn simulate_wall(design: &Path, out: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "simulate",
+        "--design",
+        s(design),
+        "--experiment",
+        "wall-impact",
+        "--out",
+        s(out),
+    ];
+    args.extend(WALL_SET);
+    args.extend(extra);
+    ok(&args)
+}
+
+/// `n` sleep-test rows: x = i, y = i / 2; row `fail_row` fails, x < 0 on row 2 (a warning).
+fn sleep_design(dir: &Path, name: &str, n: usize, fail_row: Option<usize>) -> PathBuf {
+    let mut t = String::from("x,y,fail\n");
+    for i in 0..n {
+        let x = if i == 2 { -1.0 } else { i as f64 };
+        let fail = u8::from(Some(i) == fail_row);
+        t += &format!("{x},{},{fail}\n", i as f64 / 2.0);
+    }
+    write(dir, name, &t)
+}
+
+fn simulate_sleep(design: &Path, out: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "simulate",
+        "--design",
+        s(design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(out),
+    ];
+    args.extend(extra);
+    ok(&args)
+}
+
+fn merge(inputs: &[&Path], out: &Path) -> Vec<u8> {
+    let mut args = vec!["campaign", "merge"];
+    args.extend(inputs.iter().map(|p| s(p)));
+    args.extend(["--out", s(out)]);
+    ok(&args);
+    std::fs::read(out).unwrap()
+}
+
+#[test]
+fn wall_impact_runs_every_row_of_a_design_and_resumes_to_a_no_op() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = wall_design(dir.path());
+    let out = dir.path().join("training_data/run.csv");
+    let stdout = simulate_wall(&design, &out, &["--threads", "2"]);
+    assert!(stdout.contains("ran 12 (12 done, 0 failed)"), "{stdout}");
+
+    let (header, rows) = read(&out);
+    assert_eq!(
+        header.join(","),
+        "run_id,row,status,seed,impact_angle,mu_pw,rho_p,d50,E_p,nu_p,E_w,e_pw,impact_speed,\
+         cnr,ctr,settled,steps,particles,wall_time_s,warnings,error"
+    );
+    assert_eq!(rows.len(), 12);
+    let mut seen: Vec<usize> = rows.iter().map(|r| r["row"].parse().unwrap()).collect();
+    seen.sort();
+    assert_eq!(seen, (0..12).collect::<Vec<_>>());
+    for r in &rows {
+        assert_eq!(r["status"], "done");
+        assert_eq!(r["run_id"].len(), 16);
+        let cnr: f64 = r["cnr"].parse().unwrap();
+        let ctr: f64 = r["ctr"].parse().unwrap();
+        assert!(cnr.is_finite() && ctr.is_finite(), "{r:?}");
+        assert!((cnr - 0.98).abs() < 0.01, "{r:?}");
+        assert!(ctr > 0.0 && ctr < 1.0, "{r:?}");
+        assert_eq!(r["error"], "");
+    }
+
+    let status = last_json(&ok(&["campaign", "status", s(&out), "--json"]));
+    assert_eq!(status["done"], 12);
+    assert_eq!(status["failed"], 0);
+    assert_eq!(status["remaining"], 0);
+    assert_eq!(status["total"], 12);
+
+    let before = std::fs::read(&out).unwrap();
+    let stdout = simulate_wall(&design, &out, &["--threads", "2"]);
+    assert!(
+        stdout.contains("12 already in the table, ran 0"),
+        "{stdout}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+}
+
+#[test]
+fn same_design_and_seed_give_identical_results_whatever_the_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = wall_design(dir.path());
+    let (a, b, c) = (
+        dir.path().join("a.csv"),
+        dir.path().join("b.csv"),
+        dir.path().join("c.csv"),
+    );
+    simulate_wall(&design, &a, &["--threads", "1"]);
+    simulate_wall(&design, &b, &["--threads", "2"]);
+    assert_eq!(without_wall_time(&a), without_wall_time(&b));
+
+    // Another campaign seed changes seeds and run ids (wall-impact itself ignores the seed).
+    simulate_wall(&design, &c, &["--seed", "2"]);
+    let (ra, rc) = (without_wall_time(&a), without_wall_time(&c));
+    for (x, y) in ra.iter().zip(&rc) {
+        assert_ne!(x[0], y[0], "run_id");
+        assert_ne!(x[3], y[3], "seed");
+        assert_eq!(x[4..], y[4..]);
+    }
+
+    // Seeds reach the experiment, and a row's seed does not depend on the others.
+    let d = sleep_design(dir.path(), "s.csv", 6, None);
+    let part = write(
+        dir.path(),
+        "s4.csv",
+        "x,y,fail\n0,0,0\n1,0.5,0\n-1,1,0\n3,1.5,0\n",
+    );
+    let (x, y, z) = (
+        dir.path().join("x.csv"),
+        dir.path().join("y.csv"),
+        dir.path().join("z.csv"),
+    );
+    simulate_sleep(&d, &x, &[]);
+    simulate_sleep(&part, &y, &[]);
+    simulate_sleep(&d, &z, &["--seed", "9"]);
+    let (rx, ry, rz) = (read(&x).1, read(&y).1, read(&z).1);
+    let noise = |rows: &[HashMap<String, String>], row: &str| {
+        rows.iter().find(|r| r["row"] == row).unwrap()["noise"].clone()
+    };
+    for row in ["0", "1", "2", "3"] {
+        assert_eq!(noise(&rx, row), noise(&ry, row));
+        assert_ne!(noise(&rx, row), noise(&rz, row));
+    }
+}
+
+#[test]
+fn kill_and_resume_gives_the_uninterrupted_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "slow.csv", 60, Some(3));
+    let (killed, reference) = (dir.path().join("killed.csv"), dir.path().join("ref.csv"));
+    let args = |out: &Path| {
+        vec![
+            "simulate".to_string(),
+            "--design".into(),
+            s(&design).into(),
+            "--experiment".into(),
+            "sleep-test".into(),
+            "--out".into(),
+            s(out).into(),
+            "--threads".into(),
+            "2".into(),
+            "--set".into(),
+            "sleep_ms=30".into(),
+        ]
+    };
+    let ref_args = args(&reference);
+    let mut reference_run = command(&arg_refs(&ref_args))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+
+    let kill_args = args(&killed);
+    let mut child = command(&arg_refs(&kill_args))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    loop {
+        // The table appears whole (atomic rename) and is never removed.
+        let n = if killed.exists() {
+            read(&killed).1.len()
+        } else {
+            0
+        };
+        if n >= 8 {
+            break;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(30), "no progress");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "finished before the kill"
+    );
+    child.kill().unwrap(); // SIGKILL: no chance to clean up
+    child.wait().unwrap();
+
+    let at_kill = std::fs::read(&killed).unwrap();
+    let status = last_json(&ok(&["campaign", "status", s(&killed), "--json"]));
+    let present = status["done"].as_u64().unwrap() + status["failed"].as_u64().unwrap();
+    assert!((8..60).contains(&present), "{status}");
+    assert_eq!(status["total"], 60);
+    assert_eq!(status["remaining"].as_u64().unwrap(), 60 - present);
+
+    // Whatever the kill left, also simulate a write cut short: half of a line, no newline.
+    let complete = if at_kill.ends_with(b"\n") {
+        at_kill.clone()
+    } else {
+        at_kill[..=at_kill.iter().rposition(|&b| b == b'\n').unwrap()].to_vec()
+    };
+    let mut damaged = complete.clone();
+    damaged.extend(b"ffffffffffffffff,59,do");
+    std::fs::write(&killed, &damaged).unwrap();
+    let status = last_json(&ok(&["campaign", "status", s(&killed), "--json"]));
+    assert_eq!(status["partial_line"], true);
+
+    let o = mbgc(&arg_refs(&kill_args));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("removed an incomplete last line"),
+        "{stderr}"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains(&format!("{present} already in the table")),
+        "{stdout}"
+    );
+    let resumed = std::fs::read(&killed).unwrap();
+    assert!(
+        resumed.starts_with(&complete),
+        "finished runs were rewritten"
+    );
+
+    // Every row exactly once, and the same table as the uninterrupted run.
+    let (_, rows) = read(&killed);
+    let mut seen: Vec<usize> = rows.iter().map(|r| r["row"].parse().unwrap()).collect();
+    seen.sort();
+    assert_eq!(seen, (0..60).collect::<Vec<_>>());
+    assert!(reference_run.wait().unwrap().success());
+    let a = merge(&[&killed], &dir.path().join("a.csv"));
+    let b = merge(&[&reference], &dir.path().join("b.csv"));
+    assert_eq!(a, b);
+    let status = last_json(&ok(&["campaign", "status", s(&killed), "--json"]));
+    assert_eq!(
+        (&status["done"], &status["failed"], &status["remaining"]),
+        (&59.into(), &1.into(), &0.into())
+    );
+}
+
+#[test]
+fn merged_shards_equal_the_merged_full_run_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 20, Some(7));
+    let full = dir.path().join("full.csv");
+    simulate_sleep(&design, &full, &["--threads", "2"]);
+    let shards: Vec<PathBuf> = (1..=3)
+        .map(|k| {
+            let out = dir.path().join(format!("part-{k}.csv"));
+            let shard = format!("{k}/3");
+            simulate_sleep(&design, &out, &["--shard", &shard, "--threads", "1"]);
+            let (_, rows) = read(&out);
+            assert!(rows
+                .iter()
+                .all(|r| r["row"].parse::<usize>().unwrap() % 3 == k - 1));
+            out
+        })
+        .collect();
+    let shard_refs: Vec<&Path> = shards.iter().map(|p| p.as_path()).collect();
+    let from_shards = merge(&shard_refs, &dir.path().join("m1.csv"));
+    let from_full = merge(&[&full], &dir.path().join("m2.csv"));
+    assert_eq!(
+        String::from_utf8(from_shards.clone()).unwrap(),
+        String::from_utf8(from_full.clone()).unwrap()
+    );
+    // Input order and identical duplicates do not matter.
+    let reversed: Vec<&Path> = shard_refs.iter().rev().copied().collect();
+    assert_eq!(merge(&reversed, &dir.path().join("m3.csv")), from_full);
+    let mut all = reversed.clone();
+    all.push(&full);
+    assert_eq!(merge(&all, &dir.path().join("m4.csv")), from_full);
+
+    // Sorted by row, with the failed row and its escaped message intact.
+    let (_, rows) = read(&dir.path().join("m1.csv"));
+    let order: Vec<usize> = rows.iter().map(|r| r["row"].parse().unwrap()).collect();
+    assert_eq!(order, (0..20).collect::<Vec<_>>());
+    assert_eq!(rows[7]["status"], "failed");
+    assert_eq!(
+        rows[7]["error"],
+        "sleep-test: \"fail\" requested, x = 7,\nsecond line"
+    );
+
+    // Shard sidecars count only their own rows.
+    let status = last_json(&ok(&["campaign", "status", s(&shards[1]), "--json"]));
+    assert_eq!(
+        (&status["total"], &status["remaining"]),
+        (&7.into(), &0.into())
+    );
+}
+
+#[test]
+fn wall_impact_shards_agree_with_a_full_run_except_for_measured_wall_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = wall_design(dir.path());
+    let full = dir.path().join("full.csv");
+    simulate_wall(&design, &full, &[]);
+    let parts: Vec<PathBuf> = (1..=3)
+        .map(|k| {
+            let out = dir.path().join(format!("p{k}.csv"));
+            simulate_wall(&design, &out, &["--shard", &format!("{k}/3")]);
+            out
+        })
+        .collect();
+    let refs: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
+    let m = dir.path().join("m.csv");
+    merge(&refs, &m);
+    assert_eq!(without_wall_time(&m), without_wall_time(&full));
+    // A duplicate differing only in wall_time_s is the same run, not a conflict.
+    merge(&[&m, &full], &dir.path().join("m2.csv"));
+}
+
+#[test]
+fn failed_and_panicking_runs_are_recorded_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = write(
+        dir.path(),
+        "d.csv",
+        "x,y,fail,panic\n1,1,0,0\n2,1,1,0\n3,1,0,1\n4,1,0,0\n5,1,0,0\n6,1,0,0\n",
+    );
+    let out = dir.path().join("out.csv");
+    let stdout = simulate_sleep(&design, &out, &[]);
+    assert!(stdout.contains("4 done, 2 failed"), "{stdout}");
+    let (_, rows) = read(&out);
+    let row = |i: &str| rows.iter().find(|r| r["row"] == i).unwrap();
+    assert_eq!(row("1")["status"], "failed");
+    assert_eq!(
+        row("1")["error"],
+        "sleep-test: \"fail\" requested, x = 2,\nsecond line"
+    );
+    assert_eq!(
+        (row("1")["f"].as_str(), row("1")["steps"].as_str()),
+        ("", "")
+    );
+    assert_eq!(row("2")["status"], "failed");
+    assert_eq!(
+        row("2")["error"],
+        "panic: sleep-test: panic on request at x = 3"
+    );
+    assert_eq!(row("3")["f"], "6.0");
+
+    // A design grown by four rows: status counts them as remaining.
+    let bigger = write(
+        dir.path(),
+        "d10.csv",
+        "x,y,fail,panic\n1,1,0,0\n2,1,1,0\n3,1,0,1\n4,1,0,0\n5,1,0,0\n6,1,0,0\n7,1,0,0\n8,1,0,0\n\
+         9,1,0,0\n10,1,0,0\n",
+    );
+    let text = ok(&[
+        "campaign",
+        "status",
+        s(&out),
+        "--design",
+        s(&bigger),
+        "--json",
+    ]);
+    assert!(text.contains("remaining  4"), "{text}");
+    let status = last_json(&text);
+    assert_eq!(status["done"], 4);
+    assert_eq!(status["failed"], 2);
+    assert_eq!(status["remaining"], 4);
+    assert_eq!(status["total"], 10);
+
+    // Resuming on it runs only the new rows; failed runs are not retried.
+    let stdout = simulate_sleep(&bigger, &out, &[]);
+    assert!(stdout.contains("6 already in the table, ran 4"), "{stdout}");
+    let status = last_json(&ok(&["campaign", "status", s(&out), "--json"]));
+    assert_eq!(
+        (&status["remaining"], &status["total"]),
+        (&0.into(), &10.into())
+    );
+}
+
+#[test]
+fn bad_inputs_are_refused_naming_the_file_and_field_before_anything_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("out.csv");
+    let wall = |design: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "--design",
+            s(design),
+            "--experiment",
+            "wall-impact",
+            "--out",
+            s(&out),
+        ];
+        args.extend(WALL_SET);
+        args.extend(extra);
+        let e = fails(&args);
+        assert!(!out.exists(), "output created for {extra:?}: {e}");
+        assert!(!d.join("out.csv.meta.json").exists());
+        e
+    };
+
+    let no_mu = write(d, "no_mu.csv", "impact_angle,rho_p,d50\n30,4000,5\n");
+    let e = wall(&no_mu, &[]);
+    assert!(
+        e.contains("no_mu.csv: column mu_pw: missing") && e.contains("--set mu_pw="),
+        "{e}"
+    );
+
+    let nan = write(
+        d,
+        "nan.csv",
+        "impact_angle,mu_pw,rho_p,d50\n30,0.1,4000,5\n40,NaN,4000,5\n",
+    );
+    let e = wall(&nan, &[]);
+    assert!(e.contains("nan.csv: line 3, column mu_pw"), "{e}");
+
+    let negative = write(
+        d,
+        "neg.csv",
+        "impact_angle,mu_pw,rho_p,d50\n30,0.1,4000,5\n40,0.1,4000,5\n50,0.1,4000,5\n\
+         60,0.1,-2500,5\n",
+    );
+    let e = wall(&negative, &[]);
+    assert!(
+        e.contains("neg.csv: line 5 (row 3)")
+            && e.contains("rho_p")
+            && e.contains("nothing was run"),
+        "{e}"
+    );
+
+    let good = wall_design(d);
+    for bad in ["0/3", "4/3", "x/y", "3"] {
+        let e = wall(&good, &["--shard", bad]);
+        assert!(e.contains(&format!("--shard {bad}")), "{e}");
+    }
+    let e = wall(&good, &["--set", "mu_pw=0.2"]);
+    assert!(
+        e.contains("wall.csv: column mu_pw") && e.contains("--set"),
+        "{e}"
+    );
+    let e = wall(&good, &["--set", "impact_speed"]);
+    assert!(e.contains("--set impact_speed"), "{e}");
+    let e = wall(&good, &["--threads", "0"]);
+    assert!(e.contains("--threads"), "{e}");
+    let e = wall(&good, &["--box-scale", "-1"]);
+    assert!(e.contains("--box-scale"), "{e}");
+    // --set values are checked like design values.
+    let e = wall(&good, &["--set", "spin=1e9"]);
+    assert!(
+        e.contains("wall.csv: line 2 (row 0)") && e.contains("parameter spin"),
+        "{e}"
+    );
+
+    let e = fails(&[
+        "simulate",
+        "--design",
+        s(&good),
+        "--experiment",
+        "shear-bx",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        e.contains("--experiment shear-bx: unknown experiment (known: wall-impact"),
+        "{e}"
+    );
+    // The test experiment is hidden unless asked for.
+    let o = Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args([
+            "simulate",
+            "--design",
+            s(&good),
+            "--experiment",
+            "sleep-test",
+        ])
+        .args(["--out", s(&out)])
+        .env_remove("MBGC_TEST_EXPERIMENTS")
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown experiment"));
+    assert!(!out.exists());
+
+    // Resume onto a table of another campaign: refused, table untouched.
+    let sd = sleep_design(d, "s.csv", 4, None);
+    simulate_sleep(&sd, &out, &[]);
+    let before = std::fs::read(&out).unwrap();
+    let sleep = |extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "--design",
+            s(&sd),
+            "--experiment",
+            "sleep-test",
+            "--out",
+            s(&out),
+        ];
+        args.extend(extra);
+        let e = fails(&args);
+        assert_eq!(std::fs::read(&out).unwrap(), before, "{extra:?}");
+        e
+    };
+    let e = sleep(&["--set", "sleep_ms=1"]);
+    assert!(
+        e.contains("out.csv: header:") && e.contains("sleep_ms"),
+        "{e}"
+    );
+    let e = sleep(&["--seed", "2"]);
+    assert!(
+        e.contains("out.csv: line 2: row") && e.contains("another campaign"),
+        "{e}"
+    );
+    let e = fails(&[
+        "simulate",
+        "--design",
+        s(&good),
+        "--experiment",
+        "wall-impact",
+        "--out",
+        s(&out),
+        "--set",
+        "E_p=380e9",
+        "--set",
+        "nu_p=0.23",
+        "--set",
+        "E_w=1e13",
+        "--set",
+        "e_pw=0.98",
+        "--set",
+        "impact_speed=3.9",
+    ]);
+    assert!(e.contains("out.csv: header:"), "{e}");
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+
+    // Merge refuses mixed headers and conflicting results for one run.
+    let other = d.join("other.csv");
+    simulate_sleep(&sd, &other, &["--set", "sleep_ms=0"]);
+    let e = fails(&[
+        "campaign",
+        "merge",
+        s(&out),
+        s(&other),
+        "--out",
+        s(&d.join("m.csv")),
+    ]);
+    assert!(
+        e.contains("other.csv: header: differs from the header of"),
+        "{e}"
+    );
+    let text = String::from_utf8(before.clone()).unwrap();
+    let (_, rows) = read(&out);
+    let f0 = &rows[0]["f"];
+    let tampered = write(
+        d,
+        "tampered.csv",
+        &text.replacen(&format!(",{f0},"), ",123.0,", 1),
+    );
+    let e = fails(&[
+        "campaign",
+        "merge",
+        s(&out),
+        s(&tampered),
+        "--out",
+        s(&d.join("m.csv")),
+    ]);
+    assert!(
+        e.contains("tampered.csv: line 2") && e.contains("conflicting results"),
+        "{e}"
+    );
+    let reseeded = d.join("reseeded.csv");
+    simulate_sleep(&sd, &reseeded, &["--seed", "5"]);
+    let e = fails(&[
+        "campaign",
+        "merge",
+        s(&out),
+        s(&reseeded),
+        "--out",
+        s(&d.join("m.csv")),
+    ]);
+    assert!(e.contains("different campaigns"), "{e}");
+    assert!(!d.join("m.csv").exists());
+
+    let e = fails(&["campaign", "status", s(&good)]);
+    assert!(
+        e.contains("wall.csv: header: expected a campaign table"),
+        "{e}"
+    );
+}
