@@ -1,6 +1,7 @@
 //! Experiments by command-line name.
 
 use super::sleep_test::SleepTest;
+use crate::dem::experiments::hopper::Hopper;
 use crate::dem::experiments::shear_box::ShearBox;
 use crate::dem::experiments::wall_impact::WallImpact;
 use crate::dem::experiments::Experiment;
@@ -30,6 +31,7 @@ type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
 /// Every experiment the command line knows. Registering one is one line here.
 const EXPERIMENTS: &[(&str, Constructor)] = &[
     ("wall-impact", |_| Ok(Box::new(WallImpact::default()))),
+    ("hopper", |_| Ok(Box::new(Hopper))),
     ("shear-box", |s| {
         Ok(Box::new(ShearBox {
             box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),

@@ -256,7 +256,8 @@ pub fn free_surface_height(positions: &[[f64; 3]], radii: &[f64]) -> f64 {
     let side = 4.0 * r_max;
     let x_min = positions.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
     let y_min = positions.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
-    let mut tops: HashMap<(i64, i64), f64> = HashMap::new();
+    // Ordered, so the sum (and the result) is the same bit for bit on every run.
+    let mut tops: std::collections::BTreeMap<(i64, i64), f64> = std::collections::BTreeMap::new();
     for (p, r) in positions.iter().zip(radii) {
         let col = (
             ((p[0] - x_min) / side).floor() as i64,

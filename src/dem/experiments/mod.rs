@@ -6,6 +6,7 @@
 //! returns named responses with diagnostics. [`Experiment::check`] refuses an impossible set before
 //! anything runs.
 
+pub mod hopper;
 pub mod shear_box;
 pub mod shear_box_liggghts;
 pub mod wall_impact;
