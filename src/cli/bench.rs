@@ -45,6 +45,9 @@ pub struct ShearBoxBenchArgs {
     /// Skip the cost table.
     #[arg(long)]
     pub no_cost: bool,
+    /// Only (re)make the cost table, replacing that section of an existing report.
+    #[arg(long)]
+    pub cost_only: bool,
     /// Cost-table cases with more particles than this are sized but not run.
     #[arg(long, default_value_t = 6000)]
     pub cost_max_particles: usize,
@@ -593,71 +596,88 @@ fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     let mut s = String::new();
-    let cmd = format!(
-        "cargo run --release -- bench shear-box --box-scale {} --seeds {}{}{} --report {}",
-        a.box_scale,
-        a.seeds,
-        if a.vs.is_some() { " --vs liggghts" } else { "" },
-        if a.no_cost { " --no-cost" } else { "" },
-        a.report
+    if a.cost_only {
+        // Keep the comparison of an earlier run; only the cost section is made again.
+        let existing = a
+            .report
             .as_ref()
-            .map(|p| p.display().to_string())
-            .unwrap_or_default()
-    );
-    let _ = writeln!(
-        s,
-        "# Calibration experiments\n\nRegenerate with\n\n```\n{cmd}\n```\n"
-    );
-    let _ = writeln!(s, "## Shear box: mbgc against LIGGGHTS 3.8\n");
-    let _ = writeln!(s, "Each run is made by mbgc (its own rest criteria decide when the fill is at rest and when the outflow has \
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .unwrap_or_default();
+        s = existing
+            .split("\n## Cost of a shear-box run")
+            .next()
+            .unwrap_or("")
+            .trim_end()
+            .to_string();
+        s.push('\n');
+    } else {
+        let cmd = format!(
+            "cargo run --release -- bench shear-box --box-scale {} --seeds {}{}{} --report {}",
+            a.box_scale,
+            a.seeds,
+            if a.vs.is_some() { " --vs liggghts" } else { "" },
+            if a.no_cost { " --no-cost" } else { "" },
+            a.report
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        );
+        let _ = writeln!(
+            s,
+            "# Calibration experiments\n\nRegenerate with\n\n```\n{cmd}\n```\n"
+        );
+        let _ = writeln!(s, "## Shear box: mbgc against LIGGGHTS 3.8\n");
+        let _ = writeln!(s, "Each run is made by mbgc (its own rest criteria decide when the fill is at rest and when the outflow has \
         stopped), then replayed in LIGGGHTS from the identical particles and positions with the same schedule: fill, strike \
         off at the rim, relax, remove the flap, remove what fell below the floor every chunk (`src/dem/experiments/shear_box_liggghts.rs` \
         writes the data file, the walls as STL meshes (the flap as a plane: LIGGGHTS takes one mesh wall fix) and the input \
         script). Both final states are measured by the same code. Box scale k = {}, E = 5e6 Pa, e = 0.6, rho_p = 2600, \
         d50 = 5 mm, sigma_ln = 0.1, seeds 1..={}. Granular outflow is chaotic: two codes (or two seeds) differ run by run by \
         a few degrees, so the comparison is of means over seeds, with the standard error of the difference.\n", a.box_scale, a.seeds);
-    let _ = writeln!(s, "| set | mu_pp, mu_r_pp, mu_pw, mu_r_pw | shear angle mbgc (deg) | LIGGGHTS | difference +- s.e. | bulk density mbgc (kg/m3) | LIGGGHTS | difference |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
-    for (name, p) in &sets {
-        let (mut am, mut al, mut rm, mut rl, mut da) = (vec![], vec![], vec![], vec![], vec![]);
-        for seed in 1..=a.seeds {
-            eprintln!("{name}: seed {seed}");
-            let (o, rec) = sb.run_recorded(p, seed, &RunOptions::default())?;
-            am.push(o.get("shear_angle").unwrap_or(f64::NAN));
-            rm.push(o.get("bulk_density").unwrap_or(f64::NAN));
-            if a.vs.is_some() {
-                let l = replay(
-                    &a.work_dir
-                        .join(format!("{}-{seed}", name.replace(' ', "-"))),
-                    p,
-                    &rec,
-                )?;
-                al.push(l.shear_angle);
-                rl.push(l.bulk_density);
-                da.push(am.last().copied().unwrap_or(f64::NAN) - l.shear_angle);
+        let _ = writeln!(s, "| set | mu_pp, mu_r_pp, mu_pw, mu_r_pw | shear angle mbgc (deg) | LIGGGHTS | difference +- s.e. | bulk density mbgc (kg/m3) | LIGGGHTS | difference |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+        for (name, p) in &sets {
+            let (mut am, mut al, mut rm, mut rl, mut da) = (vec![], vec![], vec![], vec![], vec![]);
+            for seed in 1..=a.seeds {
+                eprintln!("{name}: seed {seed}");
+                let (o, rec) = sb.run_recorded(p, seed, &RunOptions::default())?;
+                am.push(o.get("shear_angle").unwrap_or(f64::NAN));
+                rm.push(o.get("bulk_density").unwrap_or(f64::NAN));
+                if a.vs.is_some() {
+                    let l = replay(
+                        &a.work_dir
+                            .join(format!("{}-{seed}", name.replace(' ', "-"))),
+                        p,
+                        &rec,
+                    )?;
+                    al.push(l.shear_angle);
+                    rl.push(l.bulk_density);
+                    da.push(am.last().copied().unwrap_or(f64::NAN) - l.shear_angle);
+                }
             }
-        }
-        let fr = |k: &str| p.get(k).unwrap_or(f64::NAN);
-        let (ma, sa) = mean_sd(&am);
-        let (mr, _) = mean_sd(&rm);
-        if a.vs.is_some() {
-            let (la, ls) = mean_sd(&al);
-            let (lr, _) = mean_sd(&rl);
-            let (_, sd_diff) = mean_sd(&da);
-            let se = sd_diff / (a.seeds as f64).sqrt();
-            let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | {la:.2} (sd {ls:.2}) | {:+.2} +- {se:.2} | {mr:.1} | {lr:.1} | {:+.2} % |",
+            let fr = |k: &str| p.get(k).unwrap_or(f64::NAN);
+            let (ma, sa) = mean_sd(&am);
+            let (mr, _) = mean_sd(&rm);
+            if a.vs.is_some() {
+                let (la, ls) = mean_sd(&al);
+                let (lr, _) = mean_sd(&rl);
+                let (_, sd_diff) = mean_sd(&da);
+                let se = sd_diff / (a.seeds as f64).sqrt();
+                let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | {la:.2} (sd {ls:.2}) | {:+.2} +- {se:.2} | {mr:.1} | {lr:.1} | {:+.2} % |",
                 fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"), ma - la, 100.0 * (mr / lr - 1.0));
-            println!("{name}: shear angle mbgc {ma:.2} LIGGGHTS {la:.2} ({:+.2} +- {se:.2}); bulk density mbgc {mr:.1} LIGGGHTS {lr:.1} ({:+.2} %)", ma - la, 100.0 * (mr / lr - 1.0));
-        } else {
-            let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | not run | | {mr:.1} | not run | |", fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"));
+                println!("{name}: shear angle mbgc {ma:.2} LIGGGHTS {la:.2} ({:+.2} +- {se:.2}); bulk density mbgc {mr:.1} LIGGGHTS {lr:.1} ({:+.2} %)", ma - la, 100.0 * (mr / lr - 1.0));
+            } else {
+                let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | not run | | {mr:.1} | not run | |", fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"));
+            }
         }
     }
     // Keep what is measured even if the cost table is interrupted.
-    if let Some(path) = &a.report {
+    if let (Some(path), false) = (&a.report, a.cost_only) {
         write_atomic(path, s.as_bytes())?;
     }
     if !a.no_cost {
         let _ = writeln!(s, "\n## Cost of a shear-box run (mbgc, one thread)\n");
+        let _ = writeln!(s, "Regenerate this section alone with `cargo run --release -- bench shear-box --cost-only --report docs/experiments.md`.\n");
         let _ = writeln!(s, "Mid friction (mu_pp 0.5, mu_r_pp 0.3), rho_p 2600, seed 1; dt = 0.25 Rayleigh time of the smallest particle. \
             The particle count follows the PSD's width (the box is k d_max wide, the particles are counted by number), the step \
             count follows the modulus (dt ~ 1/sqrt(E)). Particles: drawn for the fill (before striking off) when not run, \
@@ -667,16 +687,18 @@ fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
         for k in [6.0, 10.0] {
             for (d50, sigma) in [(5.0, 0.1), (5.0, 0.3), (11.16, 0.26)] {
                 for e in [5e6, 5e7] {
-                    eprintln!("cost: k {k} d50 {d50} sigma {sigma} E {e:e}");
                     let sb = ShearBox {
                         box_scale: k,
                         ..Default::default()
                     };
-                    let o = sb.run(
-                        &shear_box_params(0.5, 0.3, 0.363, 0.3, d50, sigma, e),
-                        1,
-                        &RunOptions::default(),
-                    )?;
+                    let p = shear_box_params(0.5, 0.3, 0.363, 0.3, d50, sigma, e);
+                    let n = sb.layout(&p, 1)?.diameters.len();
+                    if n > a.cost_max_particles {
+                        let _ = writeln!(s, "| {k} | {d50} | {sigma} | {e:e} | {n} (drawn) | not run (over --cost-max-particles {}) | | | |", a.cost_max_particles);
+                        continue;
+                    }
+                    eprintln!("cost: k {k} d50 {d50} sigma {sigma} E {e:e}: {n} particles drawn");
+                    let o = sb.run(&p, 1, &RunOptions::default())?;
                     let _ = writeln!(
                         s,
                         "| {k} | {d50} | {sigma} | {e:e} | {} | {} | {:.1} | {:.2} | {:.1} |",
