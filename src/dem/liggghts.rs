@@ -432,7 +432,7 @@ pub fn parse_dump_rows(file: &str, text: &str) -> Result<Vec<(usize, f64, [f64; 
                     "5 numbers: id radius x y z",
                 )
             })?;
-        if v.len() != 5 || v.iter().any(|x| !x.is_finite()) || v[0] < 1.0 {
+        if v.len() != 5 || v.iter().any(|x| !x.is_finite()) || v[0] < 1.0 || v[0].fract() != 0.0 {
             return Err(Error::input(
                 file,
                 format!("atom row {}", k + 1),
@@ -523,53 +523,25 @@ pub fn parse_log(file: &str, text: &str, atoms: usize, steps: u64) -> Result<Log
 /// Reads a `dump custom ... id radius x y z` snapshot with `atoms` atoms, returning positions and
 /// radii ordered by atom id (id k is particle k - 1 of the case).
 pub fn parse_dump(file: &str, text: &str, atoms: usize) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
-    let mut lines = text.lines();
-    lines
-        .by_ref()
-        .find(|l| l.starts_with("ITEM: ATOMS"))
-        .filter(|l| {
-            l.split_whitespace()
-                .skip(2)
-                .eq(["id", "radius", "x", "y", "z"])
-        })
-        .ok_or_else(|| Error::input(file, "ITEM: ATOMS", "columns 'id radius x y z'"))?;
     let mut positions = vec![[f64::NAN; 3]; atoms];
     let mut radii = vec![f64::NAN; atoms];
-    let mut seen = 0usize;
-    for (k, line) in lines.enumerate() {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let row = || format!("atom row {}", k + 1);
-        let v: Vec<f64> = line
-            .split_whitespace()
-            .map(|w| w.parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| Error::input(file, row(), "5 numbers: id radius x y z"))?;
-        if v.len() != 5 || v.iter().any(|x| !x.is_finite()) {
+    let rows = parse_dump_rows(file, text)?;
+    for (k, &(id, r, x)) in rows.iter().enumerate() {
+        if id == 0 || id > atoms || !radii[id - 1].is_nan() {
             return Err(Error::input(
                 file,
-                row(),
-                "5 finite numbers: id radius x y z",
+                format!("atom row {}", k + 1),
+                format!("a unique atom id in 1..={atoms}, found {id}"),
             ));
         }
-        let id = v[0] as usize;
-        if v[0] != id as f64 || id == 0 || id > atoms || !radii[id - 1].is_nan() {
-            return Err(Error::input(
-                file,
-                row(),
-                format!("a unique atom id in 1..={atoms}, found {}", v[0]),
-            ));
-        }
-        radii[id - 1] = v[1];
-        positions[id - 1] = [v[2], v[3], v[4]];
-        seen += 1;
+        radii[id - 1] = r;
+        positions[id - 1] = x;
     }
-    if seen != atoms {
+    if rows.len() != atoms {
         return Err(Error::input(
             file,
             "atoms",
-            format!("{atoms} atom rows, found {seen}"),
+            format!("{atoms} atom rows, found {}", rows.len()),
         ));
     }
     Ok((positions, radii))

@@ -76,6 +76,12 @@ impl ParamSet {
     }
 }
 
+/// The parameters of seed 004's space (`examples/space_seed004.toml`) that the bulk experiments need.
+pub const SEED004_PARAMETERS: [&str; 12] = [
+    "E_p", "E_w", "nu_p", "e_pp", "e_pw", "mu_pp", "mu_pw", "mu_r_pp", "mu_r_pw", "rho_p", "d50",
+    "sigma_ln",
+];
+
 /// Physically allowed ranges of the seed-004 parameters (wider than the metamodel's space: an
 /// experiment refuses only what cannot be simulated).
 pub const E_RANGE: (f64, f64) = (1e3, 1e13);

@@ -290,10 +290,7 @@ impl Experiment for ShearBox {
     }
 
     fn parameters(&self) -> Vec<&'static str> {
-        vec![
-            "E_p", "E_w", "nu_p", "e_pp", "e_pw", "mu_pp", "mu_pw", "mu_r_pp", "mu_r_pw", "rho_p",
-            "d50", "sigma_ln",
-        ]
+        super::SEED004_PARAMETERS.to_vec()
     }
 
     fn responses(&self) -> Vec<&'static str> {
