@@ -671,8 +671,17 @@ fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
             }
         }
     }
-    // Keep what is measured even if the cost table is interrupted.
+    // Keep what is measured even if the cost table is interrupted; with --no-cost, keep the cost
+    // section of an existing report.
     if let (Some(path), false) = (&a.report, a.cost_only) {
+        if a.no_cost {
+            if let Some(cost) = std::fs::read_to_string(path)
+                .ok()
+                .and_then(|old| old.find("\n## Cost of a shear-box run").map(|i| old[i..].to_string()))
+            {
+                s.push_str(&cost);
+            }
+        }
         write_atomic(path, s.as_bytes())?;
     }
     if !a.no_cost {
