@@ -675,10 +675,10 @@ fn shear_box(a: &ShearBoxBenchArgs) -> anyhow::Result<()> {
     // section of an existing report.
     if let (Some(path), false) = (&a.report, a.cost_only) {
         if a.no_cost {
-            if let Some(cost) = std::fs::read_to_string(path)
-                .ok()
-                .and_then(|old| old.find("\n## Cost of a shear-box run").map(|i| old[i..].to_string()))
-            {
+            if let Some(cost) = std::fs::read_to_string(path).ok().and_then(|old| {
+                old.find("\n## Cost of a shear-box run")
+                    .map(|i| old[i..].to_string())
+            }) {
                 s.push_str(&cost);
             }
         }
