@@ -76,3 +76,22 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
     std::fs::write(&tmp, contents).map_err(|e| Error::io(&tmp, e))?;
     std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
 }
+
+/// Maps a csv crate error to an error naming the file and, for ragged rows, the line.
+pub fn csv_error(file: &str, e: csv::Error) -> Error {
+    let msg = e.to_string();
+    match e.into_kind() {
+        // Not Error::Io: its message already embeds the source, which `{:#}` would repeat.
+        csv::ErrorKind::Io(_) => Error::invalid(format!("{file}: {msg}")),
+        csv::ErrorKind::UnequalLengths {
+            pos,
+            expected_len,
+            len,
+        } => Error::input(
+            file,
+            format!("line {}", pos.map(|p| p.line()).unwrap_or(0)),
+            format!("expected {expected_len} fields like the header, found {len}"),
+        ),
+        _ => Error::input(file, "CSV", msg),
+    }
+}

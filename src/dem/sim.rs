@@ -536,47 +536,47 @@ impl Simulation {
             .sum()
     }
 
+    /// Touching particle pairs as (i, j, overlap).
+    pub fn touching_pairs(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        let p = &self.particles;
+        let nl = &self.neighbors;
+        (0..p.len()).flat_map(move |i| {
+            (nl.start[i] as usize..nl.start[i + 1] as usize).filter_map(move |e| {
+                let j = nl.nb[e] as usize;
+                let s = p.r[i] + p.r[j];
+                let d2 = norm2(sub(p.x[i], p.x[j]));
+                (d2 < s * s).then(|| (i, j, s - d2.sqrt()))
+            })
+        })
+    }
+
     /// Elastic energy of the Hertz normal springs, (8/15) Y* sqrt(R*) delta^(5/2) per contact.
     pub fn elastic_energy(&self) -> f64 {
         let p = &self.particles;
-        let nl = &self.neighbors;
-        let mut u = 0.0;
+        let pairs: f64 = self
+            .touching_pairs()
+            .map(|(i, j, d)| {
+                let r_eff = p.r[i] * p.r[j] / (p.r[i] + p.r[j]);
+                let y = self.materials.pair(p.material[i], p.material[j]).y_eff;
+                8.0 / 15.0 * y * r_eff.sqrt() * d.powf(2.5)
+            })
+            .sum();
+        let mut walls = 0.0;
         for i in 0..p.len() {
-            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
-                let j = nl.nb[e] as usize;
-                let d = p.r[i] + p.r[j] - norm(sub(p.x[i], p.x[j]));
-                if d > 0.0 {
-                    let r_eff = p.r[i] * p.r[j] / (p.r[i] + p.r[j]);
-                    let y = self.materials.pair(p.material[i], p.material[j]).y_eff;
-                    u += 8.0 / 15.0 * y * r_eff.sqrt() * d.powf(2.5);
-                }
-            }
             for w in self.walls.iter().filter(|w| w.active) {
                 if let Some(g) = w.gap(p.x[i], p.r[i]) {
                     let d = p.r[i] - g.distance;
                     let y = self.materials.pair(p.material[i], w.material).y_eff;
-                    u += 8.0 / 15.0 * y * p.r[i].sqrt() * d.powf(2.5);
+                    walls += 8.0 / 15.0 * y * p.r[i].sqrt() * d.powf(2.5);
                 }
             }
         }
-        u
+        pairs + walls
     }
 
     /// Number of touching particle-particle contacts.
     pub fn contact_count(&self) -> usize {
-        let p = &self.particles;
-        let nl = &self.neighbors;
-        let mut c = 0;
-        for i in 0..p.len() {
-            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
-                let j = nl.nb[e] as usize;
-                let s = p.r[i] + p.r[j];
-                if norm2(sub(p.x[i], p.x[j])) < s * s {
-                    c += 1;
-                }
-            }
-        }
-        c
+        self.touching_pairs().count()
     }
 }
 

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{csv_error, Error, Result};
 
 pub const SIZE_COLUMN: &str = "size_mm";
 pub const PASSING_COLUMN: &str = "passing";
@@ -215,24 +215,6 @@ impl SieveData {
 
     pub fn is_empty(&self) -> bool {
         self.size_mm.is_empty()
-    }
-}
-
-fn csv_error(file: &str, e: csv::Error) -> Error {
-    let msg = e.to_string();
-    match e.into_kind() {
-        // Not Error::Io: its message already embeds the source, which `{:#}` would repeat.
-        csv::ErrorKind::Io(_) => Error::invalid(format!("{file}: {msg}")),
-        csv::ErrorKind::UnequalLengths {
-            pos,
-            expected_len,
-            len,
-        } => Error::input(
-            file,
-            format!("line {}", pos.map(|p| p.line()).unwrap_or(0)),
-            format!("expected {expected_len} fields like the header, found {len}"),
-        ),
-        _ => Error::input(file, "CSV", msg),
     }
 }
 

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use super::points::Points;
-use crate::error::{write_atomic, Error, Result};
+use crate::error::{csv_error, write_atomic, Error, Result};
 use crate::space::Space;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -81,22 +81,6 @@ pub fn read_numeric_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         rows.push(row);
     }
     Ok((header, rows))
-}
-
-fn csv_error(file: &str, e: csv::Error) -> Error {
-    match e.kind() {
-        csv::ErrorKind::Io(_) => Error::invalid(format!("{file}: {e}")),
-        csv::ErrorKind::UnequalLengths {
-            pos,
-            expected_len,
-            len,
-        } => Error::input(
-            file,
-            format!("line {}", pos.as_ref().map(|p| p.line()).unwrap_or(0)),
-            format!("expected {expected_len} fields like the header, found {len}"),
-        ),
-        _ => Error::input(file, "CSV", e.to_string()),
-    }
 }
 
 impl Design {
