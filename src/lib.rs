@@ -9,6 +9,7 @@ pub mod campaign;
 pub mod cli;
 pub mod dem;
 pub mod error;
+pub mod gp;
 pub mod plot;
 pub mod psd;
 pub mod sampling;
