@@ -4,7 +4,10 @@ use clap::{Parser, Subcommand};
 
 pub mod bench;
 pub mod campaign;
+pub mod export;
+pub mod fit;
 pub mod metrics;
+pub mod predict;
 pub mod psd;
 pub mod sample;
 pub mod simulate;
@@ -32,6 +35,12 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Campaign tables: merge shards, report progress.
     Campaign(campaign::CampaignArgs),
+    /// Fit one equation per response by genetic-programming symbolic regression.
+    Fit(fit::FitArgs),
+    /// Evaluate a saved metamodel on the rows of a table.
+    Predict(predict::PredictArgs),
+    /// Write a saved metamodel's equations as Rust, LaTeX or sympy.
+    Export(export::ExportArgs),
     /// Benchmarks and reproduction reports.
     Bench(bench::BenchArgs),
 }
@@ -43,6 +52,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Psd(a) => psd::run(&a),
         Command::Simulate(a) => simulate::run(&a),
         Command::Campaign(a) => campaign::run(&a),
+        Command::Fit(a) => fit::run(&a),
+        Command::Predict(a) => predict::run(&a),
+        Command::Export(a) => export::run(&a),
         Command::Bench(a) => bench::run(&a),
     }
 }

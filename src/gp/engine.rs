@@ -130,10 +130,12 @@ impl Config {
         if self.max_length < 1 {
             return Err("max_length: expected at least 1".into());
         }
-        if !(self.const_range.0 < self.const_range.1) {
+        if self.const_range.0.is_nan()
+            || self.const_range.0.partial_cmp(&self.const_range.1) != Some(std::cmp::Ordering::Less)
+        {
             return Err("const_range: expected min < max".into());
         }
-        if !(self.parsimony >= 0.0) {
+        if self.parsimony.is_nan() || self.parsimony < 0.0 {
             return Err(format!("parsimony: expected >= 0, got {}", self.parsimony));
         }
         Ok(functions)

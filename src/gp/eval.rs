@@ -247,9 +247,9 @@ mod tests {
         let mut out = vec![0.0; d.rows()];
         let mut ev = Evaluator::new();
         assert!(ev.eval(&p, &d.x, &mut out));
-        for i in 0..d.rows() {
+        for (i, o) in out.iter().enumerate() {
             let (a, b) = (d.x[0][i], d.x[1][i]);
-            assert_eq!(out[i], a.sqrt() * b.exp() - a / b);
+            assert_eq!(*o, a.sqrt() * b.exp() - a / b);
         }
         assert_eq!(ev.node_evals, 9 * 150);
     }

@@ -175,34 +175,59 @@ fn simplify_binary(op: Node, a: Expr, b: Expr) -> Expr {
     }
 }
 
+/// How a C-like language writes what the tree means.
+pub struct Syntax<'a> {
+    pub names: &'a [String],
+    pub constant: &'a dyn Fn(f64) -> String,
+    /// A unary function applied to an already printed argument (not `Neg`).
+    pub call: &'a dyn Fn(Node, &str) -> String,
+    /// Square and cube as `a**2` (true) or through `call` (false).
+    pub power_operator: bool,
+}
+
 /// Prints an expression in Python/sympy syntax with the given variable names and constant format.
 pub fn infix(e: &Expr, names: &[String], constant: &dyn Fn(f64) -> String) -> String {
+    infix_with(
+        e,
+        &Syntax {
+            names,
+            constant,
+            call: &|f, a| format!("{}({a})", f.name()),
+            power_operator: true,
+        },
+    )
+}
+
+/// Infix printing with minimal parentheses; the tree's grouping is kept exactly (left-associative
+/// operators), so a language with IEEE arithmetic computes the same value as the evaluator.
+pub fn infix_with(e: &Expr, syn: &Syntax) -> String {
     // Precedence: 1 sum, 2 product, 3 unary minus, 4 power, 5 atom/call.
-    fn go(e: &Expr, names: &[String], c: &dyn Fn(f64) -> String) -> (String, u8) {
+    fn go(e: &Expr, syn: &Syntax) -> (String, u8) {
         match e {
-            Var(k) => (names[*k as usize].clone(), 5),
+            Var(k) => (syn.names[*k as usize].clone(), 5),
             Const(v) => {
-                let s = c(*v);
+                let s = (syn.constant)(*v);
                 let p = if s.starts_with('-') { 3 } else { 5 };
                 (s, p)
             }
             Unary(f, a) => {
-                let (s, p) = go(a, names, c);
+                let (s, p) = go(a, syn);
                 match f {
                     Node::Neg => (format!("-{}", wrap(s, p, 4)), 3),
-                    Node::Square => (format!("{}**2", wrap(s, p, 5)), 4),
-                    Node::Cube => (format!("{}**3", wrap(s, p, 5)), 4),
-                    f => (format!("{}({s})", f.name()), 5),
+                    Node::Square if syn.power_operator => (format!("{}**2", wrap(s, p, 5)), 4),
+                    Node::Cube if syn.power_operator => (format!("{}**3", wrap(s, p, 5)), 4),
+                    f => ((syn.call)(*f, &s), 5),
                 }
             }
             Binary(f, a, b) => {
-                let (sa, pa) = go(a, names, c);
-                let (sb, pb) = go(b, names, c);
+                let (sa, pa) = go(a, syn);
+                let (sb, pb) = go(b, syn);
                 match f {
-                    // x + (-c) reads x - c.
-                    Node::Add if matches!(**b, Const(v) if v < 0.0) => {
-                        (format!("{sa} - {}", c(-b.as_const().unwrap())), 1)
-                    }
+                    // x + (-c) reads x - c (the same IEEE result).
+                    Node::Add if matches!(**b, Const(v) if v < 0.0) => (
+                        format!("{sa} - {}", (syn.constant)(-b.as_const().unwrap())),
+                        1,
+                    ),
                     Node::Add => (format!("{sa} + {}", wrap(sb, pb, 2)), 1),
                     Node::Sub => (format!("{sa} - {}", wrap(sb, pb, 2)), 1),
                     Node::Mul => (format!("{}*{}", wrap(sa, pa, 2), wrap(sb, pb, 3)), 2),
@@ -218,7 +243,7 @@ pub fn infix(e: &Expr, names: &[String], constant: &dyn Fn(f64) -> String) -> St
             s
         }
     }
-    go(e, names, constant).0
+    go(e, syn).0
 }
 
 /// Shortest decimal that reads back as the same f64.

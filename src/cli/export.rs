@@ -1,0 +1,34 @@
+//! `mbgc export`: the fitted equations as Rust, LaTeX or sympy.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::error::write_atomic;
+use crate::export::{export, Format};
+use crate::metamodel::Metamodel;
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// Model file written by `mbgc fit`.
+    #[arg(long)]
+    pub model: PathBuf,
+    #[arg(long, value_enum)]
+    pub format: Format,
+    /// Write to this file instead of standard output.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+pub fn run(a: &ExportArgs) -> anyhow::Result<()> {
+    let model = Metamodel::load(&a.model)?;
+    let text = export(&model, a.format);
+    match &a.out {
+        Some(p) => {
+            write_atomic(p, text.as_bytes())?;
+            println!("wrote {}", p.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}

@@ -1,0 +1,166 @@
+//! `mbgc fit`: one readable equation per response by genetic programming, saved as a model file.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::gp::Config;
+use crate::metamodel::{fit_table, FitOptions};
+
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Training table (CSV; campaign tables: rows whose status is not `done` are skipped).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Input columns, comma-separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub inputs: Vec<String>,
+    /// Response columns, comma-separated: one equation each.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub targets: Vec<String>,
+    /// Model file to write (JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long, default_value_t = 5000)]
+    pub population: usize,
+    #[arg(long, default_value_t = 20)]
+    pub generations: usize,
+    /// Wall-clock limit per response, e.g. 90s, 10m, 1h (results then depend on machine speed).
+    #[arg(long, value_parser = parse_duration)]
+    pub time_limit: Option<f64>,
+    /// Share of rows held out for the test metrics (seeded shuffle).
+    #[arg(long, default_value_t = 0.1)]
+    pub test_fraction: f64,
+    /// Scale inputs to [0, 1] as this space file says (linear or log); stored in the model.
+    #[arg(long)]
+    pub space: Option<PathBuf>,
+    /// Function set, comma-separated (add,sub,mul,div,neg,square,cube,sqrt,log,exp,tanh,sin,cos).
+    #[arg(long, default_value = crate::gp::node::SEED004_FUNCTIONS)]
+    pub functions: String,
+    /// Penalty per node on the normalised error 1 - R^2.
+    #[arg(long, default_value_t = 0.001)]
+    pub parsimony: f64,
+    #[arg(long, default_value_t = 4)]
+    pub islands: usize,
+    #[arg(long, default_value_t = 20)]
+    pub tournament: usize,
+    /// Longest tree (nodes) a child may have.
+    #[arg(long, default_value_t = 64)]
+    pub max_length: usize,
+    /// Fit y directly instead of a + b * tree.
+    #[arg(long)]
+    pub no_linear_scaling: bool,
+    /// Directory for the parity plot and residual histogram of each response
+    /// (default: next to the model, `<out stem>_figures/`).
+    #[arg(long)]
+    pub figures: Option<PathBuf>,
+    /// Do not draw figures.
+    #[arg(long)]
+    pub no_figures: bool,
+}
+
+/// `90`, `90s`, `10m`, `1.5h` -> seconds.
+pub fn parse_duration(s: &str) -> Result<f64, String> {
+    let s = s.trim();
+    let (num, unit) = match s.chars().last() {
+        Some('s') => (&s[..s.len() - 1], 1.0),
+        Some('m') => (&s[..s.len() - 1], 60.0),
+        Some('h') => (&s[..s.len() - 1], 3600.0),
+        _ => (s, 1.0),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v * unit),
+        _ => Err(format!(
+            "expected a positive duration like 90s, 10m or 1h, got \"{s}\""
+        )),
+    }
+}
+
+pub fn run(a: &FitArgs) -> anyhow::Result<()> {
+    let config = Config {
+        population: a.population,
+        generations: a.generations,
+        islands: a.islands,
+        tournament: a.tournament,
+        parsimony: a.parsimony,
+        functions: a.functions.clone(),
+        max_length: a.max_length,
+        linear_scaling: !a.no_linear_scaling,
+        time_limit: a.time_limit,
+        seed: a.seed,
+        ..Config::default()
+    };
+    let figures = if a.no_figures {
+        None
+    } else {
+        Some(a.figures.clone().unwrap_or_else(|| {
+            let stem = a
+                .out
+                .file_stem()
+                .map(|s| s.to_string_lossy().to_string())
+                .unwrap_or_else(|| "model".into());
+            a.out.with_file_name(format!("{stem}_figures"))
+        }))
+    };
+    let opts = FitOptions {
+        data: a.data.clone(),
+        inputs: a.inputs.clone(),
+        targets: a.targets.clone(),
+        test_fraction: a.test_fraction,
+        space: a.space.clone(),
+        config,
+        plots: figures,
+    };
+    let bar = ProgressBar::new(a.generations as u64 + 1);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>14} [{bar:30}] gen {pos}/{len} {msg}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    let mut current = String::new();
+    let report = fit_table(&opts, |target, p| {
+        if current != target {
+            current = target.to_string();
+            bar.reset();
+            bar.set_prefix(current.clone());
+        }
+        bar.set_position(p.generation as u64 + 1);
+        bar.set_message(format!(
+            "1-R2 {:.3e}, front {}, {:.2e} node-evals/s",
+            p.best_nmse,
+            p.front_size,
+            p.node_evals as f64 / p.seconds.max(1e-9)
+        ));
+    })?;
+    bar.finish_and_clear();
+    let model = report.model;
+    model
+        .save(&a.out)
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    for r in &model.responses {
+        let test = r
+            .test
+            .map(|t| format!("test R2 {:.5} RMSE {:.4e}", t.r2, t.rmse))
+            .unwrap_or_else(|| "no test rows".into());
+        println!(
+            "{} = {}\n    size {}, train R2 {:.5} RMSE {:.4e}, {test}; {} generations, {:.1} s, {:.2e} node-evals/s",
+            r.name,
+            r.equation,
+            r.size,
+            r.train.r2,
+            r.train.rmse,
+            r.generations,
+            r.seconds,
+            r.node_evals as f64 / r.seconds.max(1e-9)
+        );
+    }
+    println!("wrote {}", a.out.display());
+    for f in &report.figures {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,263 @@
+//! Equations as LaTeX, constants rounded to four significant digits, names in the field's
+//! notation (`mu_r_pp` -> `\mu_{r,pp}`, `d50` -> `d_{50}`).
+
+use crate::gp::expr::Expr;
+use crate::gp::Node;
+use crate::metamodel::{Metamodel, Transform};
+
+const GREEK: &[&str] = &[
+    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa",
+    "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi",
+    "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Phi", "Psi", "Omega",
+];
+
+fn escape(s: &str) -> String {
+    s.chars()
+        .map(|c| match c {
+            '_' | '%' | '&' | '#' | '$' => format!("\\{c}"),
+            c => c.to_string(),
+        })
+        .collect()
+}
+
+fn base(b: &str) -> String {
+    if GREEK.contains(&b) {
+        format!("\\{b}")
+    } else if b.chars().count() == 1 {
+        b.to_string()
+    } else {
+        format!("\\mathrm{{{}}}", escape(b))
+    }
+}
+
+/// `mu_r_pp` -> `\mu_{r,pp}`; `d50` -> `d_{50}`; `E_p` -> `E_{p}`.
+pub fn symbol(name: &str) -> String {
+    let mut parts = name.split('_');
+    let head = parts.next().unwrap_or("");
+    let mut subs: Vec<String> = parts.filter(|p| !p.is_empty()).map(escape).collect();
+    let split = head.find(|c: char| c.is_ascii_digit()).filter(|&i| i > 0);
+    let b = match split {
+        Some(i) => {
+            subs.insert(0, head[i..].to_string());
+            base(&head[..i])
+        }
+        None => base(head),
+    };
+    if subs.is_empty() {
+        b
+    } else {
+        format!("{b}_{{{}}}", subs.join(","))
+    }
+}
+
+/// Four significant digits; powers of ten outside [1e-3, 1e4).
+pub fn constant(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e4).contains(&a) {
+        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        let e = a.log10().floor() as i32;
+        let m = v / 10f64.powi(e);
+        format!("{m:.3} \\times 10^{{{e}}}")
+    }
+}
+
+fn latex(e: &Expr, names: &[String]) -> (String, u8) {
+    // Precedence: 1 sum, 2 product, 3 unary minus, 5 atom.
+    let wrap = |(s, p): (String, u8), min: u8| {
+        if p < min {
+            format!("\\left({s}\\right)")
+        } else {
+            s
+        }
+    };
+    match e {
+        Expr::Var(k) => (names[*k as usize].clone(), 5),
+        Expr::Const(v) => (constant(*v), if *v < 0.0 { 3 } else { 5 }),
+        Expr::Unary(f, a) => {
+            let inner = latex(a, names);
+            match f {
+                Node::Neg => (format!("-{}", wrap(inner, 4)), 3),
+                Node::Square => (format!("{}^{{2}}", wrap(inner, 5)), 5),
+                Node::Cube => (format!("{}^{{3}}", wrap(inner, 5)), 5),
+                Node::Sqrt => (format!("\\sqrt{{{}}}", inner.0), 5),
+                Node::Log => (format!("\\ln\\left({}\\right)", inner.0), 5),
+                Node::Exp => (format!("\\exp\\left({}\\right)", inner.0), 5),
+                Node::Tanh => (format!("\\tanh\\left({}\\right)", inner.0), 5),
+                Node::Sin => (format!("\\sin\\left({}\\right)", inner.0), 5),
+                Node::Cos => (format!("\\cos\\left({}\\right)", inner.0), 5),
+                _ => unreachable!(),
+            }
+        }
+        Expr::Binary(f, a, b) => {
+            let (la, lb) = (latex(a, names), latex(b, names));
+            match f {
+                Node::Add if matches!(**b, Expr::Const(v) if v < 0.0) => {
+                    let Expr::Const(v) = **b else { unreachable!() };
+                    (format!("{} - {}", la.0, constant(-v)), 1)
+                }
+                Node::Add => (format!("{} + {}", la.0, wrap(lb, 2)), 1),
+                Node::Sub => (format!("{} - {}", la.0, wrap(lb, 2)), 1),
+                _ => product(e, names),
+            }
+        }
+    }
+}
+
+/// Gathers a product/quotient chain into a coefficient, numerator and denominator factors.
+fn gather<'a>(
+    e: &'a Expr,
+    inv: bool,
+    coef: &mut f64,
+    num: &mut Vec<&'a Expr>,
+    den: &mut Vec<&'a Expr>,
+) {
+    match e {
+        Expr::Binary(Node::Mul, a, b) => {
+            gather(a, inv, coef, num, den);
+            gather(b, inv, coef, num, den);
+        }
+        Expr::Binary(Node::Div, a, b) => {
+            gather(a, inv, coef, num, den);
+            gather(b, !inv, coef, num, den);
+        }
+        Expr::Const(c) => *coef = if inv { *coef / c } else { *coef * c },
+        f if inv => den.push(f),
+        f => num.push(f),
+    }
+}
+
+/// Factors with equal ones written as powers: `r \, r` -> `r^{2}`.
+fn factors(list: &[&Expr], names: &[String]) -> String {
+    let mut seen: Vec<(&Expr, usize)> = Vec::new();
+    for f in list {
+        match seen.iter_mut().find(|(g, _)| g == f) {
+            Some((_, k)) => *k += 1,
+            None => seen.push((f, 1)),
+        }
+    }
+    seen.iter()
+        .map(|(f, k)| {
+            let (s, p) = latex(f, names);
+            let s = if p < 5 && (*k > 1 || seen.len() > 1) {
+                format!("\\left({s}\\right)")
+            } else {
+                s
+            };
+            if *k > 1 {
+                format!("{s}^{{{k}}}")
+            } else {
+                s
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" \\, ")
+}
+
+/// `c \frac{a b}{d}`: how people write products and quotients (for reading; the rounding of
+/// the coefficient is the only change).
+fn product(e: &Expr, names: &[String]) -> (String, u8) {
+    let (mut coef, mut num, mut den) = (1.0, Vec::new(), Vec::new());
+    gather(e, false, &mut coef, &mut num, &mut den);
+    let top = if num.is_empty() {
+        "1".to_string()
+    } else {
+        factors(&num, names)
+    };
+    let body = if den.is_empty() {
+        top
+    } else {
+        format!("\\frac{{{top}}}{{{}}}", factors(&den, names))
+    };
+    let (sign, c) = if coef < 0.0 { ("-", -coef) } else { ("", coef) };
+    let prec = if sign.is_empty() { 2 } else { 3 };
+    if c == 1.0 {
+        if num.is_empty() && den.is_empty() {
+            return (format!("{sign}1"), prec);
+        }
+        (format!("{sign}{body}"), prec)
+    } else if num.is_empty() && den.is_empty() {
+        (constant(coef), prec)
+    } else if num.is_empty() && body == "1" {
+        (format!("{sign}{}", constant(c)), prec)
+    } else {
+        let body = if num.is_empty() && !den.is_empty() {
+            format!("\\frac{{{}}}{{{}}}", constant(c), factors(&den, names))
+        } else {
+            format!("{} \\, {body}", constant(c))
+        };
+        (format!("{sign}{body}"), prec)
+    }
+}
+
+/// The right-hand side of one response's equation.
+pub fn equation(m: &Metamodel, response: usize) -> String {
+    let names: Vec<String> = m
+        .inputs
+        .iter()
+        .map(|i| match i.transform {
+            Transform::Identity => symbol(&i.name),
+            _ => format!("\\tilde{{{}}}", symbol(&i.name)),
+        })
+        .collect();
+    latex(&Expr::from_postfix(&m.responses[response].program), &names).0
+}
+
+/// An `align*` block with every response and the definitions of scaled inputs.
+pub fn document(m: &Metamodel) -> String {
+    let mut out = String::from("\\begin{align*}\n");
+    let mut rows: Vec<String> = (0..m.responses.len())
+        .map(|r| format!("{} &= {}", symbol(&m.responses[r].name), equation(m, r)))
+        .collect();
+    for i in &m.inputs {
+        let s = symbol(&i.name);
+        match i.transform {
+            Transform::Identity => {}
+            Transform::Linear { offset, width } => rows.push(format!(
+                "\\tilde{{{s}}} &= \\frac{{{s} - {}}}{{{}}}",
+                constant(offset),
+                constant(width)
+            )),
+            Transform::Log { offset, width } => rows.push(format!(
+                "\\tilde{{{s}}} &= \\frac{{\\ln {s} - {}}}{{{}}}",
+                constant(offset),
+                constant(width)
+            )),
+        }
+    }
+    out.push_str(&rows.join(" \\\\\n"));
+    out.push_str("\n\\end{align*}\n");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_follow_the_field() {
+        assert_eq!(symbol("mu_r_pp"), "\\mu_{r,pp}");
+        assert_eq!(symbol("d50"), "d_{50}");
+        assert_eq!(symbol("E_p"), "E_{p}");
+        assert_eq!(symbol("shear_angle"), "\\mathrm{shear}_{angle}");
+    }
+
+    #[test]
+    fn constants_are_rounded_to_four_digits() {
+        assert_eq!(constant(0.07957747154594767), "0.07958");
+        assert_eq!(constant(1.4999999999999991), "1.5");
+        assert_eq!(constant(-2.3), "-2.3");
+        assert_eq!(constant(1234.5678), "1235");
+        assert_eq!(constant(6.02e23), "6.020 \\times 10^{23}");
+        assert_eq!(constant(-1.5e-5), "-1.500 \\times 10^{-5}");
+    }
+}
