@@ -29,6 +29,34 @@ pub enum BenchCommand {
     /// Shear box: mbgc against LIGGGHTS replaying the identical runs (low, mid and high
     /// friction, several seeds), and the cost of a run for several PSDs and moduli.
     ShearBox(ShearBoxBenchArgs),
+    /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
+    /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
+    Gp(GpBenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct GpBenchArgs {
+    /// Directory written by `benches/gp/feynman.py` (and `run_gplearn.py`).
+    #[arg(long)]
+    pub dir: PathBuf,
+    /// gplearn's results (default: <dir>/gplearn_results.json).
+    #[arg(long)]
+    pub gplearn: Option<PathBuf>,
+    /// Python with sympy, for the SRBench exact-recovery rule.
+    #[arg(long, default_value = "python3")]
+    pub python: String,
+    #[arg(long, default_value_t = 5000)]
+    pub population: usize,
+    #[arg(long, default_value_t = 20)]
+    pub generations: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Only these equations (comma-separated names).
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
+    /// Markdown report (e.g. docs/gp_benchmark.md).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -122,7 +150,76 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Sampling(s) => sampling(s),
         BenchCommand::Dem(d) => dem(d),
         BenchCommand::ShearBox(b) => shear_box(b),
+        BenchCommand::Gp(g) => gp(g),
     }
+}
+
+fn gp(a: &GpBenchArgs) -> anyhow::Result<()> {
+    use crate::gp::benchmark::{
+        check_recovery, read_equations, read_gplearn, report, run_mbgc, scripts_dir,
+    };
+    let equations: Vec<_> = read_equations(&a.dir)?
+        .into_iter()
+        .filter(|e| a.only.is_empty() || a.only.contains(&e.name))
+        .collect();
+    let gplearn_path = a
+        .gplearn
+        .clone()
+        .unwrap_or_else(|| a.dir.join("gplearn_results.json"));
+    let theirs = read_gplearn(&gplearn_path)?;
+    let cfg = crate::gp::Config {
+        population: a.population,
+        generations: a.generations,
+        seed: a.seed,
+        ..crate::gp::Config::default()
+    };
+    let mut ours = Vec::new();
+    for eq in &equations {
+        let r = run_mbgc(&a.dir, eq, &cfg)?;
+        println!(
+            "{:>10}: test R2 {}, size {}, {:.2} s, {} generations: {}",
+            eq.name,
+            r.test_r2.map_or("n/a".into(), |v| format!("{v:.6}")),
+            r.size,
+            r.wall_time_s,
+            r.generations_run.unwrap_or(0),
+            r.expression
+        );
+        ours.push(r);
+    }
+    let pairs: Vec<(String, String)> = equations
+        .iter()
+        .zip(&ours)
+        .map(|(e, r)| (e.truth.clone(), r.expression.clone()))
+        .collect();
+    let script = scripts_dir().join("srbench_check.py");
+    let recovered = check_recovery(&a.python, &script, &a.dir, &pairs)?;
+    for (r, ok) in ours.iter_mut().zip(recovered) {
+        r.recovered = ok;
+    }
+    let command = format!(
+        "cargo run --release -- bench gp --dir {} --python {} --population {} --generations {} --seed {}{}",
+        a.dir.display(),
+        a.python,
+        a.population,
+        a.generations,
+        a.seed,
+        a.report
+            .as_ref()
+            .map(|p| format!(" --report {}", p.display()))
+            .unwrap_or_default()
+    );
+    let text = report(&equations, &ours, &theirs, &cfg, &command);
+    match &a.report {
+        Some(p) => {
+            write_atomic(p, text.as_bytes())?;
+            println!("wrote {}", p.display());
+        }
+        None => print!("{text}"),
+    }
+    let json = a.dir.join("mbgc_results.json");
+    write_atomic(&json, serde_json::to_string_pretty(&ours)?.as_bytes())?;
+    Ok(())
 }
 
 const DIMS: [usize; 2] = [2, 10];

@@ -115,7 +115,7 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         config,
         plots: figures,
     };
-    let bar = ProgressBar::new(a.generations as u64 + 1);
+    let bar = ProgressBar::new(a.generations as u64);
     bar.set_style(
         ProgressStyle::with_template("{prefix:>14} [{bar:30}] gen {pos}/{len} {msg}")
             .expect("static template")

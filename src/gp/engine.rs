@@ -19,6 +19,7 @@ use std::time::Instant;
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Config {
     pub population: usize,
+    /// Populations evaluated, the initial one included (as gplearn counts).
     pub generations: usize,
     /// Sub-populations evolving separately, exchanging `migrants` every `migration_interval`.
     pub islands: usize,
@@ -176,6 +177,7 @@ pub struct FitResult {
     pub front: Vec<FrontEntry>,
     /// Index in `front` of the returned equation (see [`select::pick`]).
     pub chosen: usize,
+    /// Populations evaluated.
     pub generations: usize,
     pub node_evals: u64,
     pub seconds: f64,
@@ -429,7 +431,7 @@ pub fn fit(
         let out_of_time = cfg
             .time_limit
             .is_some_and(|t| start.elapsed().as_secs_f64() >= t);
-        if generation > cfg.generations || out_of_time {
+        if generation >= cfg.generations || out_of_time {
             generation -= 1;
             break;
         }
@@ -561,7 +563,7 @@ pub fn fit(
     Ok(FitResult {
         front,
         chosen,
-        generations: generation,
+        generations: generation + 1,
         node_evals,
         seconds: start.elapsed().as_secs_f64(),
     })
