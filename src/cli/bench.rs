@@ -198,8 +198,12 @@ fn gp(a: &GpBenchArgs) -> anyhow::Result<()> {
         r.recovered = ok;
     }
     let command = format!(
-        "cargo run --release -- bench gp --dir {} --python {} --population {} --generations {} --seed {}{}",
+        "cargo run --release -- bench gp --dir {}{} --python {} --population {} --generations {} --seed {}{}",
         a.dir.display(),
+        a.gplearn
+            .as_ref()
+            .map(|p| format!(" --gplearn {}", p.display()))
+            .unwrap_or_default(),
         a.python,
         a.population,
         a.generations,
