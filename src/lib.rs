@@ -5,12 +5,14 @@
 //! ([`psd`]) turn sieve data into the two PSD inputs of the metamodel; later stages simulate,
 //! fit, and calibrate.
 
+pub mod calibrate;
 pub mod campaign;
 pub mod cli;
 pub mod dem;
 pub mod error;
 pub mod export;
 pub mod gp;
+pub mod material;
 pub mod metamodel;
 pub mod plot;
 pub mod psd;

@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+pub mod calibrate;
 pub mod campaign;
 pub mod export;
 pub mod fit;
@@ -11,6 +12,7 @@ pub mod predict;
 pub mod psd;
 pub mod sample;
 pub mod simulate;
+pub mod validate;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -41,6 +43,10 @@ pub enum Command {
     Predict(predict::PredictArgs),
     /// Write a saved metamodel's equations as Rust, LaTeX or sympy.
     Export(export::ExportArgs),
+    /// Calibrate a material: invert a saved metamodel for its measurements.
+    Calibrate(calibrate::CalibrateArgs),
+    /// Rerun the DEM experiment at calibrated parameters and compare with the measurements.
+    Validate(validate::ValidateArgs),
     /// Benchmarks and reproduction reports.
     Bench(bench::BenchArgs),
 }
@@ -55,6 +61,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Fit(a) => fit::run(&a),
         Command::Predict(a) => predict::run(&a),
         Command::Export(a) => export::run(&a),
+        Command::Calibrate(a) => calibrate::run(&a),
+        Command::Validate(a) => validate::run(&a),
         Command::Bench(a) => bench::run(&a),
     }
 }

@@ -6,7 +6,7 @@ use super::node::Node;
 use nalgebra::{DMatrix, DVector};
 
 /// Children `(left, right)` of every node; unary nodes use `left`, leaves neither.
-fn children(p: &[Node]) -> Vec<(usize, usize)> {
+pub(crate) fn children(p: &[Node]) -> Vec<(usize, usize)> {
     let mut stack = Vec::with_capacity(p.len());
     let mut out = Vec::with_capacity(p.len());
     for (i, n) in p.iter().enumerate() {

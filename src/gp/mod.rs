@@ -10,6 +10,7 @@ pub mod constants;
 pub mod engine;
 pub mod eval;
 pub mod expr;
+pub mod grad;
 pub mod node;
 pub mod program;
 pub mod select;

@@ -278,6 +278,30 @@ impl Metamodel {
         self.predict(response, &cols)[0]
     }
 
+    /// Prediction and its gradient with respect to the physical inputs at one point; `None`
+    /// where the equation is not finite.
+    pub fn value_and_gradient(
+        &self,
+        response: &ResponseModel,
+        x: &[f64],
+    ) -> Option<(f64, Vec<f64>)> {
+        let xt: Vec<f64> = self
+            .inputs
+            .iter()
+            .zip(x)
+            .map(|(i, &v)| i.transform.apply(v))
+            .collect();
+        let (f, mut g) = gp::grad::value_and_gradient(&response.program, &xt)?;
+        for ((gk, inp), &v) in g.iter_mut().zip(&self.inputs).zip(x) {
+            *gk *= match inp.transform {
+                Transform::Identity => 1.0,
+                Transform::Linear { width, .. } => 1.0 / width,
+                Transform::Log { width, .. } => 1.0 / (v * width),
+            };
+        }
+        Some((f, g))
+    }
+
     /// Inputs of a point outside the valid domain, as `(name, value, [min, max])`.
     pub fn outside_domain<'a>(&'a self, x: &[f64]) -> Vec<(&'a str, f64, [f64; 2])> {
         self.inputs

@@ -1,0 +1,13 @@
+//! Calibration: invert the metamodel for a material.
+//!
+//! [`problem`] turns a model and a material file into the search (free parameters, box,
+//! measurements, constraints); [`optimize`] finds every distinct optimum by L-BFGS from many
+//! starts and describes the solution set when the data cannot fix every parameter.
+
+pub mod bayes;
+pub mod optimize;
+pub mod problem;
+pub mod tmcmc;
+
+pub use optimize::{calibrate, Calibration, Optimum};
+pub use problem::Problem;

@@ -1,0 +1,139 @@
+//! `mbgc validate`: rerun the DEM experiment at calibrated parameters and compare with the
+//! measurements (and with what the metamodel predicted there).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::campaign::registry::{experiment_by_name, ExperimentSettings};
+use crate::dem::experiments::{ParamSet, RunOptions};
+use crate::error::{read_to_string, Error};
+use crate::material::Material;
+
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    #[arg(long)]
+    pub material: PathBuf,
+    /// Parameter file written by `mbgc calibrate --out` (`[parameters]`, optional `[predicted]`).
+    #[arg(long)]
+    pub params: PathBuf,
+    #[arg(long, default_value = "shear-box")]
+    pub experiment: String,
+    /// Box scale of the experiment (use the campaign's).
+    #[arg(long)]
+    pub box_scale: Option<f64>,
+    /// Parameters the experiment needs that the model did not have, e.g. `--set nu_p=0.3`.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Side view of the final state (SVG or PNG).
+    #[arg(long)]
+    pub picture: Option<PathBuf>,
+}
+
+fn read_params(path: &std::path::Path) -> anyhow::Result<(ParamSet, Vec<(String, f64)>)> {
+    let file = path.display().to_string();
+    let doc: toml::Table = read_to_string(path)?
+        .parse()
+        .map_err(|e: toml::de::Error| {
+            Error::input(&file, "TOML syntax", e.message().to_string())
+        })?;
+    let table = |key: &str| -> anyhow::Result<Vec<(String, f64)>> {
+        let Some(t) = doc.get(key) else {
+            return Ok(Vec::new());
+        };
+        let t = t
+            .as_table()
+            .ok_or_else(|| Error::input(&file, key, "a table of name = number"))?;
+        t.iter()
+            .map(|(k, v)| {
+                let x = v
+                    .as_float()
+                    .or_else(|| v.as_integer().map(|i| i as f64))
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| Error::input(&file, format!("{key}.{k}"), "a finite number"))?;
+                Ok((k.clone(), x))
+            })
+            .collect()
+    };
+    let params = table("parameters")?;
+    if params.is_empty() {
+        anyhow::bail!(Error::input(&file, "parameters", "a [parameters] table"));
+    }
+    Ok((ParamSet::from_pairs(&params), table("predicted")?))
+}
+
+pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
+    let material = Material::from_file(&a.material)?;
+    let (mut params, predicted) = read_params(&a.params)?;
+    if let Some((d50, sigma)) = material.psd_parameters()? {
+        if params.get("d50").is_none() {
+            params.set("d50", d50);
+        }
+        if params.get("sigma_ln").is_none() {
+            params.set("sigma_ln", sigma);
+        }
+    }
+    for s in &a.set {
+        let (k, v) = crate::campaign::parse_set(s)?;
+        params.set(&k, v);
+    }
+    let exp = experiment_by_name(
+        &a.experiment,
+        &ExperimentSettings {
+            box_scale: a.box_scale,
+        },
+    )?;
+    exp.check(&params)
+        .with_context(|| format!("{} at the parameters of {}", exp.name(), a.params.display()))?;
+    let t = std::time::Instant::now();
+    let out = exp.run(
+        &params,
+        a.seed,
+        &RunOptions {
+            picture: a.picture.clone(),
+            threads: a.threads,
+            ..RunOptions::default()
+        },
+    )?;
+    println!(
+        "{} at {} ({:.1} s):",
+        exp.name(),
+        a.params.display(),
+        t.elapsed().as_secs_f64()
+    );
+    println!(
+        "  {:>14} {:>12} {:>8} {:>12} {:>9} {:>8} {:>12}",
+        "response", "measured", "sd", "DEM", "off %", "off sd", "metamodel"
+    );
+    for m in &material.measured {
+        let Some(dem) = out.get(&m.response) else {
+            println!(
+                "  {:>14} {:>12} (the {} experiment does not measure it)",
+                m.response,
+                m.value,
+                exp.name()
+            );
+            continue;
+        };
+        let model = predicted
+            .iter()
+            .find(|(k, _)| *k == m.response)
+            .map_or("-".to_string(), |(_, v)| format!("{v:.4}"));
+        println!(
+            "  {:>14} {:>12.4} {:>8.3} {:>12.4} {:>+9.2} {:>+8.2} {:>12}",
+            m.response,
+            m.value,
+            m.sd,
+            dem,
+            100.0 * (dem - m.value) / m.value,
+            (dem - m.value) / m.sd,
+            model
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,158 @@
+//! `mbgc calibrate` and `mbgc validate` end to end on small problems.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn mbgc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run mbgc")
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = mbgc(args);
+    assert!(
+        o.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A model of y = 2 a + b^2 (a, b in [0, 1]) and z = a * c fitted by `mbgc fit`.
+fn fit_model(dir: &Path) -> std::path::PathBuf {
+    let mut csv = String::from("a,b,c,y,z\n");
+    for i in 0..200u32 {
+        let a = sobol_burley::sample(i, 0, 3) as f64;
+        let b = sobol_burley::sample(i, 1, 3) as f64;
+        let c = 1.0 + sobol_burley::sample(i, 2, 3) as f64;
+        csv.push_str(&format!("{a},{b},{c},{},{}\n", 2.0 * a + b * b, a * c));
+    }
+    let data = dir.join("t.csv");
+    std::fs::write(&data, csv).unwrap();
+    let model = dir.join("m.json");
+    ok(&[
+        "fit",
+        "--data",
+        s(&data),
+        "--inputs",
+        "a,b,c",
+        "--targets",
+        "y,z",
+        "--out",
+        s(&model),
+        "--population",
+        "1000",
+        "--generations",
+        "10",
+        "--no-figures",
+    ]);
+    model
+}
+
+#[test]
+fn calibrate_writes_parameters_and_reports_the_posterior() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = fit_model(dir.path());
+    // Truth a = 0.3, b = 0.5, c = 1.5: y = 0.85, z = 0.45.
+    let mat = dir.path().join("mat.toml");
+    std::fs::write(
+        &mat,
+        "name = \"toy\"\n[measured]\ny = { value = 0.85, sd = 0.01 }\nz = { value = 0.45, sd = 0.01 }\n[fixed]\nc = 1.5\n",
+    )
+    .unwrap();
+    let out = dir.path().join("cal.toml");
+    let text = ok(&[
+        "calibrate",
+        "--material",
+        s(&mat),
+        "--model",
+        s(&model),
+        "--out",
+        s(&out),
+        "--bayes",
+        "--samples",
+        "1000",
+        "--sigma-max",
+        "0.05",
+    ]);
+    assert!(text.contains("distinct optim"), "{text}");
+    assert!(text.contains("log evidence"), "{text}");
+    let cal: toml::Table = std::fs::read_to_string(&out).unwrap().parse().unwrap();
+    let p = cal["parameters"].as_table().unwrap();
+    let a = p["a"].as_float().unwrap();
+    let b = p["b"].as_float().unwrap();
+    assert!((a - 0.3).abs() < 0.01 && (b - 0.5).abs() < 0.02, "{p:?}");
+    assert_eq!(p["c"].as_float().unwrap(), 1.5);
+    // JSON carries the same optimum and the posterior summaries.
+    let json = ok(&[
+        "calibrate",
+        "--material",
+        s(&mat),
+        "--model",
+        s(&model),
+        "--json",
+        "--bayes",
+        "--samples",
+        "500",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let post = &v["posterior"]["parameters"];
+    assert_eq!(post[0]["name"], "a");
+    let mean_a = post[0]["mean"].as_f64().unwrap();
+    assert!((mean_a - 0.3).abs() < 0.03, "posterior mean of a {mean_a}");
+    assert!(v["calibration"]["optima"][0]["chi2"].as_f64().unwrap() < 1.0);
+}
+
+#[test]
+fn validate_reruns_the_dem_experiment() {
+    let dir = tempfile::tempdir().unwrap();
+    let mat = dir.path().join("steel.toml");
+    std::fs::write(
+        &mat,
+        "name = \"steel ball\"\n[measured]\ncnr = { value = 0.8, sd = 0.05 }\n",
+    )
+    .unwrap();
+    let params = dir.path().join("p.toml");
+    std::fs::write(
+        &params,
+        "[parameters]\nE_p = 2e11\nnu_p = 0.3\nrho_p = 7800\nd50 = 10\nE_w = 2e11\ne_pw = 0.8\n\
+         mu_pw = 0.1\nimpact_speed = 1.0\nimpact_angle = 0\n[predicted]\ncnr = 0.79\n",
+    )
+    .unwrap();
+    let text = ok(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+    ]);
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("cnr"))
+        .unwrap();
+    let dem: f64 = line.split_whitespace().nth(3).unwrap().parse().unwrap();
+    assert!((dem - 0.8).abs() < 0.01, "DEM restitution {dem}: {text}");
+    // A parameter the experiment needs but the file lacks is named.
+    std::fs::write(&params, "[parameters]\nE_p = 2e11\n").unwrap();
+    let o = mbgc(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+    ]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("p.toml") && e.contains("missing"), "{e}");
+}
