@@ -187,3 +187,45 @@ fn bad_materials_are_refused_naming_the_field() {
     let e = Problem::new(m, &mat).unwrap_err().to_string();
     assert!(e.contains("psd") && e.contains("sigma_ln"), "{e}");
 }
+
+/// Posterior and evidence of a problem with a known answer: model y = a on a in [0, 1] (uniform
+/// prior), one measurement 0.4 +- 0.05, no model error: posterior N(0.4, 0.05^2) and
+/// ln Z = ln(Phi(12) - Phi(-8)) = 0 (to 1e-15).
+#[test]
+fn bayesian_posterior_and_evidence_of_a_linear_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("a,y\n");
+    for i in 0..=20 {
+        let a = i as f64 / 20.0;
+        csv.push_str(&format!("{a},{a}\n"));
+    }
+    let data = dir.path().join("lin.csv");
+    std::fs::write(&data, csv).unwrap();
+    let opts = FitOptions {
+        data,
+        inputs: vec!["a".into()],
+        targets: vec!["y".into()],
+        test_fraction: 0.0,
+        space: None,
+        config: Config {
+            population: 50,
+            generations: 2,
+            ..Config::default()
+        },
+        plots: None,
+    };
+    let m = fit_table(&opts, |_, _| {}).unwrap().model;
+    assert_eq!(m.responses[0].equation, "a");
+    let mat = Material::from_toml_str("[measured]\ny = { value = 0.4, sd = 0.05 }\n", "lin.toml")
+        .unwrap();
+    let p = Problem::new(&m, &mat).unwrap();
+    let post = mbgc::calibrate::bayes::posterior(&p, 2000, 0.0, 3).unwrap();
+    let a = &post.parameters[0];
+    eprintln!("mean {} sd {} ln Z {}", a.mean, a.sd, post.ln_evidence);
+    assert!((a.mean - 0.4).abs() < 0.005, "{a:?}");
+    assert!((a.sd - 0.05).abs() < 0.005, "{a:?}");
+    assert!(post.ln_evidence.abs() < 0.1, "ln Z {}", post.ln_evidence);
+    assert!(
+        (a.q05 - (0.4 - 1.645 * 0.05)).abs() < 0.01 && (a.q95 - (0.4 + 1.645 * 0.05)).abs() < 0.01
+    );
+}

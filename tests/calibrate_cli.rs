@@ -25,8 +25,12 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// A model of y = 2 a + b^2 (a, b in [0, 1]) and z = a * c fitted by `mbgc fit`.
+/// A model of y = 2 a + b^2 (a, b in [0, 1]) and z = a * c fitted by `mbgc fit` on `inputs`.
 fn fit_model(dir: &Path) -> std::path::PathBuf {
+    fit_on(dir, "a,b,c", "m.json")
+}
+
+fn fit_on(dir: &Path, inputs: &str, name: &str) -> std::path::PathBuf {
     let mut csv = String::from("a,b,c,y,z\n");
     for i in 0..200u32 {
         let a = sobol_burley::sample(i, 0, 3) as f64;
@@ -36,13 +40,13 @@ fn fit_model(dir: &Path) -> std::path::PathBuf {
     }
     let data = dir.join("t.csv");
     std::fs::write(&data, csv).unwrap();
-    let model = dir.join("m.json");
+    let model = dir.join(name);
     ok(&[
         "fit",
         "--data",
         s(&data),
         "--inputs",
-        "a,b,c",
+        inputs,
         "--targets",
         "y,z",
         "--out",
@@ -108,6 +112,45 @@ fn calibrate_writes_parameters_and_reports_the_posterior() {
     let mean_a = post[0]["mean"].as_f64().unwrap();
     assert!((mean_a - 0.3).abs() < 0.03, "posterior mean of a {mean_a}");
     assert!(v["calibration"]["optima"][0]["chi2"].as_f64().unwrap() < 1.0);
+}
+
+/// A model class that lacks an effect (y without b) loses against the full one by evidence when
+/// the model error is bounded (a relative model error up to 10 % would absorb the 7 % misfit of the
+/// reduced model, which then wins by having a parameter less: Occam).
+#[test]
+fn model_classes_are_ranked_by_evidence() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = fit_model(dir.path());
+    let reduced = fit_on(dir.path(), "a,c", "reduced.json");
+    let mat = dir.path().join("mat.toml");
+    std::fs::write(
+        &mat,
+        "[measured]\ny = { value = 0.85, sd = 0.01 }\nz = { value = 0.45, sd = 0.01 }\n[fixed]\nc = 1.5\n",
+    )
+    .unwrap();
+    let json = ok(&[
+        "calibrate",
+        "--material",
+        s(&mat),
+        "--model",
+        s(&full),
+        "--model",
+        s(&reduced),
+        "--bayes",
+        "--samples",
+        "500",
+        "--sigma-max",
+        "0.02",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let p = v["class_probabilities"].as_array().unwrap();
+    let p_full = p[0].as_f64().unwrap();
+    assert!(
+        p_full > 0.9,
+        "P(full model) = {p_full}: {}",
+        v["classes"][1]["posterior"]
+    );
 }
 
 #[test]

@@ -16,9 +16,10 @@ pub struct CalibrateArgs {
     /// Material file (measurements, PSD, fixed parameters, bounds, constraints).
     #[arg(long)]
     pub material: PathBuf,
-    /// Metamodel written by `mbgc fit`.
-    #[arg(long, default_value = "models/shear_box.json")]
-    pub model: PathBuf,
+    /// Metamodel written by `mbgc fit`. Give several (e.g. with and without an effect) with
+    /// `--bayes` to compare them as model classes by their evidence.
+    #[arg(long, default_values = ["models/shear_box.json"])]
+    pub model: Vec<PathBuf>,
     /// L-BFGS starts (Sobol points of the search box).
     #[arg(long, default_value_t = 64)]
     pub starts: usize,
@@ -36,18 +37,64 @@ pub struct CalibrateArgs {
     /// Print the result as JSON instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Write the best parameter set (all model inputs) as TOML, for `mbgc validate`.
+    /// Write the best parameter set (all model inputs, first model) as TOML, for `mbgc validate`.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
 
 pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     let material = Material::from_file(&a.material)?;
-    let model = Metamodel::load(&a.model)?;
     if a.starts == 0 {
         anyhow::bail!("--starts: expected at least 1");
     }
-    let problem = Problem::new(&model, &material)?;
+    let mut evidences = Vec::new();
+    let mut jsons = Vec::new();
+    for (i, path) in a.model.iter().enumerate() {
+        if i > 0 && !a.json {
+            println!();
+        }
+        let (ev, json) = run_one(a, &material, path, i == 0)?;
+        evidences.push(ev);
+        jsons.push(json);
+    }
+    if a.model.len() > 1 && a.bayes {
+        let ln_z: Vec<f64> = evidences
+            .iter()
+            .map(|e| e.unwrap_or(f64::NEG_INFINITY))
+            .collect();
+        let prob = bayes::class_probabilities(&ln_z);
+        if a.json {
+            let v = serde_json::json!({
+                "classes": jsons,
+                "class_probabilities": prob,
+            });
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        } else {
+            println!("\nModel classes (equal prior probabilities):");
+            for ((m, z), p) in a.model.iter().zip(&ln_z).zip(&prob) {
+                println!(
+                    "  {:>40}: log evidence {z:.3}, P(M|D) = {p:.4}",
+                    m.display()
+                );
+            }
+        }
+    } else if a.json {
+        for j in jsons {
+            println!("{}", serde_json::to_string_pretty(&j)?);
+        }
+    }
+    Ok(())
+}
+
+/// Calibrates with one model; returns its log-evidence (with `--bayes`) and the JSON record.
+fn run_one(
+    a: &CalibrateArgs,
+    material: &Material,
+    model_path: &std::path::Path,
+    first: bool,
+) -> anyhow::Result<(Option<f64>, serde_json::Value)> {
+    let model = Metamodel::load(model_path)?;
+    let problem = Problem::new(&model, material)?;
     let cal = calibrate(&problem, a.starts, a.seed);
     let Some(best) = cal.optima.first() else {
         anyhow::bail!(
@@ -72,12 +119,12 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     } else {
         None
     };
-    if let Some(path) = &a.out {
+    if let Some(path) = a.out.as_ref().filter(|_| first) {
         let x = problem.full(&best.x);
         let mut t = format!(
             "# Calibrated by mbgc from {} with {}\nmaterial = {:?}\n\n[parameters]\n",
             material.source,
-            a.model.display(),
+            model_path.display(),
             material.name
         );
         for (n, v) in problem.names.iter().zip(&x) {
@@ -89,23 +136,23 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
         }
         write_atomic(path, t.as_bytes())?;
     }
+    let json = serde_json::json!({
+        "material": material.name,
+        "model": model_path.display().to_string(),
+        "notes": problem.notes,
+        "calibration": cal,
+        "posterior": posterior,
+    });
+    let ln_z = posterior.as_ref().map(|p| p.ln_evidence);
     if a.json {
-        let v = serde_json::json!({
-            "material": material.name,
-            "model": a.model.display().to_string(),
-            "notes": problem.notes,
-            "calibration": cal,
-            "posterior": posterior,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
+        return Ok((ln_z, json));
     }
     let names = problem.free_names();
     println!(
         "{} ({}) with {}",
         material.name,
         material.source,
-        a.model.display()
+        model_path.display()
     );
     for n in &problem.notes {
         println!("  {n}");
@@ -209,9 +256,13 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
                 s.name, s.mean, s.cov, s.q05, s.q95
             );
         }
+        println!("Posterior-robust predictions (mean +- sd over the posterior):");
+        for s in &post.responses {
+            println!("  {:>12}: {:.4} +- {:.4}", s.name, s.mean, s.sd);
+        }
     }
-    if let Some(p) = &a.out {
+    if let Some(p) = a.out.as_ref().filter(|_| first) {
         println!("wrote {}", p.display());
     }
-    Ok(())
+    Ok((ln_z, json))
 }
