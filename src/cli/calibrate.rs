@@ -214,6 +214,17 @@ fn run_one(
         );
     }
     if cal.excess_parameters > 0 {
+        let equal = cal
+            .optima
+            .iter()
+            .filter(|o| o.chi2 <= best.chi2 + 1.0)
+            .count();
+        if equal > 1 {
+            println!(
+                "{equal} of the optima are equally good points of one continuous solution set, \
+                 not separate answers."
+            );
+        }
         println!(
             "{} free parameters but {} measurements: the data fix at most {} combinations; the \
              solutions form a set of dimension >= {}.",
