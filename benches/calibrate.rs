@@ -18,8 +18,12 @@ fn main() {
     let dir = tempfile::tempdir().expect("temp dir");
     // Synthetic responses shaped like the shear box's (the bench times the inversion, not physics).
     let mut csv = NAMES.join(",") + ",shear_angle,bulk_density\n";
-    let lo = [5e6, 5e6, 0.1, 0.05, 0.05, 0.0, 0.0, 0.0, 0.0, 250.0, 0.4, 0.07];
-    let hi = [5e8, 5e8, 0.5, 0.95, 0.95, 1.0, 1.0, 1.0, 1.0, 3000.0, 25.6, 1.17];
+    let lo = [
+        5e6, 5e6, 0.1, 0.05, 0.05, 0.0, 0.0, 0.0, 0.0, 250.0, 0.4, 0.07,
+    ];
+    let hi = [
+        5e8, 5e8, 0.5, 0.95, 0.95, 1.0, 1.0, 1.0, 1.0, 3000.0, 25.6, 1.17,
+    ];
     for i in 0..600u32 {
         let x: Vec<f64> = (0..12)
             .map(|d| lo[d] + (hi[d] - lo[d]) * sobol_burley::sample(i, d as u32, 5) as f64)

@@ -31,6 +31,12 @@ pub struct Posterior {
     pub parameters: Vec<Summary>,
     /// Posterior-robust mean and sd of every response of the model (seed 003 Eqs. 14-15).
     pub responses: Vec<Summary>,
+    /// The equally weighted posterior samples (free parameters, then sigma).
+    #[serde(skip)]
+    pub draws: Vec<Vec<f64>>,
+    /// Their names.
+    #[serde(skip)]
+    pub names: Vec<String>,
 }
 
 /// ln N(y; mu, var).
@@ -106,7 +112,7 @@ pub fn posterior(p: &Problem, samples: usize, sigma_max: f64, seed: u64) -> Resu
     if sigma_max > 0.0 {
         names.push("sigma".into());
     }
-    let parameters = names
+    let parameters: Vec<Summary> = names
         .iter()
         .enumerate()
         .map(|(j, n)| summary(n, &mut r.samples.iter().map(|s| s[j]).collect::<Vec<_>>()))
@@ -130,6 +136,8 @@ pub fn posterior(p: &Problem, samples: usize, sigma_max: f64, seed: u64) -> Resu
         ln_evidence: r.ln_evidence,
         parameters,
         responses,
+        draws: r.samples,
+        names,
     })
 }
 

@@ -37,6 +37,10 @@ pub struct CalibrateArgs {
     /// Print the result as JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Directory for figures: the posterior (corner plot, with `--bayes`) and the set of equally
+    /// good optima (when the data cannot fix every parameter).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
     /// Write the best parameter set (all model inputs, first model) as TOML, for `mbgc validate`.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -135,6 +139,47 @@ fn run_one(
             writeln!(t, "{} = {p:?}", tg.name)?;
         }
         write_atomic(path, t.as_bytes())?;
+    }
+    let mut figures = Vec::new();
+    if let Some(dir) = &a.plot {
+        let stem = model_path
+            .file_stem()
+            .map_or("model".into(), |s| s.to_string_lossy().to_string());
+        let names: Vec<String> = problem.free_names().iter().map(|s| s.to_string()).collect();
+        let boxes: Vec<(f64, f64)> = problem
+            .lower
+            .iter()
+            .copied()
+            .zip(problem.upper.iter().copied())
+            .collect();
+        if let Some(post) = &posterior {
+            let mut ranges = boxes.clone();
+            let mut marks = best.x.clone();
+            if post.names.len() > names.len() {
+                ranges.push((0.0, a.sigma_max));
+                marks.push(post.parameters.last().map_or(0.0, |s| s.mean));
+            }
+            let path = dir.join(format!("{stem}_posterior.svg"));
+            crate::plot::corner::corner(
+                &path,
+                &post.names,
+                &post.draws,
+                Some(&marks),
+                Some(&ranges),
+            )?;
+            figures.push(path);
+        }
+        let good: Vec<Vec<f64>> = cal
+            .optima
+            .iter()
+            .filter(|o| o.chi2 <= best.chi2 + 1.0)
+            .map(|o| o.x.clone())
+            .collect();
+        if cal.excess_parameters > 0 && good.len() > 1 && !names.is_empty() {
+            let path = dir.join(format!("{stem}_solution_set.svg"));
+            crate::plot::corner::corner(&path, &names, &good, Some(&best.x), Some(&boxes))?;
+            figures.push(path);
+        }
     }
     let json = serde_json::json!({
         "material": material.name,
@@ -274,6 +319,9 @@ fn run_one(
     }
     if let Some(p) = a.out.as_ref().filter(|_| first) {
         println!("wrote {}", p.display());
+    }
+    for f in &figures {
+        println!("wrote {}", f.display());
     }
     Ok((ln_z, json))
 }

@@ -6,6 +6,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 
 pub mod boxplot;
+pub mod corner;
 pub mod parity;
 pub mod psd;
 
