@@ -32,6 +32,44 @@ pub enum BenchCommand {
     /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
     /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
     Gp(GpBenchArgs),
+    /// Seed 003 Table 4 on DEM impacts: TMCMC of the three normal-force classes (Tsuji,
+    /// Kuwabara-Kono, free exponent) on measured restitution of steel; posteriors, evidences.
+    Restitution(RestitutionBenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct RestitutionBenchArgs {
+    /// Measured restitution, columns impact_angle_deg,type,value,sd (seed 003 Table 2:
+    /// examples/restitution_steel.csv).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// TMCMC samples per stage.
+    #[arg(long, default_value_t = 2000)]
+    pub samples: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Threads (0: all cores); the result does not depend on it.
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Metropolis steps per chain and stage before the recorded one.
+    #[arg(long, default_value_t = 40)]
+    pub burn_in: usize,
+    /// Independent TMCMC runs per class (seeds seed, seed+1, ...): evidence scatter.
+    #[arg(long, default_value_t = 3)]
+    pub replicates: usize,
+    /// Young's moduli of particle and wall, Pa, one group of runs each (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = [2.1e10, 2.1e11])]
+    pub youngs: Vec<f64>,
+    /// Impact speed, m/s (seed 003 does not state it).
+    #[arg(long, default_value_t = 2.0)]
+    pub speed: f64,
+    /// Other speeds at which every class is recalibrated on the last modulus (one run each);
+    /// give the flag without values to skip.
+    #[arg(long, value_delimiter = ',', num_args = 0.., default_values_t = [1.0, 4.0])]
+    pub speed_check: Vec<f64>,
+    /// Markdown report (e.g. docs/bayes_restitution.md).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -151,7 +189,54 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Dem(d) => dem(d),
         BenchCommand::ShearBox(b) => shear_box(b),
         BenchCommand::Gp(g) => gp(g),
+        BenchCommand::Restitution(r) => restitution(r),
     }
+}
+
+fn restitution(a: &RestitutionBenchArgs) -> anyhow::Result<()> {
+    use crate::calibrate::restitution::{report, run_study_with, StudySettings};
+    let settings = StudySettings {
+        burn_in: a.burn_in,
+        replicates: a.replicates,
+        youngs_moduli: a.youngs.clone(),
+        impact_speed: a.speed,
+        speed_check: a.speed_check.clone(),
+        ..StudySettings::new(a.samples, a.seed, a.threads)
+    };
+    let study = run_study_with(&a.data, &settings)?;
+    let command = format!(
+        "cargo run --release -- bench restitution --data {} --samples {} --seed {} --threads {} --burn-in {} --replicates {} --youngs {} --speed {} --speed-check {}{}",
+        a.data.display(),
+        a.samples,
+        a.seed,
+        a.threads,
+        a.burn_in,
+        a.replicates,
+        a.youngs
+            .iter()
+            .map(|e| format!("{e:e}"))
+            .collect::<Vec<_>>()
+            .join(","),
+        a.speed,
+        a.speed_check
+            .iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+        a.report
+            .as_ref()
+            .map(|p| format!(" --report {}", p.display()))
+            .unwrap_or_default()
+    );
+    let text = report(&study, &command);
+    match &a.report {
+        Some(p) => {
+            write_atomic(p, text.as_bytes())?;
+            println!("wrote {}", p.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
 }
 
 fn gp(a: &GpBenchArgs) -> anyhow::Result<()> {

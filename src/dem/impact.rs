@@ -77,15 +77,21 @@ pub fn run_impact(imp: &Impact) -> Result<ImpactResult> {
         youngs_modulus: b.youngs_modulus,
         poisson: b.poisson,
     })?;
-    // The rigid plane: a modulus so large that Y* and G* are the body's alone.
-    let m_other = match &imp.partner {
-        None => materials.add(Material {
+    // The plane: `wall_youngs_modulus` with the body's Poisson ratio, or rigid (a modulus so
+    // large that Y* and G* are the body's alone).
+    let m_other = match (&imp.partner, imp.wall_youngs_modulus) {
+        (None, Some(e_w)) => materials.add(Material {
+            name: "wall".into(),
+            youngs_modulus: e_w,
+            poisson: b.poisson,
+        })?,
+        (None, None) => materials.add(Material {
             name: "rigid".into(),
             youngs_modulus: 1e40,
             poisson: 0.0,
         })?,
-        Some(p) if *p == *b => m_body,
-        Some(p) => materials.add(Material {
+        (Some(p), _) if *p == *b => m_body,
+        (Some(p), _) => materials.add(Material {
             name: "partner".into(),
             youngs_modulus: p.youngs_modulus,
             poisson: p.poisson,

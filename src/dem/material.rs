@@ -29,6 +29,9 @@ pub struct Interaction {
     /// Phenomenological damping constant gamma_n of the power-law damped normal models
     /// (Tsuji, Kuwabara-Kono, free exponent), in N s/m^(1+alpha).
     pub damping_gamma_n: f64,
+    /// Constant tangential spring stiffness k_t, N/m (the Cundall-Strack spring of seed 003);
+    /// 0 (default) for Mindlin's k_t = 8 G* sqrt(R* d).
+    pub tangential_stiffness: f64,
 }
 
 impl Default for Interaction {
@@ -39,6 +42,7 @@ impl Default for Interaction {
             rolling_friction: 0.0,
             cohesion_energy_density: 0.0,
             damping_gamma_n: 0.0,
+            tangential_stiffness: 0.0,
         }
     }
 }
@@ -63,6 +67,8 @@ pub struct PairConstants {
     pub rolling_friction: f64,
     pub cohesion_energy_density: f64,
     pub damping_gamma_n: f64,
+    /// Constant tangential stiffness (N/m), 0 for Mindlin's.
+    pub k_t_fixed: f64,
 }
 
 impl PairConstants {
@@ -87,6 +93,7 @@ impl PairConstants {
             rolling_friction: i.rolling_friction,
             cohesion_energy_density: i.cohesion_energy_density,
             damping_gamma_n: i.damping_gamma_n,
+            k_t_fixed: i.tangential_stiffness,
         }
     }
 }
@@ -151,6 +158,13 @@ impl Materials {
             f64::MAX,
         )?;
         check_range(&name, "damping gamma_n", i.damping_gamma_n, 0.0, f64::MAX)?;
+        check_range(
+            &name,
+            "tangential stiffness",
+            i.tangential_stiffness,
+            0.0,
+            f64::MAX,
+        )?;
         self.interactions[a * n + b] = Some(i.clone());
         self.interactions[b * n + a] = Some(i);
         self.rebuild();

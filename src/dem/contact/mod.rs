@@ -375,6 +375,7 @@ mod tests {
             rolling_friction: mu_r,
             cohesion_energy_density: ced,
             damping_gamma_n: 2.0,
+            tangential_stiffness: 0.0,
         };
         PairConstants::new(&m, &m, &i)
     }
@@ -436,6 +437,23 @@ mod tests {
                 "slide: mu F_n against the slip"
             );
         }
+    }
+
+    #[test]
+    fn a_constant_tangential_stiffness_replaces_mindlins() {
+        let mut p = pc(1.0, 0.3, 0.0, 0.0);
+        p.k_t_fixed = 5e4;
+        let c = contact(1e-4, 0.0, [0.01, 0.0, 0.0], [0.0; 3]);
+        let mut xi = [0.0; 3];
+        let f = tangential::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
+        assert!((f[0] + 5e4 * 1e-7).abs() < 1e-15, "stick: -k_t xi, {f:?}");
+        let mut xi = [1.0, 0.0, 0.0];
+        let f = tangential::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
+        assert!((norm(f) - 30.0).abs() < 1e-9, "slide: mu F_n");
+        assert!(
+            (xi[0] - 30.0 / 5e4).abs() < 1e-15,
+            "spring reset to the cap"
+        );
     }
 
     #[test]

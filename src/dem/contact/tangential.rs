@@ -7,7 +7,8 @@ use crate::dem::vec3::*;
 const SQRT_5_6: f64 = 0.912_870_929_175_276_8;
 
 /// Advances the spring `xi` by the tangential relative velocity, keeps it in the tangent plane,
-/// and returns the tangential force on i; k_t = 8 G* sqrt(R* d),
+/// and returns the tangential force on i; k_t = 8 G* sqrt(R* d) (Mindlin) or the pair's constant
+/// `k_t_fixed` when set (the linear Cundall-Strack spring of seed 003),
 /// gamma_t = -2 sqrt(5/6) beta sqrt(k_t m*).
 ///
 /// LIGGGHTS (`strict = false`): if the spring force k_t |xi| exceeds mu |F_n|, the force is the
@@ -31,9 +32,22 @@ pub fn mindlin_history(
     add_assign(xi, scale(c.v_t, dt));
     let xn = dot(*xi, c.n);
     sub_assign(xi, scale(c.n, xn));
-    let k_t = 8.0 * p.g_eff * c.sqrt_rd;
+    let fixed = p.k_t_fixed > 0.0;
+    let k_t = if fixed {
+        p.k_t_fixed
+    } else {
+        8.0 * p.g_eff * c.sqrt_rd
+    };
+    // -2 sqrt(5/6) beta sqrt(k_t m*), in Mindlin's case with the operations in LIGGGHTS' order.
+    let damping = || {
+        if fixed {
+            -2.0 * SQRT_5_6 * p.beta * (p.k_t_fixed * c.m_eff).sqrt()
+        } else {
+            -2.0 * SQRT_5_6 * p.beta * p.sqrt_8g * c.damp_root
+        }
+    };
     if strict {
-        let gamma_t = -2.0 * SQRT_5_6 * p.beta * p.sqrt_8g * c.damp_root;
+        let gamma_t = damping();
         let mut f_t = sub(scale(*xi, -k_t), scale(c.v_t, gamma_t));
         let cap = p.friction * f_n.max(0.0);
         let mag2 = norm2(f_t);
@@ -57,7 +71,7 @@ pub fn mindlin_history(
             *xi = scale(f_t, -1.0 / k_t);
         }
     } else {
-        let gamma_t = -2.0 * SQRT_5_6 * p.beta * p.sqrt_8g * c.damp_root;
+        let gamma_t = damping();
         sub_assign(&mut f_t, scale(c.v_t, gamma_t));
     }
     f_t

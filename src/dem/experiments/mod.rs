@@ -113,6 +113,7 @@ pub fn materials_from(p: &ParamSet) -> Result<(Materials, u16, u16)> {
         rolling_friction: p.require("mu_r_pp", MU_RANGE.0, MU_RANGE.1)?,
         cohesion_energy_density: p.optional("ced_pp", 0.0, 0.0, 1e9)?,
         damping_gamma_n: 0.0,
+        tangential_stiffness: 0.0,
     };
     let pw = Interaction {
         restitution: p.require("e_pw", E_REST_RANGE.0, E_REST_RANGE.1)?,
@@ -120,6 +121,7 @@ pub fn materials_from(p: &ParamSet) -> Result<(Materials, u16, u16)> {
         rolling_friction: p.require("mu_r_pw", MU_RANGE.0, MU_RANGE.1)?,
         cohesion_energy_density: p.optional("ced_pw", 0.0, 0.0, 1e9)?,
         damping_gamma_n: 0.0,
+        tangential_stiffness: 0.0,
     };
     m.set_interaction(grain, grain, pp)?;
     m.set_interaction(grain, wall, pw.clone())?;
