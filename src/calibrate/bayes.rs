@@ -11,7 +11,7 @@ use super::tmcmc::{tmcmc, TmcmcOptions, TmcmcResult, UniformBox};
 use crate::error::{Error, Result};
 use serde::Serialize;
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Summary {
     pub name: String,
     pub mean: f64,

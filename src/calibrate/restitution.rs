@@ -497,15 +497,7 @@ impl StudySettings {
 }
 
 /// Posterior summary of one parameter.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ParameterSummary {
-    pub name: String,
-    pub mean: f64,
-    pub sd: f64,
-    pub cov: f64,
-    pub q05: f64,
-    pub q95: f64,
-}
+pub use super::bayes::Summary as ParameterSummary;
 
 /// Posterior of one class on one setup.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
