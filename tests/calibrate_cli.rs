@@ -1,29 +1,9 @@
 //! `mbgc calibrate` and `mbgc validate` end to end on small problems.
 
+mod common;
+
+use common::{mbgc, ok, s};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn mbgc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mbgc"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run mbgc")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = mbgc(args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8(o.stdout).unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// A model of y = 2 a + b^2 (a, b in [0, 1]) and z = a * c fitted by `mbgc fit` on `inputs`.
 fn fit_model(dir: &Path) -> std::path::PathBuf {

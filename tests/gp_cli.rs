@@ -2,40 +2,13 @@
 //! compiled by rustc and compared with `predict`, LaTeX well-formed, sympy readable by sympy, and
 //! bad input refused naming the file and the field.
 
+mod common;
+
+use common::{fails, ok, s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use mbgc::metamodel::Metamodel;
-
-fn mbgc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mbgc"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run mbgc")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = mbgc(args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8(o.stdout).unwrap()
-}
-
-fn fails(args: &[&str]) -> String {
-    let o = mbgc(args);
-    assert!(!o.status.success(), "{args:?} should fail");
-    let e = String::from_utf8(o.stderr).unwrap();
-    assert!(!e.contains("panicked"), "{e}");
-    e
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// A table with a log-scaled input: y1 = 3 mu / (1 + mu_r) + 0.2 ln(E), y2 = mu ln(E).
 fn table(dir: &Path) -> (PathBuf, PathBuf) {

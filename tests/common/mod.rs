@@ -1,0 +1,37 @@
+//! Running the `mbgc` binary from integration tests.
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+pub fn mbgc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run mbgc")
+}
+
+/// Runs a command that must succeed and returns its standard output.
+pub fn ok(args: &[&str]) -> String {
+    let o = mbgc(args);
+    assert!(
+        o.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// Runs a command that must fail (without a panic) and returns its error message.
+pub fn fails(args: &[&str]) -> String {
+    let o = mbgc(args);
+    assert!(!o.status.success(), "{args:?} should fail");
+    let e = String::from_utf8(o.stderr).unwrap();
+    assert!(!e.contains("panicked"), "{e}");
+    e
+}
+
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
