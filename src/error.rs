@@ -95,3 +95,35 @@ pub fn csv_error(file: &str, e: csv::Error) -> Error {
         _ => Error::input(file, "CSV", msg),
     }
 }
+
+/// Opens a CSV file (fields trimmed) and returns the reader with its header.
+pub fn csv_open(path: &Path) -> Result<(csv::Reader<std::fs::File>, Vec<String>)> {
+    let file = path.display().to_string();
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| csv_error(&file, e))?;
+    let header = rdr
+        .headers()
+        .map_err(|e| csv_error(&file, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    Ok((rdr, header))
+}
+
+/// One CSV field as a finite number; the error names the file, the line and the column.
+pub fn csv_number(file: &str, line: u64, column: &str, field: &str) -> Result<f64> {
+    let at = || format!("line {line}, column {column}");
+    let v: f64 = field
+        .parse()
+        .map_err(|_| Error::input(file, at(), format!("expected a number, found \"{field}\"")))?;
+    if !v.is_finite() {
+        return Err(Error::input(
+            file,
+            at(),
+            format!("expected a finite number, found {field}"),
+        ));
+    }
+    Ok(v)
+}

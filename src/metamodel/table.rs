@@ -1,7 +1,7 @@
 //! Reading the columns a fit or a prediction needs from a CSV table (a campaign table, a design,
 //! any user table). Other columns may hold anything.
 
-use crate::error::{csv_error, Error, Result};
+use crate::error::{csv_error, csv_number, csv_open, Error, Result};
 use std::path::Path;
 
 /// Named numeric columns of a table.
@@ -20,16 +20,7 @@ pub struct Columns {
 /// column (campaign tables), rows whose status is not `done` are skipped and counted.
 pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
     let file = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| csv_error(&file, e))?;
-    let header: Vec<String> = rdr
-        .headers()
-        .map_err(|e| csv_error(&file, e))?
-        .iter()
-        .map(str::to_string)
-        .collect();
+    let (mut rdr, header) = csv_open(path)?;
     let mut idx = Vec::with_capacity(names.len());
     for n in names {
         let i = header.iter().position(|h| h == n).ok_or_else(|| {
@@ -56,21 +47,7 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
         }
         for (k, &i) in idx.iter().enumerate() {
             let field = rec.get(i).unwrap_or("");
-            let v: f64 = field.parse().map_err(|_| {
-                Error::input(
-                    &file,
-                    format!("line {line}, column {}", names[k]),
-                    format!("a number, got \"{field}\""),
-                )
-            })?;
-            if !v.is_finite() {
-                return Err(Error::input(
-                    &file,
-                    format!("line {line}, column {}", names[k]),
-                    format!("a finite number, got {field}"),
-                ));
-            }
-            values[k].push(v);
+            values[k].push(csv_number(&file, line as u64, &names[k], field)?);
         }
         records.push(rec.iter().map(str::to_string).collect());
     }

@@ -24,16 +24,7 @@ pub struct SieveData {
 impl SieveData {
     pub fn read(path: &Path) -> Result<SieveData> {
         let file = path.display().to_string();
-        let mut rdr = csv::ReaderBuilder::new()
-            .trim(csv::Trim::All)
-            .from_path(path)
-            .map_err(|e| csv_error(&file, e))?;
-        let header: Vec<String> = rdr
-            .headers()
-            .map_err(|e| csv_error(&file, e))?
-            .iter()
-            .map(str::to_string)
-            .collect();
+        let (mut rdr, header) = crate::error::csv_open(path)?;
         let find = |name: &str| header.iter().position(|h| h == name);
         let size_col = find(SIZE_COLUMN).ok_or_else(|| {
             Error::input(

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use super::points::Points;
-use crate::error::{csv_error, write_atomic, Error, Result};
+use crate::error::{csv_error, csv_number, csv_open, write_atomic, Error, Result};
 use crate::space::Space;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -23,16 +23,7 @@ pub struct Design {
 /// and the column.
 pub fn read_numeric_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
     let file = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| csv_error(&file, e))?;
-    let header: Vec<String> = rdr
-        .headers()
-        .map_err(|e| csv_error(&file, e))?
-        .iter()
-        .map(str::to_string)
-        .collect();
+    let (mut rdr, header) = csv_open(path)?;
     if header.is_empty() || header.iter().all(|h| h.is_empty()) {
         return Err(Error::input(
             &file,
@@ -62,21 +53,7 @@ pub fn read_numeric_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         let line = rec.position().map(|p| p.line()).unwrap_or(0);
         let mut row = Vec::with_capacity(header.len());
         for (j, field) in rec.iter().enumerate() {
-            let v: f64 = field.parse().map_err(|_| {
-                Error::input(
-                    &file,
-                    format!("line {line}, column {}", header[j]),
-                    format!("expected a number, found \"{field}\""),
-                )
-            })?;
-            if !v.is_finite() {
-                return Err(Error::input(
-                    &file,
-                    format!("line {line}, column {}", header[j]),
-                    format!("expected a finite number, found {field}"),
-                ));
-            }
-            row.push(v);
+            row.push(csv_number(&file, line, &header[j], field)?);
         }
         rows.push(row);
     }
