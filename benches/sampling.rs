@@ -4,8 +4,8 @@
 //!
 //!     cargo bench --bench sampling
 
-use mbgc::sampling::benchmark::timing;
 use mbgc::sampling::Method;
+use mbgc::studies::sampling_quality::timing;
 
 fn main() {
     let (n, dim) = (1000, 12);

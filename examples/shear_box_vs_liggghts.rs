@@ -1,8 +1,7 @@
 //! Shear box in mbgc and replayed in LIGGGHTS on the identical configuration.
 //! cargo run --release --example shear_box_vs_liggghts -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [seed] [mu_pw] [mu_r_pw]
-use mbgc::dem::experiments::{
-    shear_box::ShearBox, shear_box_liggghts::replay, ParamSet, RunOptions,
-};
+use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
+use mbgc::studies::shear_box_vs_liggghts::replay;
 
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();

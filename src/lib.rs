@@ -12,11 +12,19 @@ pub mod dem;
 pub mod error;
 pub mod export;
 pub mod gp;
+pub mod liggghts;
 pub mod material;
 pub mod metamodel;
+pub mod numeric;
 pub mod plot;
 pub mod psd;
 pub mod sampling;
 pub mod space;
+pub mod studies;
 
 pub use error::{Error, Result};
+
+// The test stand-ins under `tests/stand_ins/` name the library `mbgc::` as any user would; the
+// unit tests include them, so inside the crate that name must resolve too.
+#[cfg(test)]
+extern crate self as mbgc;

@@ -308,14 +308,16 @@ fn effects_are_chosen_by_name() {
 /// colliding steps they part, as any two granular trajectories differing by round-off do.)
 #[test]
 fn threaded_run_matches_the_serial_run() {
-    let spec = mbgc::dem::bench::BenchSpec {
+    let spec = mbgc::studies::dem_scene::BenchSpec {
         particles: 400,
         box_hi: [0.06, 0.06, 0.12],
         ..Default::default()
     };
-    let (x, r) = mbgc::dem::bench::initial_packing(&spec).unwrap();
-    let mut serial = Simulation::new(mbgc::dem::bench::scene(&spec, &x, &r).unwrap()).unwrap();
-    let mut team = Simulation::new(mbgc::dem::bench::scene(&spec, &x, &r).unwrap()).unwrap();
+    let (x, r) = mbgc::studies::dem_scene::initial_packing(&spec).unwrap();
+    let mut serial =
+        Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
+    let mut team =
+        Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
     serial.run(15000).unwrap();
     team.run(15000).unwrap();
     assert_eq!(
@@ -346,13 +348,13 @@ fn threaded_run_matches_the_serial_run() {
 /// Removing particles keeps the others' contacts (and their history) and changes nothing else.
 #[test]
 fn removing_particles_keeps_the_rest_of_the_packing() {
-    let spec = mbgc::dem::bench::BenchSpec {
+    let spec = mbgc::studies::dem_scene::BenchSpec {
         particles: 300,
         box_hi: [0.06, 0.06, 0.12],
         ..Default::default()
     };
-    let (x, r) = mbgc::dem::bench::initial_packing(&spec).unwrap();
-    let mut sim = Simulation::new(mbgc::dem::bench::scene(&spec, &x, &r).unwrap()).unwrap();
+    let (x, r) = mbgc::studies::dem_scene::initial_packing(&spec).unwrap();
+    let mut sim = Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
     sim.run(15000).unwrap();
     let top = sim.particles.x.iter().map(|x| x[2]).fold(0.0, f64::max);
     let contacts_below = |s: &Simulation| {

@@ -1,19 +1,21 @@
 //! LIGGGHTS end to end on a tiny case. Ignored by default (needs the `liggghts` package):
 //! cargo test --test liggghts -- --ignored
 
-use mbgc::dem::liggghts::{self, LiggghtsCase, BENCHMARK_BOX};
+use mbgc::liggghts;
+use mbgc::studies::dem_scene::{jittered_lattice, liggghts_case, BenchSpec, BENCHMARK_BOX};
 
 #[test]
 #[ignore = "runs LIGGGHTS (apt-get install liggghts)"]
 fn tiny_case_settles_inside_the_box() {
-    if liggghts::find_binary().is_none() {
-        eprintln!("LIGGGHTS not installed: skipped");
-        return;
-    }
+    // Asked for explicitly (--ignored), a missing LIGGGHTS is a failure, not a pass.
+    assert!(
+        liggghts::find_binary().is_some(),
+        "LIGGGHTS is not installed: this test needs `liggghts` (or `lmp_auto`) on PATH \
+         (Debian: apt-get install liggghts)"
+    );
     // 200 particles in the bottom 6 cm, so they reach the floor within the 2000 settling steps.
     let (positions, radii) =
-        mbgc::dem::bench::jittered_lattice(200, [0.0; 3], [0.12, 0.12, 0.06], 0.0075, 0.01, 3)
-            .unwrap();
+        jittered_lattice(200, [0.0; 3], [0.12, 0.12, 0.06], 0.0075, 0.01, 3).unwrap();
     let top = |p: &[[f64; 3]], r: &[f64]| {
         p.iter()
             .zip(r)
@@ -21,12 +23,10 @@ fn tiny_case_settles_inside_the_box() {
             .fold(f64::MIN, f64::max)
     };
     let initial_top = top(&positions, &radii);
-    let mut case = LiggghtsCase::benchmark(positions, radii.clone());
-    case.settle_steps = 2000;
-    case.timed_steps = 500;
+    let case = liggghts_case(&BenchSpec::default(), positions, radii.clone(), 2000, 500);
 
     let dir = tempfile::tempdir().unwrap();
-    let res = liggghts::run(dir.path(), &case).unwrap();
+    let res = liggghts::closed_box::run(dir.path(), &case).unwrap();
 
     assert!(res.version.starts_with("LIGGGHTS"), "{}", res.version);
     assert!(res.timed_wall_s > 0.0 && res.particle_steps_per_s > 0.0);

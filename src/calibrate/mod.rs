@@ -7,7 +7,6 @@
 pub mod bayes;
 pub mod optimize;
 pub mod problem;
-pub mod restitution;
 pub mod tmcmc;
 
 pub use optimize::{calibrate, Calibration, Optimum};

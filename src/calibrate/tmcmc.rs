@@ -17,6 +17,7 @@
 //! Every chain has its own `ChaCha8Rng` seeded from `(seed, stage, chain)`, so the chains can
 //! run on rayon threads and the result is the same for a seed whatever the thread count.
 
+use crate::numeric::{quantile_sorted, splitmix64};
 use nalgebra::{DMatrix, DVector};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -273,10 +274,7 @@ impl TmcmcResult {
             return f64::NAN;
         }
         v.sort_by(f64::total_cmp);
-        let h = q * (v.len() - 1) as f64;
-        let lo = h.floor() as usize;
-        let hi = (lo + 1).min(v.len() - 1);
-        v[lo] + (h - lo as f64) * (v[hi] - v[lo])
+        quantile_sorted(&v, q)
     }
 }
 
@@ -621,15 +619,6 @@ fn check_no_pos_inf(ln_l: &[f64]) -> Result<(), String> {
         Ok(())
     }
 }
-
-/// splitmix64 finaliser: decorrelates nearby seeds.
-fn splitmix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 /// Stream seed for `(seed, stage, chain)`.
 fn mix(seed: u64, stage: u64, chain: u64) -> u64 {
     splitmix64(splitmix64(splitmix64(seed) ^ stage) ^ chain)

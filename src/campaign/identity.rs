@@ -3,31 +3,7 @@
 
 use super::registry::ExperimentSettings;
 use crate::dem::experiments::ParamSet;
-
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
-
-/// 64-bit FNV-1a. Strings are written with a length prefix so that no two input lists share a
-/// byte stream (`ab` + `c` vs `a` + `bc`).
-struct Fnv1a(u64);
-
-impl Fnv1a {
-    fn bytes(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= u64::from(b);
-            self.0 = self.0.wrapping_mul(FNV_PRIME);
-        }
-    }
-
-    fn str(&mut self, s: &str) {
-        self.bytes(&(s.len() as u64).to_le_bytes());
-        self.bytes(s.as_bytes());
-    }
-
-    fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
-    }
-}
+use crate::numeric::{splitmix64, Fnv1a};
 
 /// The id of a run: 64-bit FNV-1a over the experiment name, each input's name and the bits of its
 /// value (so `0.0` and `-0.0` differ, and a value re-read from a CSV matches only if it is the same
@@ -39,7 +15,7 @@ pub fn run_id(
     seed: u64,
     settings: &ExperimentSettings,
 ) -> String {
-    let mut h = Fnv1a(FNV_OFFSET);
+    let mut h = Fnv1a::default();
     h.str(experiment);
     for (name, value) in inputs.iter() {
         h.str(name);
@@ -52,16 +28,6 @@ pub fn run_id(
     }
     format!("{:016x}", h.0)
 }
-
-/// SplitMix64's output function (Steele et al. 2014): a bijection of u64 that scatters
-/// neighbouring inputs.
-fn splitmix64(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 /// The seed of design row `row` (0-based) in a campaign with seed `seed`:
 /// `splitmix64(splitmix64(seed) ^ row)`. It depends on nothing else, so a row is reproducible on
 /// its own (any shard, any thread, any restart), and for a given campaign seed no two rows share
@@ -76,19 +42,6 @@ mod tests {
 
     fn inputs(v: f64) -> ParamSet {
         ParamSet::from_pairs(&[("a", 1.5), ("b", v)])
-    }
-
-    #[test]
-    fn hash_is_standard_fnv1a() {
-        for (text, want) in [
-            ("", 0xcbf2_9ce4_8422_2325_u64),
-            ("a", 0xaf63_dc4c_8601_ec8c),
-            ("foobar", 0x8594_4171_f739_67e8),
-        ] {
-            let mut h = Fnv1a(FNV_OFFSET);
-            h.bytes(text.as_bytes());
-            assert_eq!(h.0, want, "{text}");
-        }
     }
 
     #[test]

@@ -13,8 +13,9 @@ pub mod merge;
 pub mod plan;
 pub mod registry;
 pub mod runner;
-#[doc(hidden)]
-pub mod sleep_test;
+#[cfg(test)]
+#[path = "../../tests/stand_ins/sleep_test.rs"]
+mod sleep_test;
 pub mod status;
 pub mod table;
 

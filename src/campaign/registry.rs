@@ -1,11 +1,11 @@
 //! Experiments by command-line name.
 
-use super::sleep_test::SleepTest;
 use crate::dem::experiments::hopper::Hopper;
 use crate::dem::experiments::shear_box::ShearBox;
 use crate::dem::experiments::wall_impact::WallImpact;
 use crate::dem::experiments::Experiment;
 use crate::error::{Error, Result};
+use std::sync::Mutex;
 
 /// Campaign-wide settings that experiments may read when they are built. Experiments that have
 /// no use for a setting ignore it (wall-impact ignores all of them).
@@ -26,7 +26,8 @@ impl ExperimentSettings {
     }
 }
 
-type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
+/// Builds an experiment from the campaign-wide settings.
+pub type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
 
 /// Every experiment the command line knows. Registering one is one line here.
 const EXPERIMENTS: &[(&str, Constructor)] = &[
@@ -40,14 +41,39 @@ const EXPERIMENTS: &[(&str, Constructor)] = &[
     }),
 ];
 
-/// Stand-ins for the tests of the campaign machinery, only known when this variable is `1`.
-pub const TEST_EXPERIMENTS_ENV: &str = "MBGC_TEST_EXPERIMENTS";
+/// Experiments added at run time by a program that embeds mbgc (its own experiment, or the test
+/// stand-ins), before it calls [`crate::cli::main`].
+static REGISTERED: Mutex<Vec<(&'static str, Constructor)>> = Mutex::new(Vec::new());
 
-const TEST_EXPERIMENTS: &[(&str, Constructor)] = &[("sleep-test", |_| Ok(Box::new(SleepTest)))];
+fn registered() -> Vec<(&'static str, Constructor)> {
+    // A poisoned lock only means another thread panicked while pushing; the list is still valid.
+    REGISTERED.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
 
-/// Names accepted by [`experiment_by_name`] (without the hidden test experiments).
+/// Makes `name` known to [`experiment_by_name`] (and so to `mbgc simulate --experiment`).
+/// A name that is already taken is refused.
+pub fn register(name: &'static str, make: Constructor) -> Result<()> {
+    let mut list = REGISTERED.lock().unwrap_or_else(|e| e.into_inner());
+    if EXPERIMENTS
+        .iter()
+        .chain(list.iter())
+        .any(|(n, _)| *n == name)
+    {
+        return Err(Error::invalid(format!(
+            "experiment {name}: already registered (expected a new name)"
+        )));
+    }
+    list.push((name, make));
+    Ok(())
+}
+
+/// Names accepted by [`experiment_by_name`]: the built-in experiments, then the registered ones.
 pub fn experiment_names() -> Vec<&'static str> {
-    EXPERIMENTS.iter().map(|(n, _)| *n).collect()
+    EXPERIMENTS
+        .iter()
+        .map(|(n, _)| *n)
+        .chain(registered().iter().map(|(n, _)| *n))
+        .collect()
 }
 
 /// The experiment called `name` on the command line, built with `settings`.
@@ -55,18 +81,13 @@ pub fn experiment_by_name(
     name: &str,
     settings: &ExperimentSettings,
 ) -> Result<Box<dyn Experiment>> {
-    let with_tests = std::env::var(TEST_EXPERIMENTS_ENV).is_ok_and(|v| v == "1");
-    lookup(name, settings, with_tests)
-}
-
-fn lookup(
-    name: &str,
-    settings: &ExperimentSettings,
-    with_tests: bool,
-) -> Result<Box<dyn Experiment>> {
     settings.validate()?;
-    let tests: &[(&str, Constructor)] = if with_tests { TEST_EXPERIMENTS } else { &[] };
-    match EXPERIMENTS.iter().chain(tests).find(|(n, _)| *n == name) {
+    let extra = registered();
+    match EXPERIMENTS
+        .iter()
+        .chain(extra.iter())
+        .find(|(n, _)| *n == name)
+    {
         Some((_, make)) => make(settings),
         None => Err(Error::invalid(format!(
             "--experiment {name}: unknown experiment (known: {})",
@@ -83,27 +104,46 @@ mod tests {
     fn names_resolve_and_unknown_names_are_refused_with_the_list() {
         let s = ExperimentSettings::default();
         for name in experiment_names() {
-            assert_eq!(lookup(name, &s, false).unwrap().name(), name);
+            assert_eq!(experiment_by_name(name, &s).unwrap().name(), name);
         }
-        let e = lookup("shear-bx", &s, false).err().unwrap().to_string();
+        let e = experiment_by_name("shear-bx", &s)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(
             e.contains("--experiment shear-bx") && e.contains("wall-impact"),
             "{e}"
         );
-        assert!(lookup("sleep-test", &s, false).is_err());
-        assert_eq!(lookup("sleep-test", &s, true).unwrap().name(), "sleep-test");
+        // Registering makes a name known; taking a known name is refused.
+        assert!(experiment_by_name("sleep-test", &s).is_err());
+        register("sleep-test", |_| {
+            Ok(Box::new(super::super::sleep_test::SleepTest))
+        })
+        .unwrap();
+        assert_eq!(
+            experiment_by_name("sleep-test", &s).unwrap().name(),
+            "sleep-test"
+        );
+        assert!(experiment_names().contains(&"sleep-test"));
+        let e = register("shear-box", |_| {
+            Ok(Box::new(super::super::sleep_test::SleepTest))
+        });
+        assert!(e.unwrap_err().to_string().contains("already registered"));
     }
 
     #[test]
     fn bad_box_scale_is_refused_naming_the_option() {
         for k in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let s = ExperimentSettings { box_scale: Some(k) };
-            let e = lookup("wall-impact", &s, false).err().unwrap().to_string();
+            let e = experiment_by_name("wall-impact", &s)
+                .err()
+                .unwrap()
+                .to_string();
             assert!(e.contains("--box-scale"), "{e}");
         }
         let s = ExperimentSettings {
             box_scale: Some(1.5),
         };
-        assert!(lookup("wall-impact", &s, false).is_ok());
+        assert!(experiment_by_name("wall-impact", &s).is_ok());
     }
 }

@@ -9,11 +9,9 @@
 //! - [`sim`]: the time-step loop and blow-up checks; [`timestep`]: the Rayleigh time.
 
 pub mod analysis;
-pub mod bench;
 pub mod contact;
 pub mod experiments;
 pub mod impact;
-pub mod liggghts;
 pub mod material;
 pub mod neighbor;
 pub mod particles;

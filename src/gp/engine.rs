@@ -8,6 +8,7 @@ use super::expr::Expr;
 use super::node::{parse_function_set, Node, SEED004_FUNCTIONS};
 use super::program::{self, Alphabet, Program};
 use super::select;
+use crate::numeric::splitmix64;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -188,18 +189,11 @@ impl FitResult {
         &self.front[self.chosen]
     }
 }
-
-fn mix(mut z: u64) -> u64 {
-    // splitmix64: decorrelates the per-child seeds.
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 /// A generator per (seed, generation, slot): the result does not depend on thread scheduling.
 fn child_rng(seed: u64, generation: usize, slot: usize) -> ChaCha8Rng {
-    ChaCha8Rng::seed_from_u64(mix(mix(seed ^ (generation as u64) << 40) ^ slot as u64))
+    ChaCha8Rng::seed_from_u64(splitmix64(
+        splitmix64(seed ^ (generation as u64) << 40) ^ slot as u64,
+    ))
 }
 
 struct Scratch {
@@ -250,7 +244,7 @@ fn tournament<'a>(island: &'a [Individual], k: usize, rng: &mut ChaCha8Rng) -> &
 /// Random points in the box spanned by the training inputs: a tree entering the hall of fame must
 /// be finite on all of them, since the saved model claims that box as its valid domain.
 fn domain_probe(train: &Dataset, seed: u64) -> Dataset {
-    let mut rng = ChaCha8Rng::seed_from_u64(mix(seed ^ 0xd0d0));
+    let mut rng = ChaCha8Rng::seed_from_u64(splitmix64(seed ^ 0xd0d0));
     let n = 512;
     let x = train
         .x

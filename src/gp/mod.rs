@@ -5,7 +5,6 @@
 //! [`constants`] tunes their constants by Levenberg-Marquardt, [`engine`] evolves them, [`select`]
 //! picks the returned equation from the Pareto front, and [`expr`] simplifies and prints it.
 
-pub mod benchmark;
 pub mod constants;
 pub mod engine;
 pub mod eval;

@@ -2,11 +2,12 @@
 
 use super::table::read_columns;
 use super::{
-    fnv1a64, residual_quantiles, DataSource, FrontMember, Input, Metamodel, Metrics, ResponseModel,
+    residual_quantiles, DataSource, FrontMember, Input, Metamodel, Metrics, ResponseModel,
     Transform, FORMAT, VERSION,
 };
 use crate::error::{Error, Result};
 use crate::gp::{self, expr, Dataset};
+use crate::numeric::fnv1a64;
 use crate::space::{Scale, Space};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;

@@ -173,17 +173,6 @@ pub struct Metamodel {
     pub seed: u64,
     pub data: DataSource,
 }
-
-/// FNV-1a, 64 bit: a stable fingerprint of the training data (not a security hash).
-pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in bytes {
-        h ^= *b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
 impl Metamodel {
     pub fn load(path: &Path) -> Result<Metamodel> {
         let file = path.display().to_string();

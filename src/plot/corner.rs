@@ -9,6 +9,7 @@
 //! ranges whose length differs from the number of names, and a range that is not finite or runs
 //! backwards. A non-finite mark only leaves that parameter unmarked.
 
+use crate::numeric::quantile_sorted;
 use std::path::Path;
 
 use plotters::coord::types::RangedCoordf64;
@@ -314,7 +315,10 @@ fn checked_span(lo: f64, hi: f64) -> Option<(f64, f64)> {
 fn auto_range(values: &[f64]) -> Option<(f64, f64)> {
     let mut sorted = values.to_vec();
     sorted.sort_by(f64::total_cmp);
-    let (mut lo, mut hi) = (quantile(&sorted, 0.01), quantile(&sorted, 0.99));
+    let (mut lo, mut hi) = (
+        quantile_sorted(&sorted, 0.01),
+        quantile_sorted(&sorted, 0.99),
+    );
     if hi - lo <= lo.abs().max(hi.abs()) * 1e-12 {
         (lo, hi) = (*sorted.first()?, *sorted.last()?);
     }
@@ -323,25 +327,6 @@ fn auto_range(values: &[f64]) -> Option<(f64, f64)> {
     let (lo, hi) = (lo - pad, hi + pad);
     (lo.is_finite() && hi.is_finite() && (hi - lo).is_finite()).then_some((lo, hi))
 }
-
-/// Quantile of sorted values with linear interpolation between order statistics (type 7 of
-/// Hyndman & Fan, the default of R and NumPy); NaN for no values.
-fn quantile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
-    let (i, f) = (h.floor() as usize, h.fract());
-    match sorted.get(i + 1) {
-        // The second form does not overflow for values of opposite sign near f64::MAX.
-        Some(&next) if f > 0.0 => match next - sorted[i] {
-            d if d.is_finite() => sorted[i] + f * d,
-            _ => (1.0 - f) * sorted[i] + f * next,
-        },
-        _ => sorted[i],
-    }
-}
-
 /// Tick label for `v` on an axis spanning `lo..hi`: as many decimals as the tick spacing needs,
 /// trailing zeros trimmed, "0" instead of rounding noise such as "-0.0", and scientific notation
 /// (e.g. "2.5e7") for magnitudes outside 1e-3..1e5.
@@ -984,10 +969,10 @@ mod tests {
     #[test]
     fn ranges_and_helpers() {
         let v = [1.0, 2.0, 3.0, 4.0, 5.0];
-        assert_eq!(quantile(&v, 0.0), 1.0);
-        assert_eq!(quantile(&v, 0.5), 3.0);
-        assert!((quantile(&v, 0.01) - 1.04).abs() < 1e-12);
-        assert!(quantile(&[], 0.5).is_nan());
+        assert_eq!(quantile_sorted(&v, 0.0), 1.0);
+        assert_eq!(quantile_sorted(&v, 0.5), 3.0);
+        assert!((quantile_sorted(&v, 0.01) - 1.04).abs() < 1e-12);
+        assert!(quantile_sorted(&[], 0.5).is_nan());
 
         // 1 %-99 % quantiles widened by 5 %: one outlier does not stretch the panel.
         let mut values: Vec<f64> = (0..=100).map(f64::from).collect();
@@ -1016,7 +1001,7 @@ mod tests {
         assert_eq!(checked_span(0.0, 5e-324), Some((-0.5, 0.5)));
         assert!(checked_span(f64::MAX, f64::MAX).is_none());
         assert!(checked_span(-f64::MAX, f64::MAX).is_none());
-        assert_eq!(quantile(&[-f64::MAX, f64::MAX], 0.5), 0.0);
+        assert_eq!(quantile_sorted(&[-f64::MAX, f64::MAX], 0.5), 0.0);
 
         assert_eq!(tick_label(-1.4e-17, -0.55, 0.55), "0");
         assert_eq!(tick_label(-0.5, -0.55, 0.55), "-0.5");

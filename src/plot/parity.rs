@@ -6,6 +6,7 @@
 //! how many); a split left without any finite pair is an error, as are an empty list of splits,
 //! empty slices and slices of different lengths.
 
+use crate::numeric::quantile_sorted;
 use std::path::Path;
 
 use plotters::coord::types::RangedCoordf64;
@@ -57,7 +58,11 @@ pub fn residual_histogram(path: &Path, response: &str, splits: &[Split]) -> Resu
             .map(|r| {
                 let mut r = r.clone();
                 r.sort_by(f64::total_cmp);
-                [quantile(&r, 0.05), quantile(&r, 0.5), quantile(&r, 0.95)]
+                [
+                    quantile_sorted(&r, 0.05),
+                    quantile_sorted(&r, 0.5),
+                    quantile_sorted(&r, 0.95),
+                ]
             })
             .collect(),
         bins,
@@ -215,21 +220,6 @@ fn r2_rmse(observed: &[f64], predicted: &[f64]) -> (f64, f64) {
     };
     (r2, (ss_res / n).sqrt())
 }
-
-/// Quantile of sorted values with linear interpolation between order statistics (type 7 of
-/// Hyndman & Fan, the default of R and NumPy); NaN for no values.
-fn quantile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
-    let (i, f) = (h.floor() as usize, h.fract());
-    match sorted.get(i + 1) {
-        Some(&next) if f > 0.0 => sorted[i] + f * (next - sorted[i]),
-        _ => sorted[i],
-    }
-}
-
 /// Four significant digits, switching to scientific notation outside 1e-3..1e5.
 fn fmt_num(v: f64) -> String {
     if !v.is_finite() {
@@ -412,7 +402,7 @@ impl Bins {
         let (lo, hi) = span_of(path, sorted.iter().copied())?;
         let span = hi - lo;
         let count = sorted.len() as f64;
-        let iqr = quantile(sorted, 0.75) - quantile(sorted, 0.25);
+        let iqr = quantile_sorted(sorted, 0.75) - quantile_sorted(sorted, 0.25);
         let fd_width = 2.0 * iqr / count.cbrt();
         let n = if lo < sorted[0] {
             // All residuals equal (span_of widened the range around them): an odd count puts
@@ -719,12 +709,12 @@ mod tests {
         assert!(r2_rmse(&[2.0, 2.0], &[2.0, 1.0]).0.is_nan());
 
         let v = [1.0, 2.0, 3.0, 4.0, 5.0];
-        assert_eq!(quantile(&v, 0.0), 1.0);
-        assert_eq!(quantile(&v, 0.5), 3.0);
-        assert_eq!(quantile(&v, 1.0), 5.0);
-        assert!((quantile(&v, 0.05) - 1.2).abs() < 1e-12);
-        assert_eq!(quantile(&[7.0], 0.95), 7.0);
-        assert!(quantile(&[], 0.5).is_nan());
+        assert_eq!(quantile_sorted(&v, 0.0), 1.0);
+        assert_eq!(quantile_sorted(&v, 0.5), 3.0);
+        assert_eq!(quantile_sorted(&v, 1.0), 5.0);
+        assert!((quantile_sorted(&v, 0.05) - 1.2).abs() < 1e-12);
+        assert_eq!(quantile_sorted(&[7.0], 0.95), 7.0);
+        assert!(quantile_sorted(&[], 0.5).is_nan());
 
         let p = Path::new("x.svg");
         for sorted in [vec![0.0; 3], (0..10_000).map(|i| i as f64).collect()] {

@@ -5,7 +5,6 @@
 //! never moved. Sequential methods (FSSF-f, FSSF-fr, MIPT, Sobol, Halton, random) take the
 //! existing points into account; LHS is one-shot and refuses to extend.
 
-pub mod benchmark;
 pub mod design;
 pub mod fssf;
 pub mod halton;

@@ -11,10 +11,7 @@ pub struct Sobol;
 
 /// A 64-bit seed folded into sobol_burley's 32-bit scramble seed.
 pub fn scramble_seed(seed: u64) -> u32 {
-    let z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    let z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    ((z ^ (z >> 31)) >> 32) as u32
+    (crate::numeric::splitmix64(seed) >> 32) as u32
 }
 
 /// Points `start..start + n` of the scrambled sequence for `seed`.

@@ -8,7 +8,6 @@
 
 pub mod hopper;
 pub mod shear_box;
-pub mod shear_box_liggghts;
 pub mod wall_impact;
 
 use std::path::PathBuf;

@@ -3,10 +3,11 @@
 //! gplearn's results come from `benches/gp/run_gplearn.py`; exact recovery of both engines is
 //! judged by the same SRBench rule (`benches/gp/srbench_check.py`, sympy).
 
-use crate::error::{read_to_string, Error, Result};
+use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::export::sympy;
 use crate::gp::Config;
 use crate::metamodel::{fit_table, table::read_columns, FitOptions, Metrics};
+use crate::numeric::quantile;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -140,18 +141,6 @@ fn fmt_r2(v: Option<f64>) -> String {
     v.map_or("n/a".into(), |v| format!("{v:.6}"))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// The Markdown report.
 pub fn report(
     equations: &[Equation],
@@ -223,12 +212,12 @@ pub fn report(
          recovery: gplearn {rec_theirs}/{n}, mbgc {rec_ours}/{n}. Test R2 > 0.999: gplearn {}/{n}, \
          mbgc {}/{n}; median test R2 gplearn {:.6}, mbgc {:.6}.\n",
         t_theirs / t_ours.max(1e-9),
-        median(ratios.clone()),
+        quantile(&ratios, 0.5),
         ratios.iter().copied().fold(f64::INFINITY, f64::min),
         at_least(&r2_theirs, 0.999),
         at_least(&r2_ours, 0.999),
-        median(r2_theirs.clone()),
-        median(r2_ours.clone()),
+        quantile(&r2_theirs, 0.5),
+        quantile(&r2_ours, 0.5),
     ));
     s.push_str(
         "\n**Reading the numbers.** Wall times are single runs on a shared 2-core machine (they \
@@ -258,4 +247,99 @@ pub fn report(
 /// Where the benchmark scripts live, relative to the crate root.
 pub fn scripts_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("benches/gp")
+}
+
+/// `mbgc bench gp`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Directory written by `benches/gp/feynman.py` (and `run_gplearn.py`).
+    #[arg(long)]
+    pub dir: PathBuf,
+    /// gplearn's results (default: <dir>/gplearn_results.json).
+    #[arg(long)]
+    pub gplearn: Option<PathBuf>,
+    /// Python with sympy, for the SRBench exact-recovery rule.
+    #[arg(long, default_value = "python3")]
+    pub python: String,
+    #[arg(long, default_value_t = 5000)]
+    pub population: usize,
+    #[arg(long, default_value_t = 20)]
+    pub generations: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Only these equations (comma-separated names).
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
+    /// Markdown report (e.g. docs/gp_benchmark.md).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let equations: Vec<_> = read_equations(&a.dir)?
+        .into_iter()
+        .filter(|e| a.only.is_empty() || a.only.contains(&e.name))
+        .collect();
+    let gplearn_path = a
+        .gplearn
+        .clone()
+        .unwrap_or_else(|| a.dir.join("gplearn_results.json"));
+    let theirs = read_gplearn(&gplearn_path)?;
+    let cfg = crate::gp::Config {
+        population: a.population,
+        generations: a.generations,
+        seed: a.seed,
+        ..crate::gp::Config::default()
+    };
+    let mut ours = Vec::new();
+    for eq in &equations {
+        let r = run_mbgc(&a.dir, eq, &cfg)?;
+        println!(
+            "{:>10}: test R2 {}, size {}, {:.2} s, {} generations: {}",
+            eq.name,
+            r.test_r2.map_or("n/a".into(), |v| format!("{v:.6}")),
+            r.size,
+            r.wall_time_s,
+            r.generations_run.unwrap_or(0),
+            r.expression
+        );
+        ours.push(r);
+    }
+    let pairs: Vec<(String, String)> = equations
+        .iter()
+        .zip(&ours)
+        .map(|(e, r)| (e.truth.clone(), r.expression.clone()))
+        .collect();
+    let script = scripts_dir().join("srbench_check.py");
+    let recovered = check_recovery(&a.python, &script, &a.dir, &pairs)?;
+    for (r, ok) in ours.iter_mut().zip(recovered) {
+        r.recovered = ok;
+    }
+    let command = format!(
+        "cargo run --release -- bench gp --dir {}{} --python {} --population {} --generations {} --seed {}{}",
+        a.dir.display(),
+        a.gplearn
+            .as_ref()
+            .map(|p| format!(" --gplearn {}", p.display()))
+            .unwrap_or_default(),
+        a.python,
+        a.population,
+        a.generations,
+        a.seed,
+        a.report
+            .as_ref()
+            .map(|p| format!(" --report {}", p.display()))
+            .unwrap_or_default()
+    );
+    let text = report(&equations, &ours, &theirs, &cfg, &command);
+    match &a.report {
+        Some(p) => {
+            write_atomic(p, text.as_bytes())?;
+            println!("wrote {}", p.display());
+        }
+        None => print!("{text}"),
+    }
+    let json = a.dir.join("mbgc_results.json");
+    write_atomic(&json, serde_json::to_string_pretty(&ours)?.as_bytes())?;
+    Ok(())
 }

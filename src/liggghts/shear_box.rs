@@ -1,8 +1,8 @@
-//! The shear box replayed in LIGGGHTS 3.8: mbgc writes the deck (data file with mbgc's initial
-//! particles, the five walls as STL meshes, the input script with mbgc's schedule) so that both
-//! codes start from the identical configuration and do the same things at the same steps:
-//! fill, strike off at the rim, relax, remove the flap, and remove what fell below the floor
-//! every chunk. Both settled states are then measured by the same code.
+//! The shear box (seed 004) as a LIGGGHTS 3.8 deck that replays a recorded mbgc run: the data
+//! file with mbgc's initial particles, the five walls as STL meshes, and an input script with
+//! mbgc's schedule, so that both codes start from the identical configuration and do the same
+//! things at the same steps: fill, strike off at the rim, relax, remove the flap, and remove what
+//! fell below the floor every chunk.
 //!
 //! `delete_atoms` must not compress the atom ids: LIGGGHTS keys the contact history by partner
 //! id, and renumbering after every deletion scrambled the histories of the remaining contacts
@@ -11,43 +11,19 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::shear_box::{measure_flank, RunRecord};
-use super::ParamSet;
-use crate::dem::analysis::sphere_box_volume;
-use crate::dem::liggghts::{find_binary, parse_dump_rows, run_deck};
-use crate::dem::particles::Particles;
-use crate::dem::vec3::V3;
-use crate::error::{read_to_string, write_atomic, Error, Result};
+use super::mesh::rect_stl;
+use super::number::num;
+use crate::dem::experiments::shear_box::RunRecord;
+use crate::dem::experiments::ParamSet;
+use crate::error::{write_atomic, Error, Result};
 
+/// Name of the input script written by [`write_deck`].
 pub const INPUT: &str = "in.shear_box";
+/// Name of the log LIGGGHTS writes for it.
 pub const LOG: &str = "log.shear_box";
-
-fn num(v: f64) -> String {
-    format!("{v:e}")
-}
-
-/// ASCII STL of a rectangle (two triangles) from a corner and two edge vectors.
-fn rect_stl(name: &str, corner: V3, a: V3, b: V3) -> String {
-    let p = |u: f64, v: f64| {
-        [
-            corner[0] + u * a[0] + v * b[0],
-            corner[1] + u * a[1] + v * b[1],
-            corner[2] + u * a[2] + v * b[2],
-        ]
-    };
-    let tri = |q: [V3; 3]| {
-        let mut s = String::from("  facet normal 0 0 0\n    outer loop\n");
-        for v in q {
-            let _ = writeln!(s, "      vertex {} {} {}", num(v[0]), num(v[1]), num(v[2]));
-        }
-        s + "    endloop\n  endfacet\n"
-    };
-    format!(
-        "solid {name}\n{}{}endsolid {name}\n",
-        tri([p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]),
-        tri([p(0.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)])
-    )
-}
+/// Dumps the deck writes: after the fill and at the end.
+pub const FILLED_DUMP: &str = "filled.dump";
+pub const FINAL_DUMP: &str = "final.dump";
 
 /// Writes the data file, the wall meshes and the input script into `dir`.
 pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
@@ -193,7 +169,7 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         num(h)
     );
     let _ = writeln!(s, "run {}", rec.relax_steps);
-    let _ = writeln!(s, "write_dump all custom filled.dump id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"");
+    let _ = writeln!(s, "write_dump all custom {FILLED_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"");
     let _ = writeln!(s, "unfix flapwall");
     let _ = writeln!(
         s,
@@ -201,59 +177,6 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         num(rec.removal_height)
     );
     let _ = writeln!(s, "variable i loop {n_chunks}\nlabel flow\nrun {}\ndelete_atoms region below compress no\nnext i\njump SELF flow", rec.chunk);
-    let _ = writeln!(s, "write_dump all custom final.dump id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"");
+    let _ = writeln!(s, "write_dump all custom {FINAL_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"");
     write_atomic(&dir.join(INPUT), s.as_bytes())
-}
-
-fn particles_of(rows: &[(usize, f64, [f64; 3])]) -> Particles {
-    let mut p = Particles::new();
-    for (_, r, x) in rows {
-        // Density is irrelevant to the geometric measures.
-        let _ = p.add(*x, *r, 1.0, 0);
-    }
-    p
-}
-
-/// LIGGGHTS' shear angle, bulk density and flank R^2 for the replayed run.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ReplayResult {
-    pub shear_angle: f64,
-    pub bulk_density: f64,
-    pub flank_r2: f64,
-    pub particles_left: usize,
-}
-
-/// Replays a recorded mbgc run in LIGGGHTS (in `dir`) and measures it as mbgc does.
-pub fn replay(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<ReplayResult> {
-    let binary = find_binary().ok_or_else(|| {
-        Error::invalid("LIGGGHTS not found on PATH (Debian: apt-get install liggghts)")
-    })?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    for stale in ["filled.dump", "final.dump", LOG] {
-        let f = dir.join(stale);
-        if f.exists() {
-            std::fs::remove_file(&f).map_err(|e| Error::io(&f, e))?;
-        }
-    }
-    write_deck(dir, p, rec)?;
-    run_deck(&binary, dir, INPUT, LOG)?;
-    let [l, w, h] = rec.layout.size;
-    let rho = p.get("rho_p").unwrap_or(f64::NAN);
-    let read = |name: &str| -> Result<Vec<(usize, f64, [f64; 3])>> {
-        let f = dir.join(name);
-        parse_dump_rows(&f.display().to_string(), &read_to_string(&f)?)
-    };
-    let filled = read("filled.dump")?;
-    let mass: f64 = filled
-        .iter()
-        .map(|(_, r, x)| rho * sphere_box_volume(*x, *r, [0.0; 3], [l, w, h]))
-        .sum();
-    let fin = particles_of(&read("final.dump")?);
-    let flank = measure_flank(&fin, rec.layout.size, rec.layout.d_max);
-    Ok(ReplayResult {
-        shear_angle: (-flank.slope).atan().to_degrees(),
-        bulk_density: mass / (l * w * h),
-        flank_r2: flank.r2,
-        particles_left: fin.len(),
-    })
 }

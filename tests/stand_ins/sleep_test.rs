@@ -1,5 +1,7 @@
 //! `sleep-test`: a stand-in experiment for the tests of the campaign machinery (kill and resume,
-//! failures, panics), known to the command line only when `MBGC_TEST_EXPERIMENTS=1`.
+//! failures, panics). It is never part of the shipped binary: the unit tests of `campaign`
+//! include this file under `#[cfg(test)]`, and the integration tests run it through the
+//! stand-in binary `mbgc_stand_ins` (`tests/stand_ins/mbgc_stand_ins.rs`), which registers it.
 //!
 //! Parameters: `x` in [-1e6, 1e6], `y` in [0, 1e6] (negative `y` is "impossible", to test
 //! [`Experiment::check`]), optional `sleep_ms` (default 0), `fail` and `panic` (a value >= 0.5
@@ -8,8 +10,8 @@
 
 use std::time::Duration;
 
-use crate::dem::experiments::{Diagnostics, Experiment, Outcome, ParamSet, RunOptions};
-use crate::error::{Error, Result};
+use mbgc::dem::experiments::{Diagnostics, Experiment, Outcome, ParamSet, RunOptions};
+use mbgc::error::{Error, Result};
 
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SleepTest;

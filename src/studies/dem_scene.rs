@@ -1,16 +1,23 @@
 //! The throughput benchmark scene (`reference/peer_throughput.md`): polydisperse spheres
 //! (d = 7.5-10 mm) in a closed box 0.12 x 0.12 x 0.36 m, rho = 2600, E = 5e7 Pa, nu = 0.3,
 //! e = 0.5, mu = 0.5, EPSD2 mu_r = 0.3, dt = 2e-5 s; settled, then timed.
+//!
+//! The scene is shared by the throughput study ([`super::dem_throughput`]), the DEM tests that
+//! need a realistic packing, and the LIGGGHTS comparison ([`liggghts_case`]).
 
 use rand::RngExt;
 
-use super::contact::ContactModel;
-use super::material::{Interaction, Material, Materials};
-use super::particles::Particles;
-use super::sim::Scene;
-use super::vec3::V3;
-use super::walls::box_planes;
+use crate::dem::contact::ContactModel;
+use crate::dem::material::{Interaction, Material, Materials};
+use crate::dem::particles::Particles;
+use crate::dem::sim::Scene;
+use crate::dem::vec3::V3;
+use crate::dem::walls::box_planes;
 use crate::error::{Error, Result};
+use crate::liggghts::LiggghtsCase;
+
+/// The benchmark box, m (lower corner at the origin).
+pub const BENCHMARK_BOX: [f64; 3] = [0.12, 0.12, 0.36];
 
 #[derive(Debug, Clone)]
 pub struct BenchSpec {
@@ -35,7 +42,7 @@ impl Default for BenchSpec {
         BenchSpec {
             particles: 3300,
             seed: 1,
-            box_hi: super::liggghts::BENCHMARK_BOX,
+            box_hi: BENCHMARK_BOX,
             d_min: 7.5e-3,
             d_max: 10e-3,
             density: 2600.0,
@@ -198,8 +205,8 @@ pub fn liggghts_case(
     radii: Vec<f64>,
     settle_steps: u64,
     timed_steps: u64,
-) -> super::liggghts::LiggghtsCase {
-    super::liggghts::LiggghtsCase {
+) -> LiggghtsCase {
+    LiggghtsCase {
         positions,
         radii,
         density: spec.density,
@@ -227,121 +234,38 @@ pub fn liggghts_case(
 /// surface (wall layers and the loose top are not bulk).
 pub fn settled_measures(spec: &BenchSpec, x: &[V3], r: &[f64]) -> (f64, f64, [V3; 2]) {
     let m = 2.0 * spec.d_max;
-    let top = super::analysis::free_surface_height(x, r) - m;
+    let top = crate::dem::analysis::free_surface_height(x, r) - m;
     let lo = [m, m, m];
     let hi = [spec.box_hi[0] - m, spec.box_hi[1] - m, top.max(m + 1e-3)];
     (
-        super::analysis::packing_fraction(x, r, lo, hi),
-        super::analysis::coordination_number_in(x, r, lo, hi),
+        crate::dem::analysis::packing_fraction(x, r, lo, hi),
+        crate::dem::analysis::coordination_number_in(x, r, lo, hi),
         [lo, hi],
     )
 }
 
-/// What one benchmark run measured.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct BenchReport {
-    pub particles: usize,
-    pub settle_steps: u64,
-    pub timed_steps: u64,
-    pub threads: usize,
-    /// One thread, after settling (median of alternating segments).
-    pub mbgc_particle_steps_per_s: f64,
-    /// With `threads` threads (equal to the above for one thread).
-    pub mbgc_particle_steps_per_s_threads: f64,
-    pub thread_speedup: f64,
-    pub mbgc_pairs: usize,
-    pub packing_fraction_mbgc: f64,
-    pub coordination_mbgc: f64,
-    pub liggghts_particle_steps_per_s: Option<f64>,
-    pub ratio: Option<f64>,
-    pub packing_fraction_liggghts: Option<f64>,
-    pub coordination_liggghts: Option<f64>,
-    pub liggghts_version: Option<String>,
-    pub liggghts_warnings: Vec<String>,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Settles the scene in mbgc, times it on one thread and on `threads` threads, and optionally
-/// runs the identical scene in LIGGGHTS (in `work_dir`).
-pub fn run_benchmark(
-    spec: &BenchSpec,
-    settle: u64,
-    timed: u64,
-    threads: usize,
-    liggghts_dir: Option<&std::path::Path>,
-    progress: impl Fn(&str),
-) -> Result<BenchReport> {
-    let (x, r) = initial_packing(spec)?;
-    let mut sim = super::Simulation::new(scene(spec, &x, &r)?)?;
-    progress(&format!("mbgc: settling {settle} steps"));
-    sim.set_threads(threads);
-    sim.run(settle)
-        .map_err(|e| Error::invalid(format!("mbgc settling blew up: {e}")))?;
-    let (xs, rs) = (sim.particles.x.clone(), sim.particles.r.clone());
-    let (phi, z, _) = settled_measures(spec, &xs, &rs);
-    // The machine's speed drifts: alternate one-thread and multi-thread segments from the same
-    // settled state and take the median of each, so a slow spell hits both alike.
-    let segments = 3u64;
-    let seg_steps = (timed / segments).max(1);
-    let time = |sim: &mut super::Simulation, t: usize| -> Result<f64> {
-        sim.set_threads(t);
-        let start = std::time::Instant::now();
-        sim.run(seg_steps)
-            .map_err(|e| Error::invalid(format!("mbgc timed run blew up: {e}")))?;
-        Ok(spec.particles as f64 * seg_steps as f64 / start.elapsed().as_secs_f64())
-    };
-    let (mut ones, mut manys) = (Vec::new(), Vec::new());
-    for k in 0..segments {
-        progress(&format!(
-            "mbgc: timing segment {}/{segments}: {seg_steps} steps on 1 thread{}",
-            k + 1,
-            if threads > 1 {
-                format!(", then on {threads}")
-            } else {
-                String::new()
+    #[test]
+    fn benchmark_lattice_is_10_by_10_by_33_without_overlaps() {
+        let (p, r) = jittered_lattice(3300, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.01, 7).unwrap();
+        assert_eq!(p.len(), 3300);
+        assert!(r.iter().all(|&r| (0.00375..=0.005).contains(&r)));
+        assert_eq!(crate::dem::analysis::coordination_number(&p, &r), 0.0);
+        // Lattice rows of 10 in x (spacing 12 mm) and 100 per layer.
+        assert!((p[1][0] - p[0][0] - 0.012).abs() < 0.002);
+        assert!(p[100][2] > p[99][2]);
+        let case = liggghts_case(&BenchSpec::default(), p.clone(), r.clone(), 40_000, 20_000);
+        case.validate().unwrap();
+        for (p, r) in p.iter().zip(&r) {
+            for k in 0..3 {
+                assert!(p[k] - r > 0.0 && p[k] + r < BENCHMARK_BOX[k], "{p:?} {r}");
             }
-        ));
-        ones.push(time(&mut sim, 1)?);
-        if threads > 1 {
-            manys.push(time(&mut sim, threads)?);
         }
+        let again = jittered_lattice(3300, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.01, 7).unwrap();
+        assert_eq!(again, (p, r));
+        assert!(jittered_lattice(4000, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.011, 7).is_err());
     }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let one = median(&mut ones);
-    let many = if threads > 1 { median(&mut manys) } else { one };
-    let mut rep = BenchReport {
-        particles: spec.particles,
-        settle_steps: settle,
-        timed_steps: timed,
-        threads,
-        mbgc_particle_steps_per_s: one,
-        mbgc_particle_steps_per_s_threads: many,
-        thread_speedup: many / one,
-        mbgc_pairs: sim.neighbors.pairs(),
-        packing_fraction_mbgc: phi,
-        coordination_mbgc: z,
-        liggghts_particle_steps_per_s: None,
-        ratio: None,
-        packing_fraction_liggghts: None,
-        coordination_liggghts: None,
-        liggghts_version: None,
-        liggghts_warnings: Vec::new(),
-    };
-    if let Some(dir) = liggghts_dir {
-        progress(&format!(
-            "LIGGGHTS: settling {settle} + timing {timed} steps (one process)"
-        ));
-        let case = liggghts_case(spec, x, r, settle, timed);
-        let res = super::liggghts::run(dir, &case)?;
-        let (phi_l, z_l, _) = settled_measures(spec, &res.settled_positions, &res.settled_radii);
-        rep.liggghts_particle_steps_per_s = Some(res.particle_steps_per_s);
-        rep.ratio = Some(one / res.particle_steps_per_s);
-        rep.packing_fraction_liggghts = Some(phi_l);
-        rep.coordination_liggghts = Some(z_l);
-        rep.liggghts_version = Some(res.version);
-        rep.liggghts_warnings = res.warnings;
-    }
-    Ok(rep)
 }

@@ -10,9 +10,11 @@
 //! type 2's Young's modulus. The walls share the particles' Poisson ratio.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
+use super::binary::{require_binary, run_deck};
+use super::number::num;
+use super::parse::{parse_dump, parse_log};
 use crate::{Error, Result};
 
 /// Name of the input script written by [`write_case`].
@@ -64,18 +66,6 @@ pub struct LiggghtsCase {
 }
 
 impl LiggghtsCase {
-    /// The project's DEM benchmark scene ([`crate::dem::bench::BenchSpec`]'s defaults) with the
-    /// given particles, 40000 + 20000 steps.
-    pub fn benchmark(positions: Vec<[f64; 3]>, radii: Vec<f64>) -> Self {
-        crate::dem::bench::liggghts_case(
-            &crate::dem::bench::BenchSpec::default(),
-            positions,
-            radii,
-            40_000,
-            20_000,
-        )
-    }
-
     /// Checks everything LIGGGHTS would reject or silently mis-handle, naming the field.
     pub fn validate(&self) -> Result<()> {
         let bad = |field: &str, value: f64, expected: &str| {
@@ -166,9 +156,6 @@ impl LiggghtsCase {
     }
 }
 
-/// The benchmark box, m (lower corner at the origin).
-pub const BENCHMARK_BOX: [f64; 3] = [0.12, 0.12, 0.36];
-
 /// Timing and settled state of one LIGGGHTS run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LiggghtsResult {
@@ -184,37 +171,6 @@ pub struct LiggghtsResult {
     /// Distinct warnings of the log (first line of each message), e.g. a contact model missing
     /// from the build's whitelist, which makes LIGGGHTS run a slower generic code path.
     pub warnings: Vec<String>,
-}
-
-/// Names LIGGGHTS is installed under: Debian's package, and the default of a source build.
-const BINARY_NAMES: [&str; 2] = ["liggghts", "lmp_auto"];
-
-/// The LIGGGHTS executable on `PATH`, or None when LIGGGHTS is not installed.
-pub fn find_binary() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .flat_map(|dir| BINARY_NAMES.iter().map(move |name| dir.join(name)))
-        .find(|p| is_executable(p))
-}
-
-fn is_executable(p: &Path) -> bool {
-    let Ok(meta) = std::fs::metadata(p) else {
-        return false;
-    };
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        meta.is_file() && meta.permissions().mode() & 0o111 != 0
-    }
-    #[cfg(not(unix))]
-    {
-        meta.is_file()
-    }
-}
-
-/// Shortest round-trip form in exponent notation, which LIGGGHTS's number parser accepts.
-fn num(v: f64) -> String {
-    format!("{v:e}")
 }
 
 /// The LIGGGHTS data file (atom_style granular: id type diameter density x y z). The simulation
@@ -259,7 +215,7 @@ pub fn input_script(case: &LiggghtsCase) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# mbgc reference case (mbgc::dem::liggghts). Type 1: particles, type 2: walls.\n\
+        "# mbgc reference case (mbgc::liggghts::closed_box). Type 1: particles, type 2: walls.\n\
          units           si\n\
          atom_style      granular\n\
          atom_modify     map array\n\
@@ -325,15 +281,9 @@ pub fn write_case(dir: &Path, case: &LiggghtsCase) -> Result<()> {
     crate::error::write_atomic(&dir.join(INPUT_FILE), input_script(case).as_bytes())
 }
 
-/// Writes the case into `dir`, runs LIGGGHTS from [`find_binary`] there and reads the results.
+/// Writes the case into `dir`, runs LIGGGHTS from [`super::find_binary`] there and reads the results.
 pub fn run(dir: &Path, case: &LiggghtsCase) -> Result<LiggghtsResult> {
-    let binary = find_binary().ok_or_else(|| {
-        Error::invalid(format!(
-            "LIGGGHTS not found: expected one of {BINARY_NAMES:?} on PATH \
-             (Debian: apt-get install liggghts)"
-        ))
-    })?;
-    run_with_binary(&binary, dir, case)
+    run_with_binary(&require_binary()?, dir, case)
 }
 
 /// As [`run`], with an explicit LIGGGHTS executable.
@@ -366,216 +316,44 @@ pub fn run_with_binary(binary: &Path, dir: &Path, case: &LiggghtsCase) -> Result
     })
 }
 
-/// Runs LIGGGHTS on the input script `input` in `dir` (one process, one thread), writing the log
-/// to `log`; an error quotes the log's ERROR line.
-pub fn run_deck(binary: &Path, dir: &Path, input: &str, log: &str) -> Result<()> {
-    // `-screen none` makes LIGGGHTS 3.8 crash in some fixes, so the screen goes to /dev/null and
-    // everything is read from the log.
-    let out = Command::new(binary)
-        .args(["-in", input, "-log", log, "-screen", "/dev/null"])
-        .current_dir(dir)
-        .env("OMP_NUM_THREADS", "1")
-        .output()
-        .map_err(|e| {
-            Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display()))
-        })?;
-    if out.status.success() {
-        return Ok(());
-    }
-    let log_path = dir.join(log);
-    let log_text = std::fs::read_to_string(&log_path).unwrap_or_default();
-    let error_line = log_text
-        .lines()
-        .find(|l| l.starts_with("ERROR"))
-        .map(str::to_owned)
-        .unwrap_or_else(|| {
-            let stderr = String::from_utf8_lossy(&out.stderr);
-            let tail: Vec<&str> = stderr.lines().rev().take(5).collect();
-            tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
-        });
-    Err(Error::invalid(format!(
-        "LIGGGHTS ({}) failed with {} in {}: {}",
-        binary.display(),
-        out.status,
-        dir.display(),
-        if error_line.is_empty() {
-            format!("no ERROR line in {}", log_path.display())
-        } else {
-            error_line
-        }
-    )))
-}
-
-/// Rows `(id, radius, position)` of a `write_dump ... custom ... id radius x y z` file, whatever
-/// atoms it holds (atoms may have been deleted).
-pub fn parse_dump_rows(file: &str, text: &str) -> Result<Vec<(usize, f64, [f64; 3])>> {
-    let mut lines = text.lines();
-    lines
-        .by_ref()
-        .find(|l| l.starts_with("ITEM: ATOMS"))
-        .filter(|l| {
-            l.split_whitespace()
-                .skip(2)
-                .eq(["id", "radius", "x", "y", "z"])
-        })
-        .ok_or_else(|| Error::input(file, "ITEM: ATOMS", "columns 'id radius x y z'"))?;
-    let mut rows = Vec::new();
-    for (k, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let v: Vec<f64> = line
-            .split_whitespace()
-            .map(|w| w.parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| {
-                Error::input(
-                    file,
-                    format!("atom row {}", k + 1),
-                    "5 numbers: id radius x y z",
-                )
-            })?;
-        if v.len() != 5 || v.iter().any(|x| !x.is_finite()) || v[0] < 1.0 || v[0].fract() != 0.0 {
-            return Err(Error::input(
-                file,
-                format!("atom row {}", k + 1),
-                "5 finite numbers: id radius x y z",
-            ));
-        }
-        rows.push((v[0] as usize, v[1], [v[2], v[3], v[4]]));
-    }
-    Ok(rows)
-}
-
-/// What [`run`] reads from a LIGGGHTS log.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LogSummary {
-    pub version: String,
-    /// Loop time of the last run, s.
-    pub loop_time_s: f64,
-    pub warnings: Vec<String>,
-}
-
-/// Reads the version, the warnings and the last "Loop time" line of a log, checking that the
-/// last run did `steps` steps with `atoms` atoms. `file` names the log in errors.
-pub fn parse_log(file: &str, text: &str, atoms: usize, steps: u64) -> Result<LogSummary> {
-    let first = text.lines().next().unwrap_or("");
-    let version = first
-        .strip_prefix("LIGGGHTS (Version ")
-        .and_then(|v| v.strip_suffix(')'))
-        .ok_or_else(|| {
-            Error::input(
-                file,
-                "first line",
-                format!("'LIGGGHTS (Version ...)' (is this LIGGGHTS?), found {first:?}"),
-            )
-        })?
-        .to_owned();
-
-    let mut warnings: Vec<String> = Vec::new();
-    let lines: Vec<&str> = text.lines().collect();
-    for (i, l) in lines.iter().enumerate() {
-        if let Some(rest) = l.strip_prefix("WARNING:") {
-            // Multi-line warnings put their text on the following lines.
-            let msg = if rest.trim().is_empty() {
-                lines[i + 1..]
-                    .iter()
-                    .map(|l| l.trim())
-                    .find(|l| !l.is_empty())
-                    .unwrap_or("")
-            } else {
-                rest.trim()
-            };
-            if !warnings.iter().any(|w| w == msg) {
-                warnings.push(msg.to_owned());
-            }
-        }
-    }
-
-    let expected =
-        format!("a line 'Loop time of T on 1 procs for {steps} steps with {atoms} atoms'");
-    let loop_line = text
-        .lines()
-        .rev()
-        .find(|l| l.starts_with("Loop time of "))
-        .ok_or_else(|| Error::input(file, "Loop time", expected.clone()))?;
-    let words: Vec<&str> = loop_line.split_whitespace().collect();
-    // Loop time of <T> on <P> procs for <S> steps with <N> atoms[, finish time ...]
-    let field = |k: usize| words.get(k).copied().unwrap_or("");
-    let loop_time_s: f64 = field(3).parse().unwrap_or(f64::NAN);
-    let got_steps: Option<u64> = field(8).parse().ok();
-    let got_atoms: Option<usize> = field(11).parse().ok();
-    if loop_time_s.is_nan()
-        || loop_time_s <= 0.0
-        || got_steps != Some(steps)
-        || got_atoms != Some(atoms)
-    {
-        return Err(Error::input(
-            file,
-            "Loop time",
-            format!("{expected} for the timed run, found {loop_line:?}"),
-        ));
-    }
-    Ok(LogSummary {
-        version,
-        loop_time_s,
-        warnings,
-    })
-}
-
-/// Reads a `dump custom ... id radius x y z` snapshot with `atoms` atoms, returning positions and
-/// radii ordered by atom id (id k is particle k - 1 of the case).
-pub fn parse_dump(file: &str, text: &str, atoms: usize) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
-    let mut positions = vec![[f64::NAN; 3]; atoms];
-    let mut radii = vec![f64::NAN; atoms];
-    let rows = parse_dump_rows(file, text)?;
-    for (k, &(id, r, x)) in rows.iter().enumerate() {
-        if id == 0 || id > atoms || !radii[id - 1].is_nan() {
-            return Err(Error::input(
-                file,
-                format!("atom row {}", k + 1),
-                format!("a unique atom id in 1..={atoms}, found {id}"),
-            ));
-        }
-        radii[id - 1] = r;
-        positions[id - 1] = x;
-    }
-    if rows.len() != atoms {
-        return Err(Error::input(
-            file,
-            "atoms",
-            format!("{atoms} atom rows, found {}", rows.len()),
-        ));
-    }
-    Ok((positions, radii))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dem::bench::jittered_lattice;
 
+    /// 50 spheres on a loose cubic lattice in a 0.12 x 0.12 x 0.36 m box, the benchmark's
+    /// material, 40000 settle + 20000 timed steps.
     fn small_case() -> LiggghtsCase {
-        let (p, r) = jittered_lattice(50, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.01, 1).unwrap();
-        LiggghtsCase::benchmark(p, r)
-    }
-
-    #[test]
-    fn benchmark_lattice_is_10_by_10_by_33_without_overlaps() {
-        let (p, r) = jittered_lattice(3300, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.01, 7).unwrap();
-        assert_eq!(p.len(), 3300);
-        assert!(r.iter().all(|&r| (0.00375..=0.005).contains(&r)));
-        assert_eq!(super::super::analysis::coordination_number(&p, &r), 0.0);
-        // Lattice rows of 10 in x (spacing 12 mm) and 100 per layer.
-        assert!((p[1][0] - p[0][0] - 0.012).abs() < 0.002);
-        assert!(p[100][2] > p[99][2]);
-        let case = LiggghtsCase::benchmark(p.clone(), r.clone());
-        case.validate().unwrap();
-        for (p, r) in p.iter().zip(&r) {
-            for k in 0..3 {
-                assert!(p[k] - r > 0.0 && p[k] + r < BENCHMARK_BOX[k], "{p:?} {r}");
-            }
+        let (mut positions, mut radii) = (Vec::new(), Vec::new());
+        for i in 0..50 {
+            let (ix, iy, iz) = (i % 5, (i / 5) % 5, i / 25);
+            positions.push([
+                0.012 + 0.02 * ix as f64,
+                0.012 + 0.02 * iy as f64,
+                0.012 + 0.02 * iz as f64,
+            ]);
+            radii.push(0.004 + 0.00002 * i as f64);
         }
-        let again = jittered_lattice(3300, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.01, 7).unwrap();
-        assert_eq!(again, (p, r));
-        assert!(jittered_lattice(4000, [0.0; 3], BENCHMARK_BOX, 0.0075, 0.011, 7).is_err());
+        LiggghtsCase {
+            positions,
+            radii,
+            density: 2600.0,
+            youngs_modulus: 5e7,
+            poisson: 0.3,
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: 0.3,
+            wall_youngs_modulus: 5e7,
+            wall_restitution: 0.5,
+            wall_friction: 0.5,
+            wall_rolling_friction: 0.3,
+            box_lo: [0.0; 3],
+            box_hi: [0.12, 0.12, 0.36],
+            gravity: 9.81,
+            dt: 2e-5,
+            skin: 2e-3,
+            settle_steps: 40_000,
+            timed_steps: 20_000,
+        }
     }
 
     #[test]
@@ -622,44 +400,6 @@ mod tests {
         let mut case = small_case();
         case.timed_steps = 0;
         assert!(case.validate().is_err());
-    }
-
-    const LOG: &str = "LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, compiled 2022-01-26 by buildd)\n\
-        pair_style gran model hertz\nWARNING: \n\tThe contact model you specified is not located in any whitelist.\n\
-        \tBecause of this ...\nWARNING: \n\tThe contact model you specified is not located in any whitelist.\n\
-        Loop time of 12.5 on 1 procs for 40000 steps with 3 atoms, finish time Sat\n\
-        Loop time of 2.5 on 1 procs for 20000 steps with 3 atoms, finish time Sat\n";
-
-    #[test]
-    fn log_gives_version_timing_and_warnings() {
-        let s = parse_log("log", LOG, 3, 20000).unwrap();
-        assert_eq!(
-            s.version,
-            "LIGGGHTS-PUBLIC 3.8.0, compiled 2022-01-26 by buildd"
-        );
-        assert_eq!(s.loop_time_s, 2.5);
-        assert_eq!(
-            s.warnings,
-            ["The contact model you specified is not located in any whitelist."]
-        );
-        let e = parse_log("log.x", LOG, 4, 20000).unwrap_err().to_string();
-        assert!(e.starts_with("log.x: Loop time:"), "{e}");
-        let e = parse_log("log.x", "LIGGGHTS (Version X)\n", 3, 1)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("Loop time"), "{e}");
-        assert!(parse_log("log.x", "LAMMPS (29 Sep 2021)\n", 3, 1).is_err());
-    }
-
-    #[test]
-    fn dump_is_read_in_id_order() {
-        let text = "ITEM: TIMESTEP\n0\nITEM: ATOMS id radius x y z \n2 0.5 4 5 6\n1 0.25 1 2 3\n";
-        let (p, r) = parse_dump("d", text, 2).unwrap();
-        assert_eq!(p, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
-        assert_eq!(r, [0.25, 0.5]);
-        assert!(parse_dump("d", text, 3).is_err());
-        assert!(parse_dump("d", &text.replace("2 0.5", "1 0.5"), 2).is_err());
-        assert!(parse_dump("d", "ITEM: ATOMS id x y z\n", 0).is_err());
     }
 
     #[test]

@@ -1,0 +1,82 @@
+//! Finding and running the LIGGGHTS executable.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::{Error, Result};
+
+/// Names LIGGGHTS is installed under: Debian's package, and the default of a source build.
+const BINARY_NAMES: [&str; 2] = ["liggghts", "lmp_auto"];
+
+/// The LIGGGHTS executable on `PATH`, or None when LIGGGHTS is not installed.
+pub fn find_binary() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .flat_map(|dir| BINARY_NAMES.iter().map(move |name| dir.join(name)))
+        .find(|p| is_executable(p))
+}
+
+fn is_executable(p: &Path) -> bool {
+    let Ok(meta) = std::fs::metadata(p) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        meta.is_file() && meta.permissions().mode() & 0o111 != 0
+    }
+    #[cfg(not(unix))]
+    {
+        meta.is_file()
+    }
+}
+
+/// Runs LIGGGHTS on the input script `input` in `dir` (one process, one thread), writing the log
+/// to `log`; an error quotes the log's ERROR line.
+pub fn run_deck(binary: &Path, dir: &Path, input: &str, log: &str) -> Result<()> {
+    // `-screen none` makes LIGGGHTS 3.8 crash in some fixes, so the screen goes to /dev/null and
+    // everything is read from the log.
+    let out = Command::new(binary)
+        .args(["-in", input, "-log", log, "-screen", "/dev/null"])
+        .current_dir(dir)
+        .env("OMP_NUM_THREADS", "1")
+        .output()
+        .map_err(|e| {
+            Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display()))
+        })?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let log_path = dir.join(log);
+    let log_text = std::fs::read_to_string(&log_path).unwrap_or_default();
+    let error_line = log_text
+        .lines()
+        .find(|l| l.starts_with("ERROR"))
+        .map(str::to_owned)
+        .unwrap_or_else(|| {
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            let tail: Vec<&str> = stderr.lines().rev().take(5).collect();
+            tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
+        });
+    Err(Error::invalid(format!(
+        "LIGGGHTS ({}) failed with {} in {}: {}",
+        binary.display(),
+        out.status,
+        dir.display(),
+        if error_line.is_empty() {
+            format!("no ERROR line in {}", log_path.display())
+        } else {
+            error_line
+        }
+    )))
+}
+
+/// The LIGGGHTS executable, or an error saying how to install it.
+pub fn require_binary() -> Result<PathBuf> {
+    find_binary().ok_or_else(|| {
+        Error::invalid(format!(
+            "LIGGGHTS not found: expected one of {BINARY_NAMES:?} on PATH \
+             (Debian: apt-get install liggghts)"
+        ))
+    })
+}

@@ -1,0 +1,20 @@
+//! Everything that speaks to LIGGGHTS-PUBLIC 3.8, the DEM code of seed 004 (Debian package
+//! `liggghts`): decks written from mbgc scenes, the executable found and run, its logs and dumps
+//! read back. The studies use it to compare mbgc's engine with LIGGGHTS on identical
+//! configurations; it depends on the DEM engine's types, never the other way round.
+//!
+//! - [`binary`]: find and run the executable.
+//! - [`closed_box`]: spheres settling in a closed box of six planes (the throughput scene).
+//! - [`shear_box`]: the shear box replaying a recorded mbgc run.
+//! - [`mesh`]: STL walls; [`number`]: numbers as LIGGGHTS reads them; [`parse`]: logs, dumps.
+
+pub mod binary;
+pub mod closed_box;
+pub mod mesh;
+pub mod number;
+pub mod parse;
+pub mod shear_box;
+
+pub use binary::{find_binary, require_binary, run_deck};
+pub use closed_box::{LiggghtsCase, LiggghtsResult};
+pub use parse::{parse_dump, parse_dump_rows, parse_log, LogSummary};

@@ -1,0 +1,18 @@
+//! Paper reproductions and benchmarks behind `mbgc bench`: each study builds its cases from the
+//! library, runs them and writes the report under `docs/` that names the command regenerating
+//! it. The core modules never import a study; a study is one file named after what it compares.
+//!
+//! - [`sampling_quality`]: seed 004 Figs. 7-8, space-filling metrics of every design method.
+//! - [`dem_scene`], [`dem_throughput`]: the settled polydisperse box, mbgc against LIGGGHTS.
+//! - [`shear_box_vs_liggghts`]: the shear box replayed in LIGGGHTS; the cost of a run.
+//! - [`gp_vs_gplearn`]: symbolic regression against gplearn on Feynman equations.
+//! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
+//! - [`reference`]: the reference codes (`--vs`).
+
+pub mod dem_scene;
+pub mod dem_throughput;
+pub mod gp_vs_gplearn;
+pub mod reference;
+pub mod restitution;
+pub mod sampling_quality;
+pub mod shear_box_vs_liggghts;
