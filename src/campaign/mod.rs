@@ -5,9 +5,10 @@
 //! - [`plan`]: the design read and checked row by row, `--set` constants, `--shard`, run ids and
 //!   seeds ([`identity`]).
 //! - [`runner`]: worker threads, one appending writer, resume.
-//! - [`table`]: the table's columns, lines, and reading it back (incomplete last line).
+//! - [`columns`]: the table's column schema; [`table`]: its lines, and reading it back (incomplete last line).
 //! - [`merge`] and [`status`].
 
+pub mod columns;
 pub mod identity;
 pub mod merge;
 pub mod plan;

@@ -7,9 +7,9 @@ use std::collections::HashSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use super::columns;
 use super::identity::{row_seed, run_id};
 use super::registry::ExperimentSettings;
-use super::table;
 use crate::dem::experiments::{Experiment, ParamSet};
 use crate::error::{Error, Result};
 use crate::sampling::design::read_numeric_csv;
@@ -127,8 +127,8 @@ impl Plan {
             .map(|s| s.to_string())
             .collect();
         let reserved = |name: &str| {
-            table::FIXED_COLUMNS.contains(&name)
-                || table::DIAGNOSTIC_COLUMNS.contains(&name)
+            columns::FIXED_COLUMNS.contains(&name)
+                || columns::DIAGNOSTIC_COLUMNS.contains(&name)
                 || responses.iter().any(|r| r == name)
         };
         for h in &header {
@@ -230,7 +230,7 @@ impl Plan {
 
     /// The table header: fixed columns, inputs, responses, diagnostics.
     pub fn columns(&self) -> Vec<String> {
-        table::columns(&self.inputs, &self.responses)
+        columns::columns(&self.inputs, &self.responses)
     }
 
     /// Rows of this shard (all rows without `--shard`).

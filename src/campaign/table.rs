@@ -13,44 +13,9 @@ use super::plan::PlannedRun;
 use crate::dem::experiments::Outcome;
 use crate::error::{Error, Result};
 
-pub const FIXED_COLUMNS: [&str; 4] = ["run_id", "row", "status", "seed"];
-pub const DIAGNOSTIC_COLUMNS: [&str; 6] = [
-    "settled",
-    "steps",
-    "particles",
-    "wall_time_s",
-    "warnings",
-    "error",
-];
-/// The one column that legitimately differs between two executions of the same run.
-pub const WALL_TIME_COLUMN: &str = "wall_time_s";
-
-pub const DONE: &str = "done";
-pub const FAILED: &str = "failed";
-
-pub fn columns(inputs: &[String], responses: &[String]) -> Vec<String> {
-    FIXED_COLUMNS
-        .iter()
-        .map(|s| s.to_string())
-        .chain(inputs.iter().cloned())
-        .chain(responses.iter().cloned())
-        .chain(DIAGNOSTIC_COLUMNS.iter().map(|s| s.to_string()))
-        .collect()
-}
-
-/// Whether a header is a campaign table's (fixed columns first, diagnostics last).
-pub fn is_campaign_header(header: &[String]) -> bool {
-    let n = header.len();
-    n >= FIXED_COLUMNS.len() + DIAGNOSTIC_COLUMNS.len()
-        && header[..FIXED_COLUMNS.len()]
-            .iter()
-            .zip(FIXED_COLUMNS)
-            .all(|(a, b)| a == b)
-        && header[n - DIAGNOSTIC_COLUMNS.len()..]
-            .iter()
-            .zip(DIAGNOSTIC_COLUMNS)
-            .all(|(a, b)| a == b)
-}
+pub use super::columns::{
+    columns, is_campaign_header, DIAGNOSTIC_COLUMNS, DONE, FAILED, FIXED_COLUMNS, WALL_TIME_COLUMN,
+};
 
 /// One CSV line, `\n`-terminated, quoted by the csv crate where needed (commas, quotes, newlines).
 pub fn csv_line<I, T>(fields: I) -> Result<Vec<u8>>

@@ -5,6 +5,7 @@
 use super::constants::Tuner;
 use super::eval::{score, Dataset, Evaluator, Score};
 use super::expr::Expr;
+pub use super::front::FrontEntry;
 use super::node::{parse_function_set, Node, SEED004_FUNCTIONS};
 use super::program::{self, Alphabet, Program};
 use super::select;
@@ -151,16 +152,6 @@ pub struct Individual {
     /// Normalised error plus parsimony penalty: what tournaments compare.
     pub fitness: f64,
     tuned: bool,
-}
-
-/// One member of the final Pareto front: the output scaling is folded into the tree and the tree
-/// simplified, so `program` alone gives the prediction.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct FrontEntry {
-    pub program: Program,
-    pub size: usize,
-    /// Mean squared error over variance (1 - R^2) on the training rows.
-    pub train_nmse: f64,
 }
 
 #[derive(Clone, Debug)]

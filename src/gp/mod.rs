@@ -9,6 +9,7 @@ pub mod constants;
 pub mod engine;
 pub mod eval;
 pub mod expr;
+pub mod front;
 pub mod grad;
 pub mod node;
 pub mod program;

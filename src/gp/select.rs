@@ -5,7 +5,7 @@
 //! smaller member, i.e. the largest `-d ln(error) / d size`. Errors are floored at 1e-24 (relative
 //! RMSE 1e-12, round-off), so that exact fits of different sizes tie and the smallest one wins.
 
-use super::engine::FrontEntry;
+use super::front::FrontEntry;
 
 pub const ERROR_FLOOR: f64 = 1e-24;
 pub const ACCURACY_FACTOR: f64 = 1.5;

@@ -1,10 +1,10 @@
 //! Fitting a metamodel to a table: split, scale, one GP run per response, metrics, figures.
 
-use super::table::read_columns;
-use super::{
+use super::model::{
     residual_quantiles, DataSource, FrontMember, Input, Metamodel, Metrics, ResponseModel,
     Transform, FORMAT, VERSION,
 };
+use super::table::read_columns;
 use crate::error::{Error, Result};
 use crate::gp::{self, expr, Dataset};
 use crate::numeric::fnv1a64;

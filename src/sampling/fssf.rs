@@ -14,8 +14,9 @@
 use rand::RngExt;
 
 use super::points::dist2;
+use super::points::Points;
+use super::sampler::{rng, Sampler};
 use super::sobol::{scramble_seed, sobol_points, MAX_DIM, MAX_POINTS};
-use super::{rng, Points, Sampler};
 use crate::error::{Error, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -3,7 +3,9 @@
 
 use rand::seq::SliceRandom;
 
-use super::{extend_sequence, rng, Points, Sampler};
+use super::points::Points;
+use super::sampler::{rng, Sampler};
+use super::sequence::extend_sequence;
 use crate::error::Result;
 
 pub struct Halton {
@@ -38,7 +40,7 @@ impl Sampler for Halton {
         "halton"
     }
 
-    /// Continues the sequence after the existing points (see [`super::extend_sequence`]), so
+    /// Continues the sequence after the existing points (see [`super::sequence::extend_sequence`]), so
     /// extension and one-shot designs of the same seed agree.
     fn extend(&self, existing: &Points, n_new: usize, seed: u64) -> Result<Points> {
         let d = existing.dim();

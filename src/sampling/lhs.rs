@@ -7,7 +7,8 @@ use rand::seq::SliceRandom;
 use rand::RngExt;
 
 use super::points::dist2;
-use super::{rng, Points, Sampler};
+use super::points::Points;
+use super::sampler::{rng, Sampler};
 use crate::error::{Error, Result};
 
 pub struct Lhs {

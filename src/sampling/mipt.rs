@@ -19,7 +19,8 @@ use rand::RngExt;
 use rand_distr::{Binomial, Distribution};
 
 use super::points::dist2;
-use super::{rng, Points, Sampler};
+use super::points::Points;
+use super::sampler::{rng, Sampler};
 use crate::error::{Error, Result};
 
 pub struct Mipt {

@@ -2,7 +2,8 @@
 
 use rand::{Rng, RngExt};
 
-use super::{rng, Points, Sampler};
+use super::points::Points;
+use super::sampler::{rng, Sampler};
 use crate::error::Result;
 
 pub struct Random;

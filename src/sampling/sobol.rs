@@ -1,6 +1,8 @@
 //! Owen-scrambled Sobol points (sobol_burley).
 
-use super::{extend_sequence, Points, Sampler};
+use super::points::Points;
+use super::sampler::Sampler;
+use super::sequence::extend_sequence;
 use crate::error::{Error, Result};
 
 /// sobol_burley computes at most 2^16 points per sequence.
@@ -30,7 +32,7 @@ impl Sampler for Sobol {
         "sobol"
     }
 
-    /// Continues the sequence after the existing points (see [`super::extend_sequence`]): a
+    /// Continues the sequence after the existing points (see [`super::sequence::extend_sequence`]): a
     /// Sobol design of n points extended by m with the same seed equals the design of n + m.
     fn extend(&self, existing: &Points, n_new: usize, seed: u64) -> Result<Points> {
         let d = existing.dim();

@@ -1,0 +1,41 @@
+//! The columns of a campaign table: `run_id,row,status,seed`, the inputs, the responses, then
+//! the diagnostics. The plan names them before anything runs; the table writes and reads them.
+
+pub const FIXED_COLUMNS: [&str; 4] = ["run_id", "row", "status", "seed"];
+pub const DIAGNOSTIC_COLUMNS: [&str; 6] = [
+    "settled",
+    "steps",
+    "particles",
+    "wall_time_s",
+    "warnings",
+    "error",
+];
+/// The one column that legitimately differs between two executions of the same run.
+pub const WALL_TIME_COLUMN: &str = "wall_time_s";
+
+pub const DONE: &str = "done";
+pub const FAILED: &str = "failed";
+
+pub fn columns(inputs: &[String], responses: &[String]) -> Vec<String> {
+    FIXED_COLUMNS
+        .iter()
+        .map(|s| s.to_string())
+        .chain(inputs.iter().cloned())
+        .chain(responses.iter().cloned())
+        .chain(DIAGNOSTIC_COLUMNS.iter().map(|s| s.to_string()))
+        .collect()
+}
+
+/// Whether a header is a campaign table's (fixed columns first, diagnostics last).
+pub fn is_campaign_header(header: &[String]) -> bool {
+    let n = header.len();
+    n >= FIXED_COLUMNS.len() + DIAGNOSTIC_COLUMNS.len()
+        && header[..FIXED_COLUMNS.len()]
+            .iter()
+            .zip(FIXED_COLUMNS)
+            .all(|(a, b)| a == b)
+        && header[n - DIAGNOSTIC_COLUMNS.len()..]
+            .iter()
+            .zip(DIAGNOSTIC_COLUMNS)
+            .all(|(a, b)| a == b)
+}

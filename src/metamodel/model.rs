@@ -1,0 +1,295 @@
+//! The model file: equations per response, input transforms, domain, metrics, Pareto front,
+//! settings, seed and data hash, saved and loaded as JSON.
+
+use crate::error::{read_to_string, write_atomic, Error, Result};
+use crate::gp::{self, Node};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub const FORMAT: &str = "mbgc-metamodel";
+pub const VERSION: u32 = 1;
+
+/// How a physical input becomes the equation's variable: `(t(x) - offset) / width`, with `t` the
+/// identity or the natural log. Stored as the two numbers used, so exports compute bit for bit
+/// the same value.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Transform {
+    Identity,
+    Linear { offset: f64, width: f64 },
+    Log { offset: f64, width: f64 },
+}
+
+impl Transform {
+    #[inline]
+    pub fn apply(&self, x: f64) -> f64 {
+        match self {
+            Transform::Identity => x,
+            Transform::Linear { offset, width } => (x - offset) / width,
+            Transform::Log { offset, width } => (x.ln() - offset) / width,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Input {
+    pub name: String,
+    pub transform: Transform,
+    /// Smallest and largest value in the data the model was fitted on: its valid domain.
+    pub domain: [f64; 2],
+}
+
+impl Input {
+    /// The name of the variable the equations use (the input itself when not transformed).
+    pub fn symbol(&self) -> String {
+        match self.transform {
+            Transform::Identity => self.name.clone(),
+            _ => format!("{}_u", self.name),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    pub rows: usize,
+    pub r2: f64,
+    pub rmse: f64,
+    pub mae: f64,
+    pub max_abs_error: f64,
+}
+
+impl Metrics {
+    pub fn of(observed: &[f64], predicted: &[f64]) -> Metrics {
+        let n = observed.len();
+        if n == 0 {
+            return Metrics::default();
+        }
+        let mean = observed.iter().sum::<f64>() / n as f64;
+        let ss_tot: f64 = observed.iter().map(|y| (y - mean).powi(2)).sum();
+        let res: Vec<f64> = observed.iter().zip(predicted).map(|(y, p)| y - p).collect();
+        let ss_res: f64 = res.iter().map(|r| r * r).sum();
+        Metrics {
+            rows: n,
+            r2: if ss_tot > 0.0 {
+                1.0 - ss_res / ss_tot
+            } else {
+                f64::NAN
+            },
+            rmse: (ss_res / n as f64).sqrt(),
+            mae: res.iter().map(|r| r.abs()).sum::<f64>() / n as f64,
+            max_abs_error: res.iter().fold(0.0, |m, r| m.max(r.abs())),
+        }
+    }
+}
+
+/// Residual (observed - predicted) quantiles.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Quantile {
+    pub q: f64,
+    pub residual: f64,
+}
+
+pub const QUANTILES: [f64; 7] = [0.0, 0.05, 0.25, 0.5, 0.75, 0.95, 1.0];
+
+pub fn residual_quantiles(observed: &[f64], predicted: &[f64]) -> Vec<Quantile> {
+    let mut r: Vec<f64> = observed.iter().zip(predicted).map(|(y, p)| y - p).collect();
+    if r.is_empty() {
+        return Vec::new();
+    }
+    r.sort_by(f64::total_cmp);
+    QUANTILES
+        .iter()
+        .map(|&q| {
+            let pos = q * (r.len() - 1) as f64;
+            let (i, f) = (pos.floor() as usize, pos.fract());
+            let v = if i + 1 < r.len() {
+                r[i] * (1.0 - f) + r[i + 1] * f
+            } else {
+                r[i]
+            };
+            Quantile { q, residual: v }
+        })
+        .collect()
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FrontMember {
+    pub size: usize,
+    pub train_r2: f64,
+    pub test_r2: Option<f64>,
+    pub equation: String,
+    pub program: Vec<Node>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ResponseModel {
+    pub name: String,
+    /// The equation in the input symbols (Python/sympy syntax, constants exact).
+    pub equation: String,
+    /// The equation as a postfix program over the transformed inputs (what predictions evaluate).
+    pub program: Vec<Node>,
+    pub size: usize,
+    /// Inputs the equation reads.
+    pub uses: Vec<String>,
+    pub train: Metrics,
+    pub test: Option<Metrics>,
+    pub train_residual_quantiles: Vec<Quantile>,
+    pub test_residual_quantiles: Vec<Quantile>,
+    pub pareto_front: Vec<FrontMember>,
+    pub selection_rule: String,
+    pub generations: usize,
+    pub node_evals: u64,
+    pub seconds: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct DataSource {
+    pub file: String,
+    /// FNV-1a 64 of the file's bytes, hex.
+    pub fnv1a64: String,
+    pub rows: usize,
+    pub train_rows: usize,
+    pub test_rows: usize,
+    pub test_fraction: f64,
+    pub skipped_rows: usize,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Metamodel {
+    pub format: String,
+    pub version: u32,
+    pub created_by: String,
+    pub inputs: Vec<Input>,
+    pub responses: Vec<ResponseModel>,
+    pub settings: gp::Config,
+    pub seed: u64,
+    pub data: DataSource,
+}
+impl Metamodel {
+    pub fn load(path: &Path) -> Result<Metamodel> {
+        let file = path.display().to_string();
+        let text = read_to_string(path)?;
+        let m: Metamodel = serde_json::from_str(&text).map_err(|e| {
+            Error::input(
+                &file,
+                format!("line {} column {}", e.line(), e.column()),
+                format!("a metamodel JSON file written by `mbgc fit` ({e})"),
+            )
+        })?;
+        if m.format != FORMAT {
+            return Err(Error::input(
+                &file,
+                "format",
+                format!("\"{FORMAT}\", got \"{}\"", m.format),
+            ));
+        }
+        if m.version != VERSION {
+            return Err(Error::input(
+                &file,
+                "version",
+                format!("{VERSION}, got {}", m.version),
+            ));
+        }
+        for r in &m.responses {
+            if !gp::program::is_valid(&r.program, m.inputs.len()) {
+                return Err(Error::input(
+                    &file,
+                    format!("responses.{}.program", r.name),
+                    format!(
+                        "a well-formed postfix program over {} inputs",
+                        m.inputs.len()
+                    ),
+                ));
+            }
+        }
+        Ok(m)
+    }
+
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(|e| Error::invalid(e.to_string()))?;
+        write_atomic(path, text.as_bytes())
+    }
+
+    pub fn input_names(&self) -> Vec<String> {
+        self.inputs.iter().map(|i| i.name.clone()).collect()
+    }
+
+    pub fn symbols(&self) -> Vec<String> {
+        self.inputs.iter().map(Input::symbol).collect()
+    }
+
+    pub fn response(&self, name: &str) -> Option<&ResponseModel> {
+        self.responses.iter().find(|r| r.name == name)
+    }
+
+    /// Transformed input columns from physical columns (`x[input][row]`).
+    pub fn transform(&self, x: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        self.inputs
+            .iter()
+            .zip(x)
+            .map(|(inp, col)| col.iter().map(|&v| inp.transform.apply(v)).collect())
+            .collect()
+    }
+
+    /// Predictions of one response for physical input columns; NaN where the equation is not
+    /// finite (outside its valid domain).
+    pub fn predict(&self, response: &ResponseModel, x: &[Vec<f64>]) -> Vec<f64> {
+        let xt = self.transform(x);
+        let rows = x.first().map_or(0, Vec::len);
+        let mut out = vec![0.0; rows];
+        let mut ev = gp::eval::Evaluator::new();
+        if !ev.eval(&response.program, &xt, &mut out) {
+            // Row by row, to keep the finite ones.
+            for (r, o) in out.iter_mut().enumerate() {
+                let row: Vec<Vec<f64>> = xt.iter().map(|c| vec![c[r]]).collect();
+                let mut one = [0.0];
+                *o = if ev.eval(&response.program, &row, &mut one) {
+                    one[0]
+                } else {
+                    f64::NAN
+                };
+            }
+        }
+        out
+    }
+
+    /// One prediction at a physical input point.
+    pub fn predict_point(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        let cols: Vec<Vec<f64>> = x.iter().map(|&v| vec![v]).collect();
+        self.predict(response, &cols)[0]
+    }
+
+    /// Prediction and its gradient with respect to the physical inputs at one point; `None`
+    /// where the equation is not finite.
+    pub fn value_and_gradient(
+        &self,
+        response: &ResponseModel,
+        x: &[f64],
+    ) -> Option<(f64, Vec<f64>)> {
+        let xt: Vec<f64> = self
+            .inputs
+            .iter()
+            .zip(x)
+            .map(|(i, &v)| i.transform.apply(v))
+            .collect();
+        let (f, mut g) = gp::grad::value_and_gradient(&response.program, &xt)?;
+        for ((gk, inp), &v) in g.iter_mut().zip(&self.inputs).zip(x) {
+            *gk *= match inp.transform {
+                Transform::Identity => 1.0,
+                Transform::Linear { width, .. } => 1.0 / width,
+                Transform::Log { width, .. } => 1.0 / (v * width),
+            };
+        }
+        Some((f, g))
+    }
+
+    /// Inputs of a point outside the valid domain, as `(name, value, [min, max])`.
+    pub fn outside_domain<'a>(&'a self, x: &[f64]) -> Vec<(&'a str, f64, [f64; 2])> {
+        self.inputs
+            .iter()
+            .zip(x)
+            .filter(|(i, &v)| !(v >= i.domain[0] && v <= i.domain[1]))
+            .map(|(i, &v)| (i.name.as_str(), v, i.domain))
+            .collect()
+    }
+}
