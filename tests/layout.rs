@@ -1,0 +1,407 @@
+//! The source layout's two rules, checked on the tree itself so they cannot quietly erode:
+//!
+//! 1. No two files of `src/` import each other, directly or through a longer cycle (a `mod.rs`
+//!    that re-exports a child counts as importing it): a concept two files need gets a file of
+//!    its own.
+//! 2. The core library never imports a study: only `src/studies/` and the command line
+//!    (`src/cli/`) name `studies`.
+//!
+//! Imports are read from the source text: `use` trees and inline paths (`crate::a::b`,
+//! `super::x`, `child::y`), outside comments, string literals and the `#[cfg(test)]` module at
+//! the end of a file. Each path counts as an edge to the longest module prefix that is a file.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+type Module = Vec<String>;
+
+fn source_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.is_dir() {
+            source_files(&p, out);
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// `src/a/b.rs` -> [a, b]; `src/a/mod.rs` -> [a]; `src/lib.rs` and `src/main.rs` -> [].
+fn module_of(src: &Path, file: &Path) -> Module {
+    let rel = file.strip_prefix(src).unwrap().with_extension("");
+    let mut m: Module = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if matches!(m.last().map(String::as_str), Some("mod" | "lib" | "main")) {
+        m.pop();
+    }
+    m
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Tok {
+    Ident(String),
+    Sep,
+    Open,
+    Close,
+    Comma,
+    Semi,
+    Other,
+}
+
+/// Tokens of Rust source with comments and literals dropped; the `#[cfg(test)] mod` at the end
+/// of a file is cut off (tests may import anything).
+fn tokens(text: &str) -> Vec<Tok> {
+    let text = match text.find("#[cfg(test)]\nmod ") {
+        Some(i) => &text[..i],
+        None => text,
+    };
+    let c: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < c.len() {
+        let ch = c[i];
+        if ch == '/' && c.get(i + 1) == Some(&'/') {
+            while i < c.len() && c[i] != '\n' {
+                i += 1;
+            }
+        } else if ch == '/' && c.get(i + 1) == Some(&'*') {
+            i += 2;
+            while i + 1 < c.len() && !(c[i] == '*' && c[i + 1] == '/') {
+                i += 1;
+            }
+            i += 2;
+        } else if ch == 'r' && (c.get(i + 1) == Some(&'"') || c.get(i + 1) == Some(&'#')) {
+            // Raw string r"..." or r#"..."#.
+            let mut j = i + 1;
+            let mut hashes = 0;
+            while c.get(j) == Some(&'#') {
+                hashes += 1;
+                j += 1;
+            }
+            if c.get(j) != Some(&'"') {
+                out.push(Tok::Ident("r".into()));
+                i += 1;
+                continue;
+            }
+            j += 1;
+            loop {
+                if j >= c.len() {
+                    break;
+                }
+                if c[j] == '"' && (0..hashes).all(|k| c.get(j + 1 + k) == Some(&'#')) {
+                    j += 1 + hashes;
+                    break;
+                }
+                j += 1;
+            }
+            i = j;
+            out.push(Tok::Other);
+        } else if ch == '"' {
+            i += 1;
+            while i < c.len() && c[i] != '"' {
+                if c[i] == '\\' {
+                    i += 1;
+                }
+                i += 1;
+            }
+            i += 1;
+            out.push(Tok::Other);
+        } else if ch == '\'' {
+            // A char literal ('x', '\n') or a lifetime ('a).
+            if c.get(i + 1) == Some(&'\\') {
+                i += 2;
+                while i < c.len() && c[i] != '\'' {
+                    i += 1;
+                }
+                i += 1;
+            } else if c.get(i + 2) == Some(&'\'') {
+                i += 3;
+            } else {
+                i += 1;
+            }
+            out.push(Tok::Other);
+        } else if ch.is_alphabetic() || ch == '_' {
+            let start = i;
+            while i < c.len() && (c[i].is_alphanumeric() || c[i] == '_') {
+                i += 1;
+            }
+            out.push(Tok::Ident(c[start..i].iter().collect()));
+        } else if ch == ':' && c.get(i + 1) == Some(&':') {
+            out.push(Tok::Sep);
+            i += 2;
+        } else {
+            out.push(match ch {
+                '{' => Tok::Open,
+                '}' => Tok::Close,
+                ',' => Tok::Comma,
+                ';' => Tok::Semi,
+                _ => Tok::Other,
+            });
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Expands a `use` tree starting at `t[*i]` (after `use`) into full paths.
+fn use_tree(t: &[Tok], i: &mut usize, prefix: &[String], out: &mut Vec<Vec<String>>) {
+    let mut path = prefix.to_vec();
+    loop {
+        match t.get(*i) {
+            Some(Tok::Ident(s)) if s == "as" => {
+                *i += 2;
+                out.push(path);
+                return;
+            }
+            Some(Tok::Ident(s)) => {
+                if s != "self" || path.is_empty() {
+                    path.push(s.clone());
+                }
+                *i += 1;
+            }
+            Some(Tok::Sep) => *i += 1,
+            Some(Tok::Open) => {
+                *i += 1;
+                loop {
+                    use_tree(t, i, &path, out);
+                    match t.get(*i) {
+                        Some(Tok::Comma) => *i += 1,
+                        Some(Tok::Close) => {
+                            *i += 1;
+                            return;
+                        }
+                        _ => return,
+                    }
+                    if t.get(*i) == Some(&Tok::Close) {
+                        *i += 1;
+                        return;
+                    }
+                }
+            }
+            _ => {
+                out.push(path);
+                return;
+            }
+        }
+    }
+}
+
+/// Every path the file names: `use` trees and inline `a::b::c` chains.
+fn paths(t: &[Tok]) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < t.len() {
+        if let Tok::Ident(s) = &t[i] {
+            if s == "use" {
+                i += 1;
+                use_tree(t, &mut i, &[], &mut out);
+                continue;
+            }
+            if t.get(i + 1) == Some(&Tok::Sep) && (i == 0 || t[i - 1] != Tok::Sep) {
+                let mut p = vec![s.clone()];
+                let mut j = i + 1;
+                while t.get(j) == Some(&Tok::Sep) {
+                    match t.get(j + 1) {
+                        Some(Tok::Ident(n)) => {
+                            p.push(n.clone());
+                            j += 2;
+                        }
+                        _ => break,
+                    }
+                }
+                out.push(p);
+                i = j;
+                continue;
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The file module a path in module `m` refers to, if it is one of the crate's files.
+fn resolve(m: &Module, path: &[String], files: &BTreeSet<Module>) -> Option<Module> {
+    let (first, rest) = path.split_first()?;
+    let mut base: Module = match first.as_str() {
+        "crate" => Vec::new(),
+        "self" => m.clone(),
+        "super" => m[..m.len().saturating_sub(1)].to_vec(),
+        child if files.contains(&[m.as_slice(), &[child.to_string()]].concat()) => {
+            let mut b = m.clone();
+            b.push(child.to_string());
+            b
+        }
+        _ => return None,
+    };
+    let mut rest = rest;
+    while rest.first().map(String::as_str) == Some("super") {
+        base.pop();
+        rest = &rest[1..];
+    }
+    let full: Module = base.iter().chain(rest).cloned().collect();
+    (0..=full.len())
+        .rev()
+        .map(|k| full[..k].to_vec())
+        .find(|p| files.contains(p))
+        .filter(|p| !p.is_empty() && p != m)
+}
+
+fn graph() -> BTreeMap<Module, BTreeSet<Module>> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut list = Vec::new();
+    source_files(&src, &mut list);
+    let files: BTreeSet<Module> = list.iter().map(|f| module_of(&src, f)).collect();
+    let mut g = BTreeMap::new();
+    for f in &list {
+        let m = module_of(&src, f);
+        let text = std::fs::read_to_string(f).unwrap();
+        let edges: BTreeSet<Module> = paths(&tokens(&text))
+            .iter()
+            .filter_map(|p| resolve(&m, p, &files))
+            .collect();
+        g.entry(m).or_insert_with(BTreeSet::new).extend(edges);
+    }
+    g
+}
+
+/// Strongly connected components with more than one module (Tarjan).
+fn cycles(g: &BTreeMap<Module, BTreeSet<Module>>) -> Vec<Vec<Module>> {
+    struct State<'a> {
+        g: &'a BTreeMap<Module, BTreeSet<Module>>,
+        index: BTreeMap<&'a Module, usize>,
+        low: BTreeMap<&'a Module, usize>,
+        stack: Vec<&'a Module>,
+        on: BTreeSet<&'a Module>,
+        out: Vec<Vec<Module>>,
+    }
+    fn visit<'a>(s: &mut State<'a>, v: &'a Module) {
+        let n = s.index.len();
+        s.index.insert(v, n);
+        s.low.insert(v, n);
+        s.stack.push(v);
+        s.on.insert(v);
+        let g = s.g;
+        for w in g.get(v).into_iter().flatten() {
+            let Some((w, _)) = g.get_key_value(w) else {
+                continue;
+            };
+            if !s.index.contains_key(w) {
+                visit(s, w);
+                let lw = s.low[w];
+                let lv = s.low.get_mut(v).unwrap();
+                *lv = (*lv).min(lw);
+            } else if s.on.contains(w) {
+                let iw = s.index[w];
+                let lv = s.low.get_mut(v).unwrap();
+                *lv = (*lv).min(iw);
+            }
+        }
+        if s.low[v] == s.index[v] {
+            let mut comp = Vec::new();
+            while let Some(w) = s.stack.pop() {
+                s.on.remove(w);
+                comp.push(w.clone());
+                if w == v {
+                    break;
+                }
+            }
+            if comp.len() > 1 {
+                s.out.push(comp);
+            }
+        }
+    }
+    let mut s = State {
+        g,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on: BTreeSet::new(),
+        out: Vec::new(),
+    };
+    for v in g.keys() {
+        if !s.index.contains_key(v) {
+            visit(&mut s, v);
+        }
+    }
+    s.out
+}
+
+fn name(m: &Module) -> String {
+    m.join("/")
+}
+
+#[test]
+fn no_two_files_import_each_other() {
+    let g = graph();
+    assert!(g.len() > 50, "only {} modules found", g.len());
+    let found: Vec<String> = cycles(&g)
+        .iter()
+        .map(|c| {
+            let members: BTreeSet<&Module> = c.iter().collect();
+            let edges: Vec<String> = c
+                .iter()
+                .flat_map(|a| {
+                    g[a].iter()
+                        .filter(|b| members.contains(b))
+                        .map(move |b| format!("{} -> {}", name(a), name(b)))
+                })
+                .collect();
+            edges.join(", ")
+        })
+        .collect();
+    assert!(found.is_empty(), "import cycles:\n{}", found.join("\n"));
+}
+
+#[test]
+fn the_core_library_never_imports_a_study() {
+    let g = graph();
+    let studies = ["studies".to_string()];
+    let offenders: Vec<String> = g
+        .iter()
+        .filter(|(m, _)| !m.is_empty() && m[0] != "studies" && m[0] != "cli")
+        .flat_map(|(m, to)| {
+            to.iter()
+                .filter(|t| t.starts_with(&studies))
+                .map(move |t| format!("{} -> {}", name(m), name(t)))
+        })
+        .collect();
+    assert!(offenders.is_empty(), "{}", offenders.join("\n"));
+}
+
+#[test]
+fn the_checker_sees_cycles_and_nested_use_trees() {
+    // A synthetic crate: a/mod.rs re-exports its child b, which imports a::c via super, and
+    // c imports b back through a nested use tree.
+    let files: BTreeSet<Module> = [vec![], vec!["a"], vec!["a", "b"], vec!["a", "c"]]
+        .into_iter()
+        .map(|m| m.into_iter().map(String::from).collect())
+        .collect();
+    let m = |s: &[&str]| -> Module { s.iter().map(|x| x.to_string()).collect() };
+    let edges = |module: &Module, text: &str| -> BTreeSet<Module> {
+        paths(&tokens(text))
+            .iter()
+            .filter_map(|p| resolve(module, p, &files))
+            .collect()
+    };
+    let a = edges(&m(&["a"]), "pub mod b;\npub use b::Thing;\n");
+    assert_eq!(a, [m(&["a", "b"])].into());
+    let b = edges(
+        &m(&["a", "b"]),
+        "// use crate::a::c; in a comment\nlet s = \"crate::a::c\";\nuse super::c::X;",
+    );
+    assert_eq!(b, [m(&["a", "c"])].into());
+    let c = edges(
+        &m(&["a", "c"]),
+        "use crate::{a::{b::{self, Y}, c::Z}, error};\n#[cfg(test)]\nmod tests { use super::super::b; }",
+    );
+    assert_eq!(c, [m(&["a", "b"])].into());
+    let mut g = BTreeMap::new();
+    g.insert(m(&["a", "b"]), b);
+    g.insert(m(&["a", "c"]), c);
+    g.insert(m(&["a"]), a);
+    let found = cycles(&g);
+    assert_eq!(found.len(), 1);
+    assert_eq!(found[0].len(), 2);
+}
