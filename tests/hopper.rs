@@ -1,5 +1,6 @@
-//! The flat-bottom hopper discharge experiment (seed 000) on small scenes (a few seconds each),
-//! and the Beverloo check on the seed's apparatus with the default fill (ignored: ~2-3 min):
+//! The flat-bottom hopper discharge experiment (seed 000) on small scenes (a few seconds each,
+//! the first also checked against Beverloo), and the tighter Beverloo check on the seed's
+//! apparatus with the default fill (ignored: ~2-3 min):
 //!
 //! cargo test --release --test hopper -- --ignored --nocapture
 
@@ -138,6 +139,12 @@ fn a_small_discharge_keeps_every_particle_stops_and_measures() {
     }
     let w = o.get("flow_rate").unwrap();
     assert!(w.is_finite() && w > 0.0, "{w}");
+    // Beverloo (C 0.58, k 1.5, the measured bulk density) within 25 %. This scene sits at the
+    // edge of the correlation's validity (D_o / d = 5, a fill of 1.1 D_o whose rate decays
+    // early), so the bound is loose; measured 0.84. A flow rate off by a physical factor
+    // (gravity, density, the time step's units, the orifice size) falls far outside it.
+    let ratio = o.get("beverloo_ratio").unwrap();
+    assert!((ratio - 1.0).abs() < 0.25, "measured / Beverloo = {ratio}");
     assert!((o.get("discharged_mass").unwrap() - m_end).abs() < 1e-12);
     assert!(
         std::fs::metadata(dir.path().join("hopper.svg"))
