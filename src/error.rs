@@ -96,19 +96,33 @@ pub fn csv_error(file: &str, e: csv::Error) -> Error {
     }
 }
 
-/// Opens a CSV file (fields trimmed) and returns the reader with its header.
+/// Opens a CSV file (fields trimmed) and returns the reader with its header. A column name that
+/// appears twice is refused: a reader looking it up would silently take the first.
 pub fn csv_open(path: &Path) -> Result<(csv::Reader<std::fs::File>, Vec<String>)> {
     let file = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
         .map_err(|e| csv_error(&file, e))?;
-    let header = rdr
+    let header: Vec<String> = rdr
         .headers()
         .map_err(|e| csv_error(&file, e))?
         .iter()
         .map(str::to_string)
         .collect();
+    for (i, h) in header.iter().enumerate() {
+        if !h.is_empty() && header[..i].contains(h) {
+            return Err(Error::input(
+                &file,
+                format!("column {h}"),
+                format!(
+                    "appears twice in the header (columns {} and {}): expected unique column names",
+                    header.iter().position(|x| x == h).unwrap_or(0) + 1,
+                    i + 1
+                ),
+            ));
+        }
+    }
     Ok((rdr, header))
 }
 

@@ -25,6 +25,7 @@ pub mod studies;
 pub use error::{Error, Result};
 
 // The test stand-ins under `tests/stand_ins/` name the library `mbgc::` as any user would; the
-// unit tests include them, so inside the crate that name must resolve too.
-#[cfg(test)]
+// unit tests and the `stand-ins` feature include them, so inside the crate that name must
+// resolve too.
+#[cfg(any(test, feature = "stand-ins"))]
 extern crate self as mbgc;

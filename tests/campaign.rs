@@ -1,31 +1,17 @@
 //! Campaigns end to end through the binary: `simulate` with wall-impact, kill and resume, shards
 //! merged against a full run, failures, status, and every bad input naming the file and field.
-//! The stand-in experiment `sleep-test` (tests/stand_ins/, known only to the stand-in binary
-//! `mbgc_stand_ins` that `cargo test` builds as an example) makes runs slow, failing or
-//! panicking on request; it reports a nominal wall time, so its tables are reproducible to the
-//! byte.
+//! The stand-in experiment `sleep-test` (tests/stand_ins/, compiled only into test builds by the
+//! `stand-ins` feature that the dev-dependency on the package itself switches on) makes runs
+//! slow, failing or panicking on request; it reports a nominal wall time, so its tables are
+//! reproducible to the byte.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-/// The stand-in binary: `mbgc` plus `sleep-test`, next to `mbgc` under `examples/`.
-fn stand_in_binary() -> PathBuf {
-    let mbgc = Path::new(env!("CARGO_BIN_EXE_mbgc"));
-    let name = format!("mbgc_stand_ins{}", std::env::consts::EXE_SUFFIX);
-    let p = mbgc.parent().unwrap().join("examples").join(name);
-    assert!(
-        p.exists(),
-        "{} is missing: run the whole suite (`cargo test`), or `cargo build --example \
-         mbgc_stand_ins` before `cargo test --test campaign`",
-        p.display()
-    );
-    p
-}
-
 fn command(args: &[&str]) -> Command {
-    let mut c = Command::new(stand_in_binary());
+    let mut c = Command::new(env!("CARGO_BIN_EXE_mbgc"));
     c.args(args);
     c
 }
@@ -598,21 +584,6 @@ fn bad_inputs_are_refused_naming_the_file_and_field_before_anything_runs() {
         e.contains("--experiment shear-bx: unknown experiment (known: wall-impact"),
         "{e}"
     );
-    // The shipped binary does not know the stand-in.
-    let o = Command::new(env!("CARGO_BIN_EXE_mbgc"))
-        .args([
-            "simulate",
-            "--design",
-            s(&good),
-            "--experiment",
-            "sleep-test",
-        ])
-        .args(["--out", s(&out)])
-        .output()
-        .unwrap();
-    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown experiment"));
-    assert!(!out.exists());
-
     // Resume onto a table of another campaign: refused, table untouched.
     let sd = sleep_design(d, "s.csv", 4, None);
     simulate_sleep(&sd, &out, &[]);
@@ -715,6 +686,93 @@ fn bad_inputs_are_refused_naming_the_file_and_field_before_anything_runs() {
     let e = fails(&["campaign", "status", s(&good)]);
     assert!(
         e.contains("wall.csv: header: expected a campaign table"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_second_writer_on_the_same_table_is_refused_and_nothing_is_written_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 20, None);
+    let out = dir.path().join("t.csv");
+    let args: Vec<String> = [
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&out),
+        "--threads",
+        "1",
+        "--set",
+        "sleep_ms=40",
+    ]
+    .iter()
+    .map(|a| a.to_string())
+    .collect();
+    let mut first = command(&arg_refs(&args))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait until the first process has started writing (header plus one run).
+    let t0 = Instant::now();
+    while !(out.exists() && !read(&out).1.is_empty()) {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "first writer made no progress"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let second = mbgc(&arg_refs(&args));
+    let err = String::from_utf8_lossy(&second.stderr).to_string();
+    assert!(!second.status.success(), "second writer was allowed");
+    assert!(err.contains("another mbgc process is writing"), "{err}");
+    assert!(first.wait().unwrap().success());
+    let rows = read(&out).1;
+    assert_eq!(rows.len(), 20);
+    let mut ids: Vec<&String> = rows.iter().map(|r| &r["run_id"]).collect();
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), 20);
+    // Once the first has finished, the table is free again (resume finds nothing to do).
+    mbgc(&arg_refs(&args))
+        .status
+        .success()
+        .then_some(())
+        .unwrap();
+}
+
+#[test]
+fn fit_refuses_a_table_holding_a_run_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 12, None);
+    let out = dir.path().join("t.csv");
+    simulate_sleep(&design, &out, &[]);
+    // A table written twice over (as two unlocked writers once did).
+    let text = std::fs::read_to_string(&out).unwrap();
+    let dup_line = text.lines().nth(3).unwrap().to_string();
+    std::fs::write(&out, format!("{text}{dup_line}\n")).unwrap();
+    let o = mbgc(&[
+        "fit",
+        "--data",
+        s(&out),
+        "--inputs",
+        "x,y",
+        "--targets",
+        "f",
+        "--out",
+        s(&dir.path().join("m.json")),
+        "--generations",
+        "2",
+        "--population",
+        "50",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "fit accepted a duplicated run");
+    assert!(
+        e.contains("column run_id") && e.contains("also on line 4"),
         "{e}"
     );
 }

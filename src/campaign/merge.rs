@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use csv::StringRecord;
 
+use super::lock::TableLock;
 use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
 use crate::error::{write_atomic, Error, Result};
 
@@ -24,6 +25,8 @@ pub struct MergeSummary {
 /// merge is refused; two run ids for the same row mean tables of different campaigns and are
 /// refused too.
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
+    // A simulate still appending to `out` would lose its later lines to the rename.
+    let _lock = TableLock::acquire(out)?;
     let (header, records, summary) = merge_tables(inputs)?;
     let mut bytes = csv_line(&header)?;
     for r in &records {

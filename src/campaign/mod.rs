@@ -10,13 +10,14 @@
 
 pub mod columns;
 pub mod identity;
+pub mod lock;
 pub mod merge;
 pub mod plan;
 pub mod registry;
 pub mod runner;
-#[cfg(test)]
+#[cfg(any(test, feature = "stand-ins"))]
 #[path = "../../tests/stand_ins/sleep_test.rs"]
-mod sleep_test;
+pub(crate) mod sleep_test;
 pub mod status;
 pub mod table;
 

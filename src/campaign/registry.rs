@@ -41,13 +41,27 @@ const EXPERIMENTS: &[(&str, Constructor)] = &[
     }),
 ];
 
+/// Test stand-ins, compiled only into test builds (`stand-ins` feature, see Cargo.toml).
+#[cfg(feature = "stand-ins")]
+const STAND_INS: &[(&str, Constructor)] =
+    &[("sleep-test", |_| Ok(Box::new(super::sleep_test::SleepTest)))];
+#[cfg(not(feature = "stand-ins"))]
+const STAND_INS: &[(&str, Constructor)] = &[];
+
 /// Experiments added at run time by a program that embeds mbgc (its own experiment, or the test
 /// stand-ins), before it calls [`crate::cli::main`].
 static REGISTERED: Mutex<Vec<(&'static str, Constructor)>> = Mutex::new(Vec::new());
 
-fn registered() -> Vec<(&'static str, Constructor)> {
+/// Built-in experiments, then the stand-ins (test builds only), then the registered ones.
+fn all() -> Vec<(&'static str, Constructor)> {
     // A poisoned lock only means another thread panicked while pushing; the list is still valid.
-    REGISTERED.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    let registered = REGISTERED.lock().unwrap_or_else(|e| e.into_inner());
+    EXPERIMENTS
+        .iter()
+        .chain(STAND_INS)
+        .chain(registered.iter())
+        .copied()
+        .collect()
 }
 
 /// Makes `name` known to [`experiment_by_name`] (and so to `mbgc simulate --experiment`).
@@ -56,6 +70,7 @@ pub fn register(name: &'static str, make: Constructor) -> Result<()> {
     let mut list = REGISTERED.lock().unwrap_or_else(|e| e.into_inner());
     if EXPERIMENTS
         .iter()
+        .chain(STAND_INS)
         .chain(list.iter())
         .any(|(n, _)| *n == name)
     {
@@ -69,11 +84,7 @@ pub fn register(name: &'static str, make: Constructor) -> Result<()> {
 
 /// Names accepted by [`experiment_by_name`]: the built-in experiments, then the registered ones.
 pub fn experiment_names() -> Vec<&'static str> {
-    EXPERIMENTS
-        .iter()
-        .map(|(n, _)| *n)
-        .chain(registered().iter().map(|(n, _)| *n))
-        .collect()
+    all().iter().map(|(n, _)| *n).collect()
 }
 
 /// The experiment called `name` on the command line, built with `settings`.
@@ -82,12 +93,7 @@ pub fn experiment_by_name(
     settings: &ExperimentSettings,
 ) -> Result<Box<dyn Experiment>> {
     settings.validate()?;
-    let extra = registered();
-    match EXPERIMENTS
-        .iter()
-        .chain(extra.iter())
-        .find(|(n, _)| *n == name)
-    {
+    match all().into_iter().find(|(n, _)| *n == name) {
         Some((_, make)) => make(settings),
         None => Err(Error::invalid(format!(
             "--experiment {name}: unknown experiment (known: {})",
@@ -114,20 +120,16 @@ mod tests {
             e.contains("--experiment shear-bx") && e.contains("wall-impact"),
             "{e}"
         );
-        // Registering makes a name known; taking a known name is refused.
-        assert!(experiment_by_name("sleep-test", &s).is_err());
-        register("sleep-test", |_| {
-            Ok(Box::new(super::super::sleep_test::SleepTest))
-        })
-        .unwrap();
+        // Registering makes a name known (the constructor decides what is built); taking a
+        // known name is refused.
+        assert!(experiment_by_name("embedded", &s).is_err());
+        register("embedded", |_| Ok(Box::new(WallImpact::default()))).unwrap();
         assert_eq!(
-            experiment_by_name("sleep-test", &s).unwrap().name(),
-            "sleep-test"
+            experiment_by_name("embedded", &s).unwrap().name(),
+            "wall-impact"
         );
-        assert!(experiment_names().contains(&"sleep-test"));
-        let e = register("shear-box", |_| {
-            Ok(Box::new(super::super::sleep_test::SleepTest))
-        });
+        assert!(experiment_names().contains(&"embedded"));
+        let e = register("shear-box", |_| Ok(Box::new(WallImpact::default())));
         assert!(e.unwrap_err().to_string().contains("already registered"));
     }
 

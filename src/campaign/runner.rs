@@ -14,6 +14,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::Meta;
 use super::table::{self, csv_line, read_table, DONE, FAILED};
@@ -63,6 +64,9 @@ pub fn run_campaign(
         )));
     }
     let t0 = Instant::now();
+    // Before the table is read: a second process must not resume from a table that the first
+    // is still appending to.
+    let _lock = TableLock::acquire(&opts.out)?;
     let (present, truncated_bytes) = prepare_table(plan, &opts.out)?;
     let selected: Vec<&PlannedRun> = plan.selected().collect();
     let todo: Vec<&PlannedRun> = selected

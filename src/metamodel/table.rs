@@ -2,6 +2,7 @@
 //! any user table). Other columns may hold anything.
 
 use crate::error::{csv_error, csv_number, csv_open, Error, Result};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Named numeric columns of a table.
@@ -33,12 +34,28 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
         idx.push(i);
     }
     let status = header.iter().position(|h| h == "status");
+    // A campaign table holds each run once; two writers on one table (or a bad merge) would
+    // otherwise weigh those runs twice in a fit.
+    let run_id = header.iter().position(|h| h == "run_id");
+    let mut seen: HashMap<String, u64> = HashMap::new();
     let mut values = vec![Vec::new(); names.len()];
     let mut records = Vec::new();
     let mut skipped = 0;
-    for (line, rec) in rdr.records().enumerate() {
+    for rec in rdr.records() {
         let rec = rec.map_err(|e| csv_error(&file, e))?;
-        let line = line + 2;
+        let line = rec.position().map_or(0, |p| p.line());
+        if let Some(id) = run_id.and_then(|k| rec.get(k)) {
+            if let Some(first) = seen.insert(id.to_string(), line) {
+                return Err(Error::input(
+                    &file,
+                    format!("line {line}, column run_id"),
+                    format!(
+                        "run {id} is also on line {first}: expected each run once (deduplicate \
+                         with `mbgc campaign merge {file} --out <new table>`)"
+                    ),
+                ));
+            }
+        }
         if let Some(s) = status {
             if rec.get(s) != Some("done") {
                 skipped += 1;
@@ -47,7 +64,7 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
         }
         for (k, &i) in idx.iter().enumerate() {
             let field = rec.get(i).unwrap_or("");
-            values[k].push(csv_number(&file, line as u64, &names[k], field)?);
+            values[k].push(csv_number(&file, line, &names[k], field)?);
         }
         records.push(rec.iter().map(str::to_string).collect());
     }

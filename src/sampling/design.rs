@@ -39,13 +39,6 @@ pub fn read_numeric_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
                 "empty column name",
             ));
         }
-        if header[..i].contains(h) {
-            return Err(Error::input(
-                &file,
-                format!("column {h}"),
-                "appears twice in the header",
-            ));
-        }
     }
     let mut rows = Vec::new();
     for rec in rdr.records() {
