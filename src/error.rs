@@ -189,10 +189,8 @@ fn path_at(table: &toml::de::DeTable, at: usize, prefix: &mut String, best: &mut
             prefix.push('.');
         }
         prefix.push_str(k.get_ref());
-        if k.span().contains(&at) || v.span().contains(&at) {
-            if prefix.len() > best.len() {
-                best.clone_from(prefix);
-            }
+        if (k.span().contains(&at) || v.span().contains(&at)) && prefix.len() > best.len() {
+            best.clone_from(prefix);
         }
         value_path_at(v, at, prefix, best);
         prefix.truncate(len);

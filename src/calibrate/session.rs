@@ -61,6 +61,13 @@ pub struct Session {
     pub sigma_max: f64,
 }
 
+/// Axis ranges and the marked point of a corner plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub ranges: Vec<(f64, f64)>,
+    pub marks: Vec<f64>,
+}
+
 /// Calibrates `material` with the metamodel saved at `model_path`. Fails when no start
 /// converged or the best optimum still violates the material's constraints.
 pub fn run(material: &Material, model_path: &Path, opts: &SessionOptions) -> Result<Session> {
@@ -166,9 +173,9 @@ impl Session {
             .then(|| good.iter().map(|o| o.x.clone()).collect())
     }
 
-    /// Axis ranges and marked point of a corner plot of the posterior: the search box and the
-    /// best optimum, plus `[0, sigma_max]` and the posterior mean when sigma was sampled.
-    pub fn posterior_frame(&self) -> Option<(Vec<(f64, f64)>, Vec<f64>)> {
+    /// Axes of a corner plot of the posterior: the search box with the best optimum marked,
+    /// plus `[0, sigma_max]` and the posterior mean when sigma was sampled.
+    pub fn posterior_frame(&self) -> Option<Frame> {
         let post = self.posterior.as_ref()?;
         let mut ranges = self.bounds.clone();
         let mut marks = self.best().x.clone();
@@ -176,7 +183,7 @@ impl Session {
             ranges.push((0.0, self.sigma_max));
             marks.push(post.parameters.last().map_or(0.0, |s| s.mean));
         }
-        Some((ranges, marks))
+        Some(Frame { ranges, marks })
     }
 
     /// The best parameter set as the TOML file `mbgc validate` reads.

@@ -1,7 +1,7 @@
 //! `mbgc calibrate`: the parameters of a material from its measurements, by inverting a saved
 //! metamodel; every distinct solution, and what the data cannot decide.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
@@ -105,18 +105,15 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
 
 /// The posterior corner plot (with `--bayes`) and the solution set (when the data leave one);
 /// returns the files written.
-fn plot(
-    dir: &std::path::Path,
-    model: &std::path::Path,
-    s: &Session,
-) -> anyhow::Result<Vec<PathBuf>> {
+fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
     let stem = model
         .file_stem()
         .map_or("model".into(), |s| s.to_string_lossy().to_string());
     let mut figures = Vec::new();
-    if let (Some(post), Some((ranges, marks))) = (&s.posterior, s.posterior_frame()) {
+    if let (Some(post), Some(frame)) = (&s.posterior, s.posterior_frame()) {
         let path = dir.join(format!("{stem}_posterior.svg"));
-        crate::plot::corner::corner(&path, &post.names, &post.draws, Some(&marks), Some(&ranges))?;
+        let (marks, ranges) = (Some(&frame.marks[..]), Some(&frame.ranges[..]));
+        crate::plot::corner::corner(&path, &post.names, &post.draws, marks, ranges)?;
         figures.push(path);
     }
     if let Some(good) = s.solution_set() {
