@@ -2,7 +2,10 @@
 //! was expected, so a user can fix the input without reading the source.
 
 use std::fmt::Display;
+use std::marker::PhantomData;
 use std::path::Path;
+
+use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -140,4 +143,155 @@ pub fn csv_number(file: &str, line: u64, column: &str, field: &str) -> Result<f6
         ));
     }
     Ok(v)
+}
+
+/// Reads a TOML document into the serde type `T` (which should `deny_unknown_fields` and leave
+/// required fields optional, so that a missing one is reported by the caller's validation with a
+/// message of its own). A syntax error names the line and column; an unknown key or a value of
+/// the wrong type names the dotted path of the field, found by locating the error's span in the
+/// document, because toml's error keeps its key path private.
+pub fn from_toml<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
+    let doc = toml::de::DeTable::parse(text).map_err(|e| {
+        let at = e
+            .span()
+            .map(|s| {
+                let (line, column) = line_column(text, s.start);
+                format!(" at line {line}, column {column}")
+            })
+            .unwrap_or_default();
+        Error::input(
+            file,
+            "TOML syntax",
+            format!("valid TOML{at} ({})", e.message().trim_end()),
+        )
+    })?;
+    toml::from_str(text).map_err(|e: toml::de::Error| {
+        let mut path = String::new();
+        if let Some(s) = e.span() {
+            path_at(doc.get_ref(), s.start, &mut String::new(), &mut path);
+        }
+        if path.is_empty() {
+            path = match e.span() {
+                Some(s) => {
+                    let (line, column) = line_column(text, s.start);
+                    format!("line {line}, column {column}")
+                }
+                None => "TOML".into(),
+            };
+        }
+        Error::input(file, path, serde_message(e.message()))
+    })
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..text.floor_char_boundary(offset.min(text.len()))];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (
+        before.matches('\n').count() + 1,
+        before[line_start..].chars().count() + 1,
+    )
+}
+
+/// Sets `best` to the path of the innermost key or value whose span holds `at`. Every entry is
+/// visited, not only those whose parent's span holds `at`: a `[table]` header and its keys lie
+/// apart in the text.
+fn path_at(table: &toml::de::DeTable, at: usize, prefix: &mut String, best: &mut String) {
+    for (k, v) in table {
+        let len = prefix.len();
+        if !prefix.is_empty() {
+            prefix.push('.');
+        }
+        prefix.push_str(k.get_ref());
+        if (k.span().contains(&at) || v.span().contains(&at)) && prefix.len() > best.len() {
+            best.clone_from(prefix);
+        }
+        value_path_at(v, at, prefix, best);
+        prefix.truncate(len);
+    }
+}
+
+fn value_path_at(
+    v: &toml::Spanned<toml::de::DeValue>,
+    at: usize,
+    prefix: &mut String,
+    best: &mut String,
+) {
+    match v.get_ref() {
+        toml::de::DeValue::Table(t) => path_at(t, at, prefix, best),
+        toml::de::DeValue::Array(a) => {
+            for (i, item) in a.iter().enumerate() {
+                let len = prefix.len();
+                prefix.push_str(&format!("[{i}]"));
+                if item.span().contains(&at) && prefix.len() > best.len() {
+                    best.clone_from(prefix);
+                }
+                value_path_at(item, at, prefix, best);
+                prefix.truncate(len);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// serde's wording recast as the crate's "expected ..., found ..." and "unknown key" messages.
+fn serde_message(msg: &str) -> String {
+    let msg = msg.trim_end();
+    if let Some(rest) = msg.strip_prefix("unknown field `") {
+        return match rest.split_once(", expected ") {
+            Some((_, keys)) => format!(
+                "unknown key; expected one of: {}",
+                keys.trim_start_matches("one of ")
+                    .replace('`', "")
+                    .replace(" or ", ", ")
+            ),
+            None => "unknown key; this table takes none".into(),
+        };
+    }
+    if let Some((found, expected)) = msg
+        .strip_prefix("invalid type: ")
+        .and_then(|r| r.split_once(", expected "))
+    {
+        let expected = match expected {
+            "f64" => "a number",
+            "a sequence" => "a list",
+            e => e,
+        };
+        return format!("expected {expected}, found {found}");
+    }
+    msg.to_string()
+}
+
+/// The entries of a TOML table in file order, for tables whose keys are names the user chooses
+/// (parameters, responses), where order matters and no struct can list the keys.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Entries<T>(pub Vec<(String, T)>);
+
+impl<T> Default for Entries<T> {
+    fn default() -> Self {
+        Entries(Vec::new())
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Entries<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct EntriesVisitor<T>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for EntriesVisitor<T> {
+            type Value = Entries<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a table")
+            }
+            fn visit_map<A: MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> std::result::Result<Entries<T>, A::Error> {
+                let mut entries = Vec::with_capacity(map.size_hint().unwrap_or(0));
+                while let Some(entry) = map.next_entry::<String, T>()? {
+                    entries.push(entry);
+                }
+                Ok(Entries(entries))
+            }
+        }
+        d.deserialize_map(EntriesVisitor(PhantomData))
+    }
 }

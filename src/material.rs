@@ -15,8 +15,10 @@
 //! expr = ["e_pw <= e_pp"]
 //! ```
 
-use crate::error::{read_to_string, Error, Result};
+use serde::Deserialize;
 use std::path::{Path, PathBuf};
+
+use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Measured {
@@ -61,45 +63,6 @@ pub struct Material {
     pub fixed: Vec<(String, f64)>,
     pub bounds: Vec<(String, [f64; 2])>,
     pub constraints: Vec<Constraint>,
-}
-
-fn number(v: &toml::Value, file: &str, field: &str) -> Result<f64> {
-    let x = match v {
-        toml::Value::Float(f) => *f,
-        toml::Value::Integer(i) => *i as f64,
-        _ => return Err(Error::input(file, field, "a number")),
-    };
-    if !x.is_finite() {
-        return Err(Error::input(
-            file,
-            field,
-            format!("a finite number, got {x}"),
-        ));
-    }
-    Ok(x)
-}
-
-fn table<'a>(v: &'a toml::Value, file: &str, field: &str) -> Result<&'a toml::Table> {
-    v.as_table()
-        .ok_or_else(|| Error::input(file, field, "a table"))
-}
-
-fn only_keys(t: &toml::Table, allowed: &[&str], file: &str, field: &str) -> Result<()> {
-    for k in t.keys() {
-        if !allowed.contains(&k.as_str()) {
-            let name = if field.is_empty() {
-                k.clone()
-            } else {
-                format!("{field}.{k}")
-            };
-            return Err(Error::input(
-                file,
-                name,
-                format!("one of: {}", allowed.join(", ")),
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// Parses `a*x + b - y` into terms and a constant.
@@ -180,6 +143,190 @@ fn constraint(text: &str, file: &str, field: &str) -> Result<Constraint> {
     })
 }
 
+// The file as written. Required keys are `Option`s so that `validate` can say what a missing
+// one means; serde only refuses unknown keys and values of the wrong type.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, expecting = "a material file")]
+struct MaterialFile {
+    name: Option<String>,
+    psd: Option<PsdFile>,
+    #[serde(default)]
+    measured: Entries<MeasuredFile>,
+    #[serde(default)]
+    fixed: Entries<f64>,
+    #[serde(default)]
+    bounds: Entries<Vec<f64>>,
+    constraints: Option<ConstraintsFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `sieve = \"file.csv\"` or both `d50_mm` and `sigma_ln`"
+)]
+struct PsdFile {
+    sieve: Option<String>,
+    d50_mm: Option<f64>,
+    sigma_ln: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table such as { value = 35.5, sd = 0.5 }"
+)]
+struct MeasuredFile {
+    value: Option<f64>,
+    sd: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `expr = [\"e_pw <= e_pp\", ...]`"
+)]
+struct ConstraintsFile {
+    #[serde(default)]
+    expr: Vec<String>,
+}
+
+fn finite(x: f64, file: &str, field: &str) -> Result<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::input(
+            file,
+            field,
+            format!("a finite number, got {x}"),
+        ))
+    }
+}
+
+impl MaterialFile {
+    /// Everything serde cannot say: what is missing, out of range or inconsistent.
+    fn validate(self, file: &str) -> Result<Material> {
+        let name = self.name.unwrap_or_else(|| {
+            Path::new(file)
+                .file_stem()
+                .map_or("material".into(), |s| s.to_string_lossy().to_string())
+        });
+        let psd = match self.psd {
+            None => None,
+            Some(PsdFile {
+                sieve: Some(s),
+                d50_mm: None,
+                sigma_ln: None,
+            }) => Some(PsdSpec::Sieve(PathBuf::from(s))),
+            Some(PsdFile {
+                sieve: None,
+                d50_mm: Some(d),
+                sigma_ln: Some(s),
+            }) => {
+                let d50_mm = finite(d, file, "psd.d50_mm")?;
+                let sigma_ln = finite(s, file, "psd.sigma_ln")?;
+                if d50_mm <= 0.0 {
+                    return Err(Error::input(file, "psd.d50_mm", "a positive size in mm"));
+                }
+                if sigma_ln <= 0.0 {
+                    return Err(Error::input(file, "psd.sigma_ln", "a positive spread"));
+                }
+                Some(PsdSpec::LogNormal { d50_mm, sigma_ln })
+            }
+            Some(_) => {
+                return Err(Error::input(
+                    file,
+                    "psd",
+                    "either `sieve = \"file.csv\"` or both `d50_mm` and `sigma_ln`",
+                ))
+            }
+        };
+        let mut measured = Vec::new();
+        for (response, m) in self.measured.0 {
+            let field = format!("measured.{response}");
+            let value = m
+                .value
+                .ok_or_else(|| Error::input(file, &field, "a `value`"))?;
+            let value = finite(value, file, &format!("{field}.value"))?;
+            let sd = m.sd.ok_or_else(|| {
+                Error::input(
+                    file,
+                    &field,
+                    "an `sd` (standard deviation of the measurement)",
+                )
+            })?;
+            let sd = finite(sd, file, &format!("{field}.sd"))?;
+            if sd <= 0.0 {
+                return Err(Error::input(
+                    file,
+                    format!("{field}.sd"),
+                    format!("a standard deviation > 0, got {sd}"),
+                ));
+            }
+            measured.push(Measured {
+                response,
+                value,
+                sd,
+            });
+        }
+        if measured.is_empty() {
+            return Err(Error::input(
+                file,
+                "measured",
+                "at least one measured response, e.g. shear_angle = { value = 35.5, sd = 0.5 }",
+            ));
+        }
+        let mut fixed = Vec::new();
+        for (k, v) in self.fixed.0 {
+            let v = finite(v, file, &format!("fixed.{k}"))?;
+            fixed.push((k, v));
+        }
+        let mut bounds = Vec::new();
+        for (k, v) in self.bounds.0 {
+            let field = format!("bounds.{k}");
+            let [lo, hi] = <[f64; 2]>::try_from(v).map_err(|v| {
+                Error::input(
+                    file,
+                    &field,
+                    format!("[min, max], got a list of {}", v.len()),
+                )
+            })?;
+            let (lo, hi) = (finite(lo, file, &field)?, finite(hi, file, &field)?);
+            if lo >= hi {
+                return Err(Error::input(
+                    file,
+                    &field,
+                    format!("min < max, got [{lo}, {hi}]"),
+                ));
+            }
+            if fixed.iter().any(|(n, _)| *n == k) {
+                return Err(Error::input(
+                    file,
+                    &field,
+                    format!("{k} is also in [fixed]: give it a value or a range, not both"),
+                ));
+            }
+            bounds.push((k, [lo, hi]));
+        }
+        let constraints = self
+            .constraints
+            .map_or(Vec::new(), |c| c.expr)
+            .iter()
+            .enumerate()
+            .map(|(i, text)| constraint(text, file, &format!("constraints.expr[{i}]")))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Material {
+            name,
+            source: file.to_string(),
+            psd,
+            measured,
+            fixed,
+            bounds,
+            constraints,
+        })
+    }
+}
+
 impl Material {
     pub fn from_file(path: &Path) -> Result<Material> {
         let text = read_to_string(path)?;
@@ -193,158 +340,7 @@ impl Material {
     }
 
     pub fn from_toml_str(text: &str, source: &str) -> Result<Material> {
-        let file = source;
-        let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            Error::input(file, "TOML syntax", format!("valid TOML ({})", e.message()))
-        })?;
-        only_keys(
-            &doc,
-            &["name", "psd", "measured", "fixed", "bounds", "constraints"],
-            file,
-            "",
-        )?;
-        let name = match doc.get("name") {
-            Some(v) => v
-                .as_str()
-                .ok_or_else(|| Error::input(file, "name", "a string"))?
-                .to_string(),
-            None => Path::new(file)
-                .file_stem()
-                .map_or("material".into(), |s| s.to_string_lossy().to_string()),
-        };
-        let psd = match doc.get("psd") {
-            None => None,
-            Some(v) => {
-                let t = table(v, file, "psd")?;
-                only_keys(t, &["sieve", "d50_mm", "sigma_ln"], file, "psd")?;
-                match (t.get("sieve"), t.get("d50_mm"), t.get("sigma_ln")) {
-                    (Some(s), None, None) => Some(PsdSpec::Sieve(PathBuf::from(
-                        s.as_str()
-                            .ok_or_else(|| Error::input(file, "psd.sieve", "a file name"))?,
-                    ))),
-                    (None, Some(d), Some(s)) => {
-                        let d50_mm = number(d, file, "psd.d50_mm")?;
-                        let sigma_ln = number(s, file, "psd.sigma_ln")?;
-                        if d50_mm <= 0.0 {
-                            return Err(Error::input(file, "psd.d50_mm", "a positive size in mm"));
-                        }
-                        if sigma_ln <= 0.0 {
-                            return Err(Error::input(file, "psd.sigma_ln", "a positive spread"));
-                        }
-                        Some(PsdSpec::LogNormal { d50_mm, sigma_ln })
-                    }
-                    _ => {
-                        return Err(Error::input(
-                            file,
-                            "psd",
-                            "either `sieve = \"file.csv\"` or both `d50_mm` and `sigma_ln`",
-                        ))
-                    }
-                }
-            }
-        };
-        let mut measured = Vec::new();
-        if let Some(v) = doc.get("measured") {
-            for (k, v) in table(v, file, "measured")? {
-                let field = format!("measured.{k}");
-                let t = table(v, file, &field)?;
-                only_keys(t, &["value", "sd"], file, &field)?;
-                let value = number(
-                    t.get("value")
-                        .ok_or_else(|| Error::input(file, &field, "a `value`"))?,
-                    file,
-                    &format!("{field}.value"),
-                )?;
-                let sd = number(
-                    t.get("sd").ok_or_else(|| {
-                        Error::input(
-                            file,
-                            &field,
-                            "an `sd` (standard deviation of the measurement)",
-                        )
-                    })?,
-                    file,
-                    &format!("{field}.sd"),
-                )?;
-                if sd <= 0.0 {
-                    return Err(Error::input(
-                        file,
-                        format!("{field}.sd"),
-                        format!("a standard deviation > 0, got {sd}"),
-                    ));
-                }
-                measured.push(Measured {
-                    response: k.clone(),
-                    value,
-                    sd,
-                });
-            }
-        }
-        if measured.is_empty() {
-            return Err(Error::input(
-                file,
-                "measured",
-                "at least one measured response, e.g. shear_angle = { value = 35.5, sd = 0.5 }",
-            ));
-        }
-        let mut fixed = Vec::new();
-        if let Some(v) = doc.get("fixed") {
-            for (k, v) in table(v, file, "fixed")? {
-                fixed.push((k.clone(), number(v, file, &format!("fixed.{k}"))?));
-            }
-        }
-        let mut bounds = Vec::new();
-        if let Some(v) = doc.get("bounds") {
-            for (k, v) in table(v, file, "bounds")? {
-                let field = format!("bounds.{k}");
-                let a = v
-                    .as_array()
-                    .filter(|a| a.len() == 2)
-                    .ok_or_else(|| Error::input(file, &field, "[min, max]"))?;
-                let (lo, hi) = (number(&a[0], file, &field)?, number(&a[1], file, &field)?);
-                if lo >= hi {
-                    return Err(Error::input(
-                        file,
-                        &field,
-                        format!("min < max, got [{lo}, {hi}]"),
-                    ));
-                }
-                if fixed.iter().any(|(n, _)| n == k) {
-                    return Err(Error::input(
-                        file,
-                        &field,
-                        format!("{k} is also in [fixed]: give it a value or a range, not both"),
-                    ));
-                }
-                bounds.push((k.clone(), [lo, hi]));
-            }
-        }
-        let mut constraints = Vec::new();
-        if let Some(v) = doc.get("constraints") {
-            let t = table(v, file, "constraints")?;
-            only_keys(t, &["expr"], file, "constraints")?;
-            if let Some(list) = t.get("expr") {
-                let list = list.as_array().ok_or_else(|| {
-                    Error::input(file, "constraints.expr", "a list of inequalities")
-                })?;
-                for (i, e) in list.iter().enumerate() {
-                    let field = format!("constraints.expr[{i}]");
-                    let s = e
-                        .as_str()
-                        .ok_or_else(|| Error::input(file, &field, "a string"))?;
-                    constraints.push(constraint(s, file, &field)?);
-                }
-            }
-        }
-        Ok(Material {
-            name,
-            source: file.to_string(),
-            psd,
-            measured,
-            fixed,
-            bounds,
-            constraints,
-        })
+        from_toml::<MaterialFile>(text, source)?.validate(source)
     }
 
     /// `(d50_mm, sigma_ln)` of the log-normal PSD, fitting sieve data if that is what was given.
@@ -431,5 +427,74 @@ expr = ["e_pw <= e_pp", "mu_pp + 0.5*mu_r_pp >= 0.2"]
                 .to_string();
             assert!(e.contains("g.toml") && e.contains(field), "{field}: {e}");
         }
+    }
+
+    #[test]
+    fn unknown_keys_and_wrong_types_name_the_path_found_and_expected() {
+        // (replace, by, field, words the message must hold)
+        let cases: [(&str, &str, &str, &[&str]); 7] = [
+            (
+                "sd = 0.5",
+                "sdd = 0.5",
+                "measured.shear_angle.sdd",
+                &["unknown key", "sd"],
+            ),
+            (
+                "mu_pw = 0.363",
+                "mu_pw = \"x\"",
+                "fixed.mu_pw",
+                &["a number", "string"],
+            ),
+            (
+                "\"mu_pp + 0.5*mu_r_pp >= 0.2\"",
+                "3",
+                "constraints.expr[1]",
+                &["string"],
+            ),
+            (
+                "[2000, 3000]",
+                "[2000, \"a\"]",
+                "bounds.rho_p[1]",
+                &["a number"],
+            ),
+            ("[2000, 3000]", "[2000]", "bounds.rho_p", &["[min, max]"]),
+            (
+                "sigma_ln = 0.26",
+                "sigma_ln = 0.26\nd90_mm = 1",
+                "psd.d90_mm",
+                &["unknown key"],
+            ),
+            (
+                "{ value = 35.53, sd = 0.5 }",
+                "35.53",
+                "measured.shear_angle",
+                &["value = 35.5"],
+            ),
+        ];
+        for (a, b, field, words) in cases {
+            let e = Material::from_toml_str(&GOOD.replace(a, b), "g.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(&format!("g.toml: {field}: ")), "{field}: {e}");
+            for w in words {
+                assert!(e.contains(w), "{field}: no \"{w}\" in {e}");
+            }
+        }
+        let e = Material::from_toml_str(&GOOD.replace("name =", "name = = "), "g.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2, column 8"), "{e}");
+    }
+
+    #[test]
+    fn keeps_file_order_and_defaults() {
+        let text = "[measured]\nz = { value = 1, sd = 1 }\na = { value = 2, sd = 1 }\n\
+                    [fixed]\nz9 = 1\nb = 2\n";
+        let m = Material::from_toml_str(text, "dir/sand.toml").unwrap();
+        assert_eq!(m.name, "sand");
+        let names: Vec<&str> = m.measured.iter().map(|r| r.response.as_str()).collect();
+        assert_eq!(names, ["z", "a"]);
+        assert_eq!(m.fixed, [("z9".to_string(), 1.0), ("b".to_string(), 2.0)]);
+        assert!(m.psd.is_none() && m.bounds.is_empty() && m.constraints.is_empty());
     }
 }

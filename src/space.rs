@@ -16,7 +16,10 @@
 
 use std::path::Path;
 
-use crate::error::{read_to_string, Error, Result};
+use serde::de::IgnoredAny;
+use serde::Deserialize;
+
+use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scale {
@@ -75,8 +78,32 @@ pub struct Space {
     pub source: String,
 }
 
-const PARAM_KEYS: &[&str] = &["unit", "min", "max", "scale", "fixed", "what"];
-const TOP_KEYS: &[&str] = &["name", "description", "parameters"];
+// The file as written. Required keys are `Option`s so that `validate` can say what a missing
+// one means; serde only refuses unknown keys and values of the wrong type.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, expecting = "a parameter-space file")]
+struct SpaceFile {
+    name: Option<String>,
+    /// Free text for the reader; any TOML value is accepted and ignored.
+    #[allow(dead_code)]
+    description: Option<IgnoredAny>,
+    parameters: Option<Entries<ParameterFile>>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "an inline table such as { unit = \"-\", min = 0.0, max = 1.0 }"
+)]
+struct ParameterFile {
+    unit: Option<String>,
+    min: Option<f64>,
+    max: Option<f64>,
+    scale: Option<String>,
+    fixed: Option<f64>,
+    what: Option<String>,
+}
 
 impl Space {
     pub fn from_file(path: &Path) -> Result<Space> {
@@ -86,53 +113,28 @@ impl Space {
 
     /// Parses a space from TOML text; `source` names the file in error messages.
     pub fn from_toml_str(text: &str, source: &str) -> Result<Space> {
-        let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            Error::input(source, "TOML syntax", e.to_string().trim_end().to_string())
+        let file: SpaceFile = from_toml(text, source)?;
+        let params = file.parameters.ok_or_else(|| {
+            Error::input(
+                source,
+                "parameters",
+                "missing; expected a [parameters] table with at least one parameter",
+            )
         })?;
-        for key in table.keys() {
-            if !TOP_KEYS.contains(&key.as_str()) {
-                return Err(Error::input(
-                    source,
-                    key.clone(),
-                    format!("unknown key; expected one of: {}", TOP_KEYS.join(", ")),
-                ));
-            }
-        }
-        let name = match table.get("name") {
-            None => None,
-            Some(toml::Value::String(s)) => Some(s.clone()),
-            Some(_) => return Err(Error::input(source, "name", "expected a string")),
-        };
-        let params = match table.get("parameters") {
-            Some(toml::Value::Table(t)) => t,
-            Some(_) => {
-                return Err(Error::input(
-                    source,
-                    "parameters",
-                    "expected a table of parameters ([parameters])",
-                ))
-            }
-            None => {
-                return Err(Error::input(
-                    source,
-                    "parameters",
-                    "missing; expected a [parameters] table with at least one parameter",
-                ))
-            }
-        };
-        if params.is_empty() {
+        if params.0.is_empty() {
             return Err(Error::input(
                 source,
                 "parameters",
                 "empty; expected at least one parameter",
             ));
         }
-        let mut parameters = Vec::with_capacity(params.len());
-        for (pname, value) in params {
-            parameters.push(parse_parameter(source, pname, value)?);
-        }
+        let parameters = params
+            .0
+            .into_iter()
+            .map(|(name, p)| p.validate(source, name))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Space {
-            name,
+            name: file.name,
             parameters,
             source: source.to_string(),
         })
@@ -183,107 +185,72 @@ impl Space {
     }
 }
 
-fn parse_parameter(source: &str, pname: &str, value: &toml::Value) -> Result<Parameter> {
-    let field = |k: &str| format!("parameters.{pname}.{k}");
-    if !is_identifier(pname) {
-        return Err(Error::input(
-            source,
-            format!("parameters.{pname}"),
-            "parameter names must start with a letter and contain only letters, digits and _",
-        ));
-    }
-    let t = value.as_table().ok_or_else(|| {
-        Error::input(
-            source,
-            format!("parameters.{pname}"),
-            "expected an inline table such as { unit = \"-\", min = 0.0, max = 1.0 }",
-        )
-    })?;
-    for key in t.keys() {
-        if !PARAM_KEYS.contains(&key.as_str()) {
+impl ParameterFile {
+    /// Everything serde cannot say: what is missing, out of range or inconsistent.
+    fn validate(self, source: &str, pname: String) -> Result<Parameter> {
+        let field = |k: &str| format!("parameters.{pname}.{k}");
+        if !is_identifier(&pname) {
             return Err(Error::input(
                 source,
-                field(key),
-                format!("unknown key; expected one of: {}", PARAM_KEYS.join(", ")),
+                format!("parameters.{pname}"),
+                "parameter names must start with a letter and contain only letters, digits and _",
             ));
         }
-    }
-    let number = |k: &str| -> Result<Option<f64>> {
-        match t.get(k) {
-            None => Ok(None),
-            Some(toml::Value::Float(f)) => Ok(Some(*f)),
-            Some(toml::Value::Integer(i)) => Ok(Some(*i as f64)),
-            Some(other) => Err(Error::input(
-                source,
-                field(k),
-                format!("expected a number, found {}", other.type_str()),
-            )),
+        let min = self
+            .min
+            .ok_or_else(|| Error::input(source, field("min"), "missing lower bound"))?;
+        let max = self
+            .max
+            .ok_or_else(|| Error::input(source, field("max"), "missing upper bound"))?;
+        for (k, v) in [("min", min), ("max", max)] {
+            if !v.is_finite() {
+                return Err(Error::input(source, field(k), "expected a finite number"));
+            }
         }
-    };
-    let string = |k: &str| -> Result<Option<String>> {
-        match t.get(k) {
-            None => Ok(None),
-            Some(toml::Value::String(s)) => Ok(Some(s.clone())),
-            Some(other) => Err(Error::input(
-                source,
-                field(k),
-                format!("expected a string, found {}", other.type_str()),
-            )),
-        }
-    };
-    let min =
-        number("min")?.ok_or_else(|| Error::input(source, field("min"), "missing lower bound"))?;
-    let max =
-        number("max")?.ok_or_else(|| Error::input(source, field("max"), "missing upper bound"))?;
-    for (k, v) in [("min", min), ("max", max)] {
-        if !v.is_finite() {
-            return Err(Error::input(source, field(k), "expected a finite number"));
-        }
-    }
-    if min >= max {
-        return Err(Error::input(
-            source,
-            field("min"),
-            format!("min ({min}) must be smaller than max ({max})"),
-        ));
-    }
-    let scale = match string("scale")?.as_deref() {
-        None | Some("linear") => Scale::Linear,
-        Some("log") => Scale::Log,
-        Some(other) => {
+        if min >= max {
             return Err(Error::input(
                 source,
-                field("scale"),
-                format!("expected \"linear\" or \"log\", found \"{other}\""),
-            ))
-        }
-    };
-    if scale == Scale::Log && min <= 0.0 {
-        return Err(Error::input(
-            source,
-            field("min"),
-            format!("log scale needs min > 0, found {min}"),
-        ));
-    }
-    let fixed = number("fixed")?;
-    if let Some(v) = fixed {
-        if !v.is_finite() || v < min || v > max {
-            return Err(Error::input(
-                source,
-                field("fixed"),
-                format!("fixed value {v} must lie within [min, max] = [{min}, {max}]"),
+                field("min"),
+                format!("min ({min}) must be smaller than max ({max})"),
             ));
         }
+        let scale = match self.scale.as_deref() {
+            None | Some("linear") => Scale::Linear,
+            Some("log") => Scale::Log,
+            Some(other) => {
+                return Err(Error::input(
+                    source,
+                    field("scale"),
+                    format!("expected \"linear\" or \"log\", found \"{other}\""),
+                ))
+            }
+        };
+        if scale == Scale::Log && min <= 0.0 {
+            return Err(Error::input(
+                source,
+                field("min"),
+                format!("log scale needs min > 0, found {min}"),
+            ));
+        }
+        if let Some(v) = self.fixed {
+            if !v.is_finite() || v < min || v > max {
+                return Err(Error::input(
+                    source,
+                    field("fixed"),
+                    format!("fixed value {v} must lie within [min, max] = [{min}, {max}]"),
+                ));
+            }
+        }
+        Ok(Parameter {
+            name: pname,
+            unit: self.unit.unwrap_or_else(|| "-".to_string()),
+            min,
+            max,
+            scale,
+            fixed: self.fixed,
+            what: self.what.unwrap_or_default(),
+        })
     }
-    Ok(Parameter {
-        name: pname.to_string(),
-        unit: string("unit")?.unwrap_or_else(|| "-".to_string()),
-        min,
-        max,
-        scale,
-        fixed,
-        what: string("what")?.unwrap_or_default(),
-    })
 }
 
 /// Parameter and response names become CSV headers and equation variables.
@@ -359,5 +326,37 @@ e_pp = { min = 0.05, max = 0.95, fixed = 0.6 }
         assert!(e.contains("params") && e.contains("unknown key"), "{e}");
         let e = err("[parameters]\na = { min = 0, max = 1");
         assert!(e.contains("bad.toml") && e.contains("TOML"), "{e}");
+    }
+
+    #[test]
+    fn wrong_types_name_the_path_found_and_expected() {
+        let e = err("[parameters]\na = { min = \"x\", max = 1 }");
+        assert!(
+            e.starts_with("bad.toml: parameters.a.min: ")
+                && e.contains("a number")
+                && e.contains("string"),
+            "{e}"
+        );
+        let e = err("[parameters]\na = 3");
+        assert!(
+            e.starts_with("bad.toml: parameters.a: ") && e.contains("inline table"),
+            "{e}"
+        );
+        let e = err("[parameters]\na = { min = 0, max = 1 }\n[parameters.b]\nmin = 0\nunits = 1");
+        assert!(
+            e.starts_with("bad.toml: parameters.b.units: unknown key"),
+            "{e}"
+        );
+        let e = err("[parameters]\n");
+        assert!(e.contains("parameters") && e.contains("empty"), "{e}");
+        let e = err("name = \"x\"");
+        assert!(e.contains("parameters") && e.contains("missing"), "{e}");
+        // A description is free text for the reader: any value is accepted.
+        let s = Space::from_toml_str(
+            "description = [1, \"two\"]\n[parameters]\nb = { min = 0, max = 1 }\na = { min = 0, max = 1 }",
+            "ok.toml",
+        )
+        .unwrap();
+        assert_eq!(s.names(), ["b", "a"]);
     }
 }

@@ -179,3 +179,28 @@ fn validate_reruns_the_dem_experiment() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("p.toml") && e.contains("missing"), "{e}");
 }
+
+#[test]
+fn calibrate_refuses_bad_material_files_naming_the_key_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let mat = dir.path().join("gravel.toml");
+    let cases = [
+        (
+            "[measured]\nshear_angle = { value = 35.5, sd = \"0.5\" }\n",
+            "gravel.toml: measured.shear_angle.sd: expected a number, found string",
+        ),
+        (
+            "[measured]\nshear_angle = { value = 35.5, sd = 0.5, unit = \"deg\" }\n",
+            "gravel.toml: measured.shear_angle.unit: unknown key; expected one of: value, sd",
+        ),
+        (
+            "[measured]\nshear_angle = { value = 35.5, sd = 0.5 }\n[constraints]\nexpr = [\"a <= b\", 2]\n",
+            "gravel.toml: constraints.expr[1]: expected a string",
+        ),
+    ];
+    for (text, want) in cases {
+        std::fs::write(&mat, text).unwrap();
+        let e = common::fails(&["calibrate", "--material", s(&mat), "--model", "none.json"]);
+        assert!(e.contains(want), "{want}: {e}");
+    }
+}

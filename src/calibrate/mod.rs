@@ -2,11 +2,13 @@
 //!
 //! [`problem`] turns a model and a material file into the search (free parameters, box,
 //! measurements, constraints); [`optimize`] finds every distinct optimum by L-BFGS from many
-//! starts and describes the solution set when the data cannot fix every parameter.
+//! starts and describes the solution set when the data cannot fix every parameter; [`session`]
+//! runs both (and the posterior) for `mbgc calibrate` and returns what it reports.
 
 pub mod bayes;
 pub mod optimize;
 pub mod problem;
+pub mod session;
 pub mod tmcmc;
 
 pub use optimize::{calibrate, Calibration, Optimum};

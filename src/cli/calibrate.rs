@@ -1,15 +1,13 @@
 //! `mbgc calibrate`: the parameters of a material from its measurements, by inverting a saved
 //! metamodel; every distinct solution, and what the data cannot decide.
 
-use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use crate::calibrate::{bayes, calibrate, Problem};
+use crate::calibrate::session::{self, Session, SessionOptions};
 use crate::error::write_atomic;
 use crate::material::Material;
-use crate::metamodel::Metamodel;
 
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
@@ -51,25 +49,40 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     if a.starts == 0 {
         anyhow::bail!("--starts: expected at least 1");
     }
-    let mut evidences = Vec::new();
-    let mut jsons = Vec::new();
+    let opts = SessionOptions {
+        starts: a.starts,
+        seed: a.seed,
+        bayes: a.bayes,
+        samples: a.samples,
+        sigma_max: a.sigma_max,
+    };
+    let mut sessions = Vec::new();
     for (i, path) in a.model.iter().enumerate() {
         if i > 0 && !a.json {
             println!();
         }
-        let (ev, json) = run_one(a, &material, path, i == 0)?;
-        evidences.push(ev);
-        jsons.push(json);
+        let s = session::run(&material, path, &opts)?;
+        let mut written = Vec::new();
+        if let Some(out) = a.out.as_ref().filter(|_| i == 0) {
+            write_atomic(out, s.calibrated_toml().as_bytes())?;
+            written.push(out.clone());
+        }
+        if let Some(dir) = &a.plot {
+            written.extend(plot(dir, path, &s)?);
+        }
+        if !a.json {
+            print_text(&s);
+            for f in &written {
+                println!("wrote {}", f.display());
+            }
+        }
+        sessions.push(s);
     }
     if a.model.len() > 1 && a.bayes {
-        let ln_z: Vec<f64> = evidences
-            .iter()
-            .map(|e| e.unwrap_or(f64::NEG_INFINITY))
-            .collect();
-        let prob = bayes::class_probabilities(&ln_z);
+        let (ln_z, prob) = session::class_probabilities(&sessions);
         if a.json {
             let v = serde_json::json!({
-                "classes": jsons,
+                "classes": sessions.iter().map(Session::json).collect::<Vec<_>>(),
                 "class_probabilities": prob,
             });
             println!("{}", serde_json::to_string_pretty(&v)?);
@@ -83,130 +96,46 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             }
         }
     } else if a.json {
-        for j in jsons {
-            println!("{}", serde_json::to_string_pretty(&j)?);
+        for s in &sessions {
+            println!("{}", serde_json::to_string_pretty(&s.json())?);
         }
     }
     Ok(())
 }
 
-/// Calibrates with one model; returns its log-evidence (with `--bayes`) and the JSON record.
-fn run_one(
-    a: &CalibrateArgs,
-    material: &Material,
-    model_path: &std::path::Path,
-    first: bool,
-) -> anyhow::Result<(Option<f64>, serde_json::Value)> {
-    let model = Metamodel::load(model_path)?;
-    let problem = Problem::new(&model, material)?;
-    let cal = calibrate(&problem, a.starts, a.seed);
-    let Some(best) = cal.optima.first() else {
-        anyhow::bail!(
-            "no start converged: the model's equations are not finite anywhere in the search box"
-        );
-    };
-    if best.violation > 1e-8 {
-        let list: Vec<&str> = problem
-            .constraints
-            .iter()
-            .map(|(c, _)| c.text.as_str())
-            .collect();
-        anyhow::bail!(
-            "{}: the constraints [{}] cannot be met inside the search box (smallest violation^2 {:.3e})",
-            material.source,
-            list.join(", "),
-            best.violation
-        );
-    }
-    let posterior = if a.bayes {
-        Some(bayes::posterior(&problem, a.samples, a.sigma_max, a.seed)?)
-    } else {
-        None
-    };
-    if let Some(path) = a.out.as_ref().filter(|_| first) {
-        let x = problem.full(&best.x);
-        let mut t = format!(
-            "# Calibrated by mbgc from {} with {}\nmaterial = {:?}\n\n[parameters]\n",
-            material.source,
-            model_path.display(),
-            material.name
-        );
-        for (n, v) in problem.names.iter().zip(&x) {
-            writeln!(t, "{n} = {v:?}")?;
-        }
-        t.push_str("\n[predicted]\n");
-        for (tg, p) in problem.targets.iter().zip(&best.predictions) {
-            writeln!(t, "{} = {p:?}", tg.name)?;
-        }
-        write_atomic(path, t.as_bytes())?;
-    }
+/// The posterior corner plot (with `--bayes`) and the solution set (when the data leave one);
+/// returns the files written.
+fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
+    let stem = model
+        .file_stem()
+        .map_or("model".into(), |s| s.to_string_lossy().to_string());
     let mut figures = Vec::new();
-    if let Some(dir) = &a.plot {
-        let stem = model_path
-            .file_stem()
-            .map_or("model".into(), |s| s.to_string_lossy().to_string());
-        let names: Vec<String> = problem.free_names().iter().map(|s| s.to_string()).collect();
-        let boxes: Vec<(f64, f64)> = problem
-            .lower
-            .iter()
-            .copied()
-            .zip(problem.upper.iter().copied())
-            .collect();
-        if let Some(post) = &posterior {
-            let mut ranges = boxes.clone();
-            let mut marks = best.x.clone();
-            if post.names.len() > names.len() {
-                ranges.push((0.0, a.sigma_max));
-                marks.push(post.parameters.last().map_or(0.0, |s| s.mean));
-            }
-            let path = dir.join(format!("{stem}_posterior.svg"));
-            crate::plot::corner::corner(
-                &path,
-                &post.names,
-                &post.draws,
-                Some(&marks),
-                Some(&ranges),
-            )?;
-            figures.push(path);
-        }
-        let good: Vec<Vec<f64>> = cal
-            .optima
-            .iter()
-            .filter(|o| o.chi2 <= best.chi2 + 1.0)
-            .map(|o| o.x.clone())
-            .collect();
-        if cal.excess_parameters > 0 && good.len() > 1 && !names.is_empty() {
-            let path = dir.join(format!("{stem}_solution_set.svg"));
-            crate::plot::corner::corner(&path, &names, &good, Some(&best.x), Some(&boxes))?;
-            figures.push(path);
-        }
+    if let (Some(post), Some(frame)) = (&s.posterior, s.posterior_frame()) {
+        let path = dir.join(format!("{stem}_posterior.svg"));
+        let (marks, ranges) = (Some(&frame.marks[..]), Some(&frame.ranges[..]));
+        crate::plot::corner::corner(&path, &post.names, &post.draws, marks, ranges)?;
+        figures.push(path);
     }
-    let json = serde_json::json!({
-        "material": material.name,
-        "model": model_path.display().to_string(),
-        "notes": problem.notes,
-        "calibration": cal,
-        "posterior": posterior,
-    });
-    let ln_z = posterior.as_ref().map(|p| p.ln_evidence);
-    if a.json {
-        return Ok((ln_z, json));
+    if let Some(good) = s.solution_set() {
+        let path = dir.join(format!("{stem}_solution_set.svg"));
+        crate::plot::corner::corner(&path, &s.free, &good, Some(&s.best().x), Some(&s.bounds))?;
+        figures.push(path);
     }
-    let names = problem.free_names();
-    println!(
-        "{} ({}) with {}",
-        material.name,
-        material.source,
-        model_path.display()
-    );
-    for n in &problem.notes {
+    Ok(figures)
+}
+
+fn print_text(s: &Session) {
+    let cal = &s.calibration;
+    let names = &s.free;
+    println!("{} ({}) with {}", s.material, s.source, s.model);
+    for n in &s.notes {
         println!("  {n}");
     }
-    for (n, v) in &material.fixed {
+    for (n, v) in &s.fixed {
         println!("  {n} = {v} fixed");
     }
-    let meas: Vec<String> = problem
-        .targets
+    let meas: Vec<String> = s
+        .measured
         .iter()
         .map(|t| format!("{} {} +- {}", t.name, t.value, t.sd))
         .collect();
@@ -224,8 +153,8 @@ fn run_one(
             .zip(&o.x)
             .map(|(n, v)| format!("{n} = {v:.4}"))
             .collect();
-        let fits: Vec<String> = problem
-            .targets
+        let fits: Vec<String> = s
+            .measured
             .iter()
             .zip(o.predictions.iter().zip(&o.residuals))
             .map(|(t, (p, r))| format!("{} {p:.4} ({r:+.2} sd)", t.name))
@@ -242,28 +171,14 @@ fn run_one(
     if cal.optima.len() > 10 {
         println!("  ... {} more (see --json)", cal.optima.len() - 10);
     }
-    let unused: Vec<&str> = names
-        .iter()
-        .copied()
-        .filter(|n| {
-            !problem
-                .targets
-                .iter()
-                .any(|t| model.responses[t.response].uses.iter().any(|u| u == n))
-        })
-        .collect();
-    if !unused.is_empty() {
+    if !s.unused.is_empty() {
         println!(
             "Not in any equation of the measured responses (any value in range fits equally): {}",
-            unused.join(", ")
+            s.unused.join(", ")
         );
     }
     if cal.excess_parameters > 0 {
-        let equal = cal
-            .optima
-            .iter()
-            .filter(|o| o.chi2 <= best.chi2 + 1.0)
-            .count();
+        let equal = s.equally_good().len();
         if equal > 1 {
             println!(
                 "{equal} of the optima are equally good points of one continuous solution set, \
@@ -274,8 +189,8 @@ fn run_one(
             "{} free parameters but {} measurements: the data fix at most {} combinations; the \
              solutions form a set of dimension >= {}.",
             names.len(),
-            problem.targets.len(),
-            problem.targets.len(),
+            s.measured.len(),
+            s.measured.len(),
             cal.excess_parameters
         );
     }
@@ -301,27 +216,20 @@ fn run_one(
             println!("  {} in [{:.4}, {:.4}]", r.name, r.min, r.max);
         }
     }
-    if let Some(post) = &posterior {
+    if let Some(post) = &s.posterior {
         println!(
             "Posterior (TMCMC, {} samples, {} stages): log evidence {:.3}",
             post.samples, post.stages, post.ln_evidence
         );
-        for s in &post.parameters {
+        for p in &post.parameters {
             println!(
                 "  {:>12}: mean {:.4}, COV {:.3}, 5 % {:.4}, 95 % {:.4}",
-                s.name, s.mean, s.cov, s.q05, s.q95
+                p.name, p.mean, p.cov, p.q05, p.q95
             );
         }
         println!("Posterior-robust predictions (mean +- sd over the posterior):");
-        for s in &post.responses {
-            println!("  {:>12}: {:.4} +- {:.4}", s.name, s.mean, s.sd);
+        for r in &post.responses {
+            println!("  {:>12}: {:.4} +- {:.4}", r.name, r.mean, r.sd);
         }
     }
-    if let Some(p) = a.out.as_ref().filter(|_| first) {
-        println!("wrote {}", p.display());
-    }
-    for f in &figures {
-        println!("wrote {}", f.display());
-    }
-    Ok((ln_z, json))
 }

@@ -188,24 +188,18 @@ fn ols(pts: &[(f64, f64)]) -> (f64, f64) {
     (slope, my - slope * mx)
 }
 
-// argmin's Nelder-Mead needs argmin-math's `vec` feature for a `Vec<f64>` parameter, which the
-// crate does not enable (argmin pulls argmin-math with `primitives` only). So the 2-D problem is
-// solved by profiling: the outer 1-D Nelder-Mead over ln(shape) minimises the SSE already
-// minimised over ln(scale) by an inner 1-D Nelder-Mead. Log parameters keep both positive.
-
-/// SSE in Q3 as a function of ln(scale) at a fixed ln(shape).
-struct ScaleCost<'a> {
+/// SSE in Q3 over `[ln scale, ln shape]`: log parameters keep both positive without bounds.
+struct LogSse<'a> {
     data: &'a SieveData,
     model: Model,
-    ln_shape: f64,
 }
 
-impl CostFunction for ScaleCost<'_> {
-    type Param = f64;
+impl CostFunction for LogSse<'_> {
+    type Param = Vec<f64>;
     type Output = f64;
 
-    fn cost(&self, ln_scale: &f64) -> std::result::Result<f64, argmin::core::Error> {
-        let c = match self.model.with_params(ln_scale.exp(), self.ln_shape.exp()) {
+    fn cost(&self, p: &Vec<f64>) -> std::result::Result<f64, argmin::core::Error> {
+        let c = match self.model.with_params(p[0].exp(), p[1].exp()) {
             Ok(d) => sse(self.data, &d),
             Err(_) => f64::INFINITY,
         };
@@ -214,65 +208,51 @@ impl CostFunction for ScaleCost<'_> {
     }
 }
 
-/// The profiled SSE: for a given ln(shape), the SSE at the best ln(scale).
-#[derive(Clone, Copy)]
-struct ShapeCost<'a> {
-    data: &'a SieveData,
-    model: Model,
-    ln_scale0: f64,
-}
-
-impl ShapeCost<'_> {
-    fn best_scale(&self, ln_shape: f64) -> std::result::Result<(f64, f64), argmin::core::Error> {
-        let inner = ScaleCost {
-            data: self.data,
-            model: self.model,
-            ln_shape,
-        };
-        nelder_mead_1d(inner, self.ln_scale0, 0.05)
-    }
-}
-
-impl CostFunction for ShapeCost<'_> {
-    type Param = f64;
-    type Output = f64;
-
-    fn cost(&self, ln_shape: &f64) -> std::result::Result<f64, argmin::core::Error> {
-        Ok(self.best_scale(*ln_shape)?.1)
-    }
-}
-
-/// Minimises a 1-D cost from `x0` with an initial simplex {x0, x0 + step}; returns (x, cost).
-fn nelder_mead_1d<C>(
-    cost: C,
-    x0: f64,
-    step: f64,
-) -> std::result::Result<(f64, f64), argmin::core::Error>
-where
-    C: CostFunction<Param = f64, Output = f64>,
-{
-    let res = Executor::new(cost, NelderMead::new(vec![x0, x0 + step]))
-        .configure(|s| s.max_iters(300))
+/// Nelder-Mead from a simplex of `x0` and one step along each axis; returns (x, cost).
+fn nelder_mead(
+    cost: LogSse<'_>,
+    x0: [f64; 2],
+    step: [f64; 2],
+) -> std::result::Result<([f64; 2], f64), argmin::core::Error> {
+    let simplex = vec![
+        x0.to_vec(),
+        vec![x0[0] + step[0], x0[1]],
+        vec![x0[0], x0[1] + step[1]],
+    ];
+    let res = Executor::new(cost, NelderMead::new(simplex))
+        .configure(|s| s.max_iters(1000))
         .run()?;
     let state = res.state();
-    let x = state.get_best_param().copied().unwrap_or(x0);
+    let x = state.get_best_param().map_or(x0, |p| [p[0], p[1]]);
     Ok((x, state.get_best_cost()))
 }
 
 fn refine(data: &SieveData, start: &Distribution) -> Result<Distribution> {
     let model = start.model();
     let [(_, scale), (_, shape)] = start.params();
-    let profile = ShapeCost {
-        data,
-        model,
-        ln_scale0: scale.ln(),
-    };
     let failed = |e: argmin::core::Error| {
         Error::invalid(format!("{}: {model} fit failed: {e}", data.source))
     };
-    let (ln_shape, _) = nelder_mead_1d(profile, shape.ln(), 0.1).map_err(failed)?;
-    let (ln_scale, _) = profile.best_scale(ln_shape).map_err(failed)?;
-    model.with_params(ln_scale.exp(), ln_shape.exp())
+    let mut x = [scale.ln(), shape.ln()];
+    let mut best = f64::INFINITY;
+    // A simplex can collapse onto a line short of the optimum (the SSE valley is long and bent
+    // in the two log parameters); restarting with a fresh, smaller simplex at the last best
+    // point costs little and stops only once a restart no longer improves the SSE.
+    let mut step = [0.05, 0.1];
+    for _ in 0..5 {
+        let (next, cost) = nelder_mead(LogSse { data, model }, x, step).map_err(failed)?;
+        if cost >= best {
+            break;
+        }
+        let gain = best - cost;
+        x = next;
+        best = cost;
+        if gain <= 1e-12 * best {
+            break;
+        }
+        step = [step[0] * 0.5, step[1] * 0.5];
+    }
+    model.with_params(x[0].exp(), x[1].exp())
 }
 
 #[cfg(test)]

@@ -1,0 +1,230 @@
+//! One calibration session: a material against one saved metamodel, from loading the model to
+//! everything `mbgc calibrate` reports (optima, solution set, posterior, the calibrated
+//! parameter file). The command line only prints and writes what [`Session`] holds.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::bayes::{self, Posterior};
+use super::optimize::{calibrate, Calibration, Optimum};
+use super::problem::Problem;
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::metamodel::Metamodel;
+
+#[derive(Clone, Debug)]
+pub struct SessionOptions {
+    /// L-BFGS starts (Sobol points of the search box); at least 1.
+    pub starts: usize,
+    pub seed: u64,
+    /// Also sample the posterior by TMCMC.
+    pub bayes: bool,
+    /// TMCMC samples per stage.
+    pub samples: usize,
+    /// Upper bound of the uniform prior of the relative model error sigma.
+    pub sigma_max: f64,
+}
+
+/// A measured response as the session matched it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    pub name: String,
+    pub value: f64,
+    pub sd: f64,
+}
+
+/// The result of one session. Plain data: it no longer borrows the model.
+#[derive(Clone, Debug)]
+pub struct Session {
+    pub material: String,
+    /// The material file.
+    pub source: String,
+    /// The model file, as given.
+    pub model: String,
+    /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
+    pub notes: Vec<String>,
+    /// The material's fixed parameters, in file order.
+    pub fixed: Vec<(String, f64)>,
+    pub measured: Vec<Measurement>,
+    /// The searched parameters and their box.
+    pub free: Vec<String>,
+    pub bounds: Vec<(f64, f64)>,
+    /// Every model input at the best optimum (fixed ones included), in model order.
+    pub best_inputs: Vec<(String, f64)>,
+    /// Distinct optima, best first (never empty).
+    pub calibration: Calibration,
+    /// Free parameters absent from every equation of the measured responses: any value in
+    /// range fits equally.
+    pub unused: Vec<String>,
+    pub posterior: Option<Posterior>,
+    /// The `sigma_max` the posterior was sampled with (the range of its `sigma` axis).
+    pub sigma_max: f64,
+}
+
+/// Axis ranges and the marked point of a corner plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub ranges: Vec<(f64, f64)>,
+    pub marks: Vec<f64>,
+}
+
+/// Calibrates `material` with the metamodel saved at `model_path`. Fails when no start
+/// converged or the best optimum still violates the material's constraints.
+pub fn run(material: &Material, model_path: &Path, opts: &SessionOptions) -> Result<Session> {
+    let model = Metamodel::load(model_path)?;
+    let problem = Problem::new(&model, material)?;
+    let cal = calibrate(&problem, opts.starts, opts.seed);
+    let Some(best) = cal.optima.first() else {
+        return Err(Error::invalid(
+            "no start converged: the model's equations are not finite anywhere in the search box",
+        ));
+    };
+    if best.violation > 1e-8 {
+        let list: Vec<&str> = problem
+            .constraints
+            .iter()
+            .map(|(c, _)| c.text.as_str())
+            .collect();
+        return Err(Error::invalid(format!(
+            "{}: the constraints [{}] cannot be met inside the search box (smallest violation^2 {:.3e})",
+            material.source,
+            list.join(", "),
+            best.violation
+        )));
+    }
+    let posterior = if opts.bayes {
+        Some(bayes::posterior(
+            &problem,
+            opts.samples,
+            opts.sigma_max,
+            opts.seed,
+        )?)
+    } else {
+        None
+    };
+    let free: Vec<String> = problem.free_names().iter().map(|s| s.to_string()).collect();
+    let unused = free
+        .iter()
+        .filter(|n| {
+            !problem
+                .targets
+                .iter()
+                .any(|t| model.responses[t.response].uses.iter().any(|u| u == *n))
+        })
+        .cloned()
+        .collect();
+    let best_inputs = problem
+        .names
+        .iter()
+        .cloned()
+        .zip(problem.full(&best.x))
+        .collect();
+    Ok(Session {
+        material: material.name.clone(),
+        source: material.source.clone(),
+        model: model_path.display().to_string(),
+        notes: problem.notes.clone(),
+        fixed: material.fixed.clone(),
+        measured: problem
+            .targets
+            .iter()
+            .map(|t| Measurement {
+                name: t.name.clone(),
+                value: t.value,
+                sd: t.sd,
+            })
+            .collect(),
+        free,
+        bounds: problem
+            .lower
+            .iter()
+            .copied()
+            .zip(problem.upper.iter().copied())
+            .collect(),
+        best_inputs,
+        calibration: cal,
+        unused,
+        posterior,
+        sigma_max: opts.sigma_max,
+    })
+}
+
+impl Session {
+    pub fn best(&self) -> &Optimum {
+        &self.calibration.optima[0]
+    }
+
+    /// The optima as good as the best (chi^2 within 1): points of one solution set when the
+    /// data cannot fix every parameter.
+    pub fn equally_good(&self) -> Vec<&Optimum> {
+        let limit = self.best().chi2 + 1.0;
+        self.calibration
+            .optima
+            .iter()
+            .filter(|o| o.chi2 <= limit)
+            .collect()
+    }
+
+    /// The equally good optima when they are worth drawing: the data leave a solution set and
+    /// the starts found more than one point of it.
+    pub fn solution_set(&self) -> Option<Vec<Vec<f64>>> {
+        let good = self.equally_good();
+        (self.calibration.excess_parameters > 0 && good.len() > 1 && !self.free.is_empty())
+            .then(|| good.iter().map(|o| o.x.clone()).collect())
+    }
+
+    /// Axes of a corner plot of the posterior: the search box with the best optimum marked,
+    /// plus `[0, sigma_max]` and the posterior mean when sigma was sampled.
+    pub fn posterior_frame(&self) -> Option<Frame> {
+        let post = self.posterior.as_ref()?;
+        let mut ranges = self.bounds.clone();
+        let mut marks = self.best().x.clone();
+        if post.names.len() > self.free.len() {
+            ranges.push((0.0, self.sigma_max));
+            marks.push(post.parameters.last().map_or(0.0, |s| s.mean));
+        }
+        Some(Frame { ranges, marks })
+    }
+
+    /// The best parameter set as the TOML file `mbgc validate` reads.
+    pub fn calibrated_toml(&self) -> String {
+        let mut t = format!(
+            "# Calibrated by mbgc from {} with {}\nmaterial = {:?}\n\n[parameters]\n",
+            self.source, self.model, self.material
+        );
+        for (n, v) in &self.best_inputs {
+            let _ = writeln!(t, "{n} = {v:?}");
+        }
+        t.push_str("\n[predicted]\n");
+        for (m, p) in self.measured.iter().zip(&self.best().predictions) {
+            let _ = writeln!(t, "{} = {p:?}", m.name);
+        }
+        t
+    }
+
+    /// The machine-readable record of `mbgc calibrate --json`.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "material": self.material,
+            "model": self.model,
+            "notes": self.notes,
+            "calibration": self.calibration,
+            "posterior": self.posterior,
+        })
+    }
+}
+
+/// Log-evidence of each session (minus infinity without a posterior) and the posterior
+/// probability of each model class under equal prior odds.
+pub fn class_probabilities(sessions: &[Session]) -> (Vec<f64>, Vec<f64>) {
+    let ln_z: Vec<f64> = sessions
+        .iter()
+        .map(|s| {
+            s.posterior
+                .as_ref()
+                .map_or(f64::NEG_INFINITY, |p| p.ln_evidence)
+        })
+        .collect();
+    let prob = bayes::class_probabilities(&ln_z);
+    (ln_z, prob)
+}
