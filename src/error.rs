@@ -60,24 +60,68 @@ pub fn read_to_string(path: &Path) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
 }
 
-/// Writes a file atomically (temporary file in the same directory, then rename), so an
-/// interrupted run never leaves a half-written result behind.
+/// Writes `contents` to `path` so that readers see the old file or the new one, never a part:
+/// a temporary file in the same directory (removed again on any error), synced, then renamed
+/// over the target. A symlink is followed to the file it names, which is replaced; a target that
+/// exists but is not a regular file (a directory, a FIFO, a device) is refused rather than
+/// replaced by a regular file.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
-    let dir = match path.parent() {
+    let target = match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => {
+            std::fs::canonicalize(path).map_err(|e| Error::io(path, e))?
+        }
+        Ok(_) => {
+            return Err(Error::invalid(format!(
+                "{}: exists and is not a regular file: expected a file path to write",
+                path.display()
+            )))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if std::fs::symlink_metadata(path).is_ok() {
+                return Err(Error::invalid(format!(
+                    "{}: is a symlink to a missing file: expected a file path to write",
+                    path.display()
+                )));
+            }
+            path.to_path_buf()
+        }
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let file_name = path
+    let file_name = target
         .file_name()
         .ok_or_else(|| Error::invalid(format!("{}: not a file path", path.display())))?;
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}",
-        file_name.to_string_lossy(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, contents).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    // Dropping the temporary file on an error path deletes it.
+    let mut tmp = tempfile::Builder::new()
+        .prefix(&format!(".{}.", file_name.to_string_lossy()))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| Error::io(dir, e))?;
+    {
+        use std::io::Write;
+        let f = tmp.as_file_mut();
+        f.write_all(contents)
+            .and_then(|()| f.sync_all())
+            .map_err(|e| Error::io(&target, e))?;
+    }
+    // The temporary file is created with mode 0600; a result file should be as readable as one
+    // written by `std::fs::write`.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let keep = std::fs::metadata(&target).map(|m| m.permissions().mode());
+        let mode = keep.unwrap_or(0o644);
+        let _ = tmp
+            .as_file()
+            .set_permissions(std::fs::Permissions::from_mode(mode));
+    }
+    tmp.persist(&target)
+        .map_err(|e| Error::io(&target, e.error))?;
+    Ok(())
 }
 
 /// Maps a csv crate error to an error naming the file and, for ragged rows, the line.
@@ -293,5 +337,92 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Entries<T> {
             }
         }
         d.deserialize_map(EntriesVisitor(PhantomData))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn leftovers(dir: &Path) -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp"))
+            .collect()
+    }
+
+    #[test]
+    fn atomic_write_replaces_a_file_and_leaves_no_temporary_behind() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("out.csv");
+        write_atomic(&p, b"one").unwrap();
+        write_atomic(&p, b"two").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"two");
+        assert!(leftovers(dir.path()).is_empty());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn atomic_write_refuses_devices_fifos_and_directories_and_follows_symlinks() {
+        use std::os::unix::fs::FileTypeExt;
+        // A device node stays a device node.
+        let e = write_atomic(Path::new("/dev/null"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        assert!(std::fs::metadata("/dev/null")
+            .unwrap()
+            .file_type()
+            .is_char_device());
+
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = write_atomic(&fifo, b"x").unwrap_err().to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+            assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+        }
+        let e = write_atomic(dir.path(), b"x").unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+
+        // A symlink to a file: the file gets the new contents, the link stays a link.
+        let real = dir.path().join("real.txt");
+        std::fs::write(&real, "old").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        // A dangling symlink is refused, not replaced.
+        let dangling = dir.path().join("dangling.txt");
+        std::os::unix::fs::symlink(dir.path().join("missing"), &dangling).unwrap();
+        assert!(write_atomic(&dangling, b"x").is_err());
+        assert!(leftovers(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn a_failed_atomic_write_leaves_nothing_behind() {
+        let dir = tempfile::tempdir().unwrap();
+        // The parent "directory" is a file: nothing can be created below it.
+        let blocker = dir.path().join("blocker");
+        std::fs::write(&blocker, "x").unwrap();
+        assert!(write_atomic(&blocker.join("out.csv"), b"x").is_err());
+        assert!(leftovers(dir.path()).is_empty());
+        assert_eq!(std::fs::read(&blocker).unwrap(), b"x");
+    }
+
+    #[test]
+    fn csv_with_a_duplicated_column_is_refused_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, "a,b,a\n1,2,3\n").unwrap();
+        let e = csv_open(&p).err().unwrap().to_string();
+        assert!(e.contains("t.csv") && e.contains("column a"), "{e}");
+        assert!(e.contains("columns 1 and 3"), "{e}");
     }
 }
