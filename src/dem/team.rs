@@ -123,3 +123,88 @@ impl Crew for SpinBarrier {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::dem::contact::ContactModel;
+    use crate::dem::step::FAIL_AT;
+    use crate::dem::walls::box_planes;
+    use crate::dem::{BlowUp, Interaction, Material, Materials, Particles, Scene, Simulation};
+    use std::time::Duration;
+
+    /// 216 spheres settling in a box: enough for a team of three.
+    fn sim() -> Simulation {
+        let mut m = Materials::new();
+        let a = m
+            .add(Material {
+                name: "g".into(),
+                youngs_modulus: 5e6,
+                poisson: 0.3,
+            })
+            .unwrap();
+        m.set_interaction(a, a, Interaction::default()).unwrap();
+        let mut p = Particles::new();
+        for i in 0..6 {
+            for j in 0..6 {
+                for k in 0..6 {
+                    let x = [i, j, k].map(|c| 0.0025 + 0.005 * c as f64);
+                    p.add(x, 0.002, 2500.0, 0).unwrap();
+                }
+            }
+        }
+        Simulation::new(Scene {
+            particles: p,
+            walls: box_planes([0.0; 3], [0.03; 3], 0),
+            materials: m,
+            model: ContactModel::default(),
+            gravity: [0.0, 0.0, -9.81],
+            dt: 2e-5,
+            skin: 5e-4,
+            domain: ([-0.01; 3], [0.04; 3]),
+            max_dt_fraction: 0.3,
+        })
+        .unwrap()
+    }
+
+    /// Runs with member `t` of `threads` panicking in step `s`; fails instead of hanging if the
+    /// others never leave their barriers.
+    fn run_failing(threads: usize, t: usize, s: u64) -> BlowUp {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut sim = sim();
+            sim.set_threads(threads);
+            FAIL_AT.with(|f| f.set(Some((t, s))));
+            let _ = tx.send(sim.run(100));
+        });
+        match rx.recv_timeout(Duration::from_secs(60)) {
+            Ok(r) => r.expect_err("the run must fail"),
+            Err(_) => panic!("the team hung after member {t} of {threads} panicked"),
+        }
+    }
+
+    #[test]
+    fn a_panicking_member_ends_the_run_with_its_message() {
+        for (threads, t, s) in [(3, 1, 7), (3, 2, 0), (2, 0, 60), (3, 0, 99)] {
+            let e = run_failing(threads, t, s);
+            let expected = format!("injected failure of member {t} in step {s}");
+            match &e {
+                BlowUp::WorkerPanic {
+                    thread, message, ..
+                } => {
+                    assert_eq!(*thread, t);
+                    assert_eq!(*message, expected);
+                }
+                other => panic!("expected a worker panic, got {other:?}"),
+            }
+            assert!(e.to_string().contains(&expected), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_team_without_failure_runs_to_the_end() {
+        let mut sim = sim();
+        sim.set_threads(3);
+        sim.run(120).unwrap();
+        assert_eq!(sim.step, 120);
+    }
+}
