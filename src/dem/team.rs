@@ -108,10 +108,13 @@ impl Crew for SpinBarrier {
                     return Err(Abandoned);
                 }
                 spins += 1;
-                if spins < 20_000 {
+                // A balanced wait is a few microseconds; past that, the member we wait for is
+                // probably descheduled (more threads than free cores), and spinning on keeps it
+                // off the core. 1000 spins is some microseconds; the earlier 20 000 cost about a
+                // millisecond per meeting with three threads on two busy cores.
+                if spins < 1_000 {
                     std::hint::spin_loop();
                 } else {
-                    // Oversubscribed machine: let the thread we wait for run.
                     std::thread::yield_now();
                 }
             }
