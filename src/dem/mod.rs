@@ -6,9 +6,11 @@
 //!   power-law damped normal models of seed 003, simplified JKR cohesion).
 //! - [`walls`]: analytic planes, rectangles, cylinders and orifice plates.
 //! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
-//! - [`sim`]: the time-step loop and blow-up checks; [`timestep`]: the Rayleigh time.
+//! - [`sim`]: a simulation, its run loop and blow-up checks ([`blowup`]); [`step`]: the
+//!   velocity-Verlet step, serial or by a thread team ([`team`]); [`timestep`]: the Rayleigh time.
 
 pub mod analysis;
+pub mod blowup;
 pub mod contact;
 pub mod experiments;
 pub mod impact;
@@ -16,14 +18,16 @@ pub mod material;
 pub mod neighbor;
 pub mod particles;
 pub mod sim;
+mod step;
 mod team;
 pub mod timestep;
 pub mod vec3;
 pub mod vtk;
 pub mod walls;
 
+pub use blowup::BlowUp;
 pub use contact::ContactModel;
 pub use material::{Interaction, Material, Materials};
 pub use particles::Particles;
-pub use sim::{BlowUp, Scene, Simulation};
+pub use sim::{Scene, Simulation};
 pub use walls::{Shape, Wall};

@@ -1,11 +1,14 @@
-//! The time-step loop: velocity Verlet with rotation (as LIGGGHTS `fix nve/sphere`), neighbour
-//! list upkeep, particle-particle and particle-wall contacts, and the checks that turn a blown-up
-//! run into an error instead of numbers.
+//! A simulation: the scene's state, the run loop (serial, or a thread team), neighbour list
+//! upkeep, particle removal, and the checks that turn a blown-up run into an error instead of
+//! numbers. The step itself is in [`super::step`].
 
-use super::contact::{Cohesion, Contact, ContactModel, History, Law, NormalForce, Rolling};
+pub use super::blowup::BlowUp;
+use super::contact::{ContactModel, History};
 use super::material::Materials;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
+use super::step::{self, Host, Params, Plan, Raw};
+use super::team;
 use super::timestep::rayleigh_time;
 use super::vec3::*;
 use super::walls::Wall;
@@ -27,72 +30,6 @@ pub struct Scene {
     pub domain: (V3, V3),
     /// Largest accepted dt as a fraction of the Rayleigh time.
     pub max_dt_fraction: f64,
-}
-
-/// Why a run was stopped.
-#[derive(Debug, Clone, PartialEq)]
-pub enum BlowUp {
-    NotFinite {
-        step: u64,
-        particle: u32,
-    },
-    LeftDomain {
-        step: u64,
-        particle: u32,
-        position: V3,
-    },
-    EnergyGrowth {
-        step: u64,
-        kinetic: f64,
-        budget: f64,
-    },
-    TooFast {
-        step: u64,
-        particle: u32,
-        speed: f64,
-    },
-}
-
-impl std::fmt::Display for BlowUp {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            BlowUp::NotFinite { step, particle } => {
-                write!(
-                    f,
-                    "step {step}: particle {particle} has a non-finite position or velocity"
-                )
-            }
-            BlowUp::LeftDomain {
-                step,
-                particle,
-                position,
-            } => {
-                write!(
-                    f,
-                    "step {step}: particle {particle} left the domain at {position:?}"
-                )
-            }
-            BlowUp::EnergyGrowth {
-                step,
-                kinetic,
-                budget,
-            } => write!(
-                f,
-                "step {step}: kinetic energy {kinetic:.3e} J exceeds all the energy the scene \
-                 started with ({budget:.3e} J: kinetic, elastic and potential down to the domain \
-                 floor); the integration is creating energy (time step too large?)"
-            ),
-            BlowUp::TooFast {
-                step,
-                particle,
-                speed,
-            } => write!(
-                f,
-                "step {step}: particle {particle} moves at {speed:.3e} m/s, beyond any speed the \
-                 scene can produce (energy is not conserved: time step too large?)"
-            ),
-        }
-    }
 }
 
 pub struct Simulation {
@@ -248,90 +185,30 @@ impl Simulation {
         self.threads
     }
 
-    /// Advances `steps` time steps, checking for blow-ups every `check_every` steps.
+    /// Advances `steps` time steps, checking for blow-ups every 50 steps and after the last.
     pub fn run(&mut self, steps: u64) -> std::result::Result<(), BlowUp> {
-        let check_every = 50;
-        if self.threads > 1 && self.particles.len() >= 64 * self.threads {
-            return super::team::run_steps(self, steps, self.threads, check_every);
+        let plan = Plan {
+            steps,
+            check_every: Some(50),
+        };
+        let model = self.model;
+        let threads = self.threads;
+        // Below some particles per thread, the barriers cost more than the split saves.
+        if threads > 1 && self.particles.len() >= 64 * threads {
+            return with_law!(model, |law| team::run(self, &law, plan, threads));
         }
-        for s in 0..steps {
-            self.advance();
-            if (s + 1) % check_every == 0 || s + 1 == steps {
-                self.check()?;
-            }
-        }
-        Ok(())
+        with_law!(model, |law| step::run_alone(self, &law, plan))
     }
 
-    /// One velocity-Verlet step.
+    /// One velocity-Verlet step, without the blow-up checks.
     pub fn advance(&mut self) {
-        let dt = self.dt;
-        let half = 0.5 * dt;
-        // One sweep: half kick, drift, displacement since the list build, and the force reset
-        // (gravity) for the coming force evaluation.
-        let mut max_disp2 = 0.0f64;
-        {
-            let g = self.gravity;
-            let p = &mut self.particles;
-            let xb = self.neighbors.x_build();
-            let have_build = xb.len() == p.len();
-            #[allow(clippy::needless_range_loop)] // one index over many parallel arrays
-            for i in 0..p.len() {
-                let a = p.inv_m[i] * half;
-                let v = &mut p.v[i];
-                v[0] += a * p.f[i][0];
-                v[1] += a * p.f[i][1];
-                v[2] += a * p.f[i][2];
-                let x = &mut p.x[i];
-                x[0] += dt * v[0];
-                x[1] += dt * v[1];
-                x[2] += dt * v[2];
-                let b = p.inv_i[i] * half;
-                let w = &mut p.w[i];
-                w[0] += b * p.t[i][0];
-                w[1] += b * p.t[i][1];
-                w[2] += b * p.t[i][2];
-                if have_build {
-                    max_disp2 = max_disp2.max(norm2(sub(*x, xb[i])));
-                }
-                p.f[i] = scale(g, p.m[i]);
-                p.t[i] = [0.0; 3];
-            }
-            if !have_build {
-                max_disp2 = f64::INFINITY;
-            }
-        }
-        let mut wall_moved = 0.0f64;
-        for (w, moved) in self.walls.iter_mut().zip(&mut self.wall_moved) {
-            if w.active && w.velocity != [0.0; 3] {
-                w.advance(dt);
-                *moved += norm(w.velocity) * dt;
-                wall_moved = wall_moved.max(*moved);
-            }
-        }
-        // A moving wall uses up the skin too: rebuild before it can reach unlisted particles.
-        let skin = self.neighbors.skin;
-        // NaN compares false, so a blown-up particle does not trigger endless rebuilds.
-        if (wall_moved > 0.25 * skin || max_disp2 > 0.25 * skin * skin) && self.positions_finite() {
-            self.rebuild_lists();
-        }
+        let plan = Plan {
+            steps: 1,
+            check_every: None,
+        };
         let model = self.model;
-        with_law!(model, |law| self.contact_forces(&law));
-        let p = &mut self.particles;
-        for i in 0..p.len() {
-            let a = p.inv_m[i] * half;
-            let v = &mut p.v[i];
-            v[0] += a * p.f[i][0];
-            v[1] += a * p.f[i][1];
-            v[2] += a * p.f[i][2];
-            let b = p.inv_i[i] * half;
-            let w = &mut p.w[i];
-            w[0] += b * p.t[i][0];
-            w[1] += b * p.t[i][1];
-            w[2] += b * p.t[i][2];
-        }
-        self.step += 1;
-        self.time += dt;
+        with_law!(model, |law| step::run_alone(self, &law, plan))
+            .expect("a step without checks cannot fail");
     }
 
     /// Rebuilds the pair list (sorting the particles) and the wall lists.
@@ -474,51 +351,7 @@ impl Simulation {
             p.t[i] = [0.0; 3];
         }
         let model = self.model;
-        with_law!(model, |law| self.contact_forces(&law));
-    }
-
-    /// Adds the contact forces (particles and walls) to the current forces (serial).
-    fn contact_forces<N: NormalForce, C: Cohesion, R: Rolling>(&mut self, law: &Law<N, C, R>) {
-        let n = self.particles.len();
-        let p = &mut self.particles;
-        let nl = &mut self.neighbors;
-        let view = P {
-            x: &p.x,
-            v: &p.v,
-            w: &p.w,
-            r: &p.r,
-            m: &p.m,
-            mat: &p.material,
-        };
-        pair_rows(
-            law,
-            &self.materials,
-            self.dt,
-            0..n,
-            &nl.start,
-            &nl.nb,
-            &mut nl.hist,
-            0,
-            view,
-            &mut p.f,
-            &mut p.t,
-        );
-        let walls = WallView {
-            walls: &self.walls,
-            lists: &self.wall_nb,
-        };
-        wall_contacts(
-            law,
-            &self.materials,
-            self.dt,
-            walls,
-            0..n,
-            0,
-            &mut self.wall_hist,
-            view,
-            &mut p.f,
-            &mut p.t,
-        );
+        with_law!(model, |law| step::add_contact_forces(self, &law));
     }
 
     pub fn kinetic_energy(&self) -> (f64, f64) {
@@ -584,145 +417,46 @@ fn inside(x: V3, (lo, hi): (V3, V3)) -> bool {
     (0..3).all(|k| x[k] >= lo[k] && x[k] <= hi[k])
 }
 
-/// Read-only particle data for the force loops.
-#[derive(Clone, Copy)]
-pub(crate) struct P<'a> {
-    pub x: &'a [V3],
-    pub v: &'a [V3],
-    pub w: &'a [V3],
-    pub r: &'a [f64],
-    pub m: &'a [f64],
-    pub mat: &'a [u16],
-}
-
-/// The walls and, per wall, the particles within reach (ascending indices).
-#[derive(Clone, Copy)]
-pub(crate) struct WallView<'a> {
-    pub walls: &'a [Wall],
-    pub lists: &'a [Vec<u32>],
-}
-
-/// Wall contacts of the particles in `range`; `wall_hist` holds all particles' wall histories.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn wall_contacts<N: NormalForce, C: Cohesion, R: Rolling>(
-    law: &Law<N, C, R>,
-    materials: &Materials,
-    dt: f64,
-    walls: WallView,
-    range: std::ops::Range<usize>,
-    hist_base: usize,
-    wall_hist: &mut [History],
-    p: P,
-    f: &mut [V3],
-    t: &mut [V3],
-) {
-    let n_walls = walls.walls.len();
-    for (wi, wall) in walls.walls.iter().enumerate() {
-        if !wall.active {
-            continue;
-        }
-        let list = &walls.lists[wi];
-        let lo = list.partition_point(|&i| (i as usize) < range.start);
-        let hi = list.partition_point(|&i| (i as usize) < range.end);
-        for &i in &list[lo..hi] {
-            let i = i as usize;
-            let ri = p.r[i];
-            let h = &mut wall_hist[i * n_walls + wi - hist_base];
-            let Some(gap) = wall.gap(p.x[i], ri) else {
-                *h = History::default();
-                continue;
-            };
-            let overlap = ri - gap.distance;
-            let area = if C::ACTIVE {
-                std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
-            } else {
-                0.0
-            };
-            let lever = ri - 0.5 * overlap;
-            let c = Contact::new(
-                gap.normal,
-                overlap,
-                ri,
-                p.m[i],
-                sub(p.v[i], wall.velocity),
-                p.w[i],
-                [0.0; 3],
-                lever,
-                0.0,
-                area,
-            );
-            let pc = materials.pair(p.mat[i], wall.material);
-            let out = law.force(&c, pc, h, dt);
-            add_assign(&mut f[i], out.force);
-            add_assign(&mut t[i], out.torque_i);
+impl Host for Simulation {
+    fn params(&self) -> Params {
+        Params {
+            dt: self.dt,
+            gravity: self.gravity,
+            skin: self.neighbors.skin,
         }
     }
-}
 
-/// Contacts of rows `rows`; `hist` starts at list entry `base`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
-    law: &Law<N, C, R>,
-    materials: &Materials,
-    dt: f64,
-    rows: std::ops::Range<usize>,
-    start: &[u32],
-    nb: &[u32],
-    hist: &mut [History],
-    base: usize,
-    p: P,
-    f: &mut [V3],
-    t: &mut [V3],
-) {
-    for i in rows {
-        let (xi, ri, mi, mati) = (p.x[i], p.r[i], p.m[i], p.mat[i]);
-        for e in start[i] as usize..start[i + 1] as usize {
-            let j = nb[e] as usize;
-            let h = &mut hist[e - base];
-            let d = sub(xi, p.x[j]);
-            let rsum = ri + p.r[j];
-            let dist2 = norm2(d);
-            if dist2 >= rsum * rsum {
-                // Most separated pairs already have no history: skip the store.
-                if h.shear[0] != 0.0 || h.shear[1] != 0.0 || h.shear[2] != 0.0 || !h.is_zero() {
-                    *h = History::default();
-                }
-                continue;
-            }
-            let rj = p.r[j];
-            let dist = dist2.sqrt();
-            let inv = 1.0 / dist;
-            let n = scale(d, inv);
-            let overlap = rsum - dist;
-            let r_eff = ri * rj / rsum;
-            let m_eff = mi * p.m[j] / (mi + p.m[j]);
-            let area = if C::ACTIVE {
-                // Area of the intersection circle of the two spheres.
-                let q = (dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) * (dist + ri + rj);
-                -std::f64::consts::PI / 4.0 * q * inv * inv
-            } else {
-                0.0
-            };
-            let c = Contact::new(
-                n,
-                overlap,
-                r_eff,
-                m_eff,
-                sub(p.v[i], p.v[j]),
-                p.w[i],
-                p.w[j],
-                ri - 0.5 * overlap,
-                rj - 0.5 * overlap,
-                area,
-            );
-            let pc = materials.pair(mati, p.mat[j]);
-            let out = law.force(&c, pc, h, dt);
-            add_assign(&mut f[i], out.force);
-            sub_assign(&mut f[j], out.force);
-            add_assign(&mut t[i], out.torque_i);
-            add_assign(&mut t[j], out.torque_j);
+    fn views(&mut self) -> Raw {
+        Raw::new(
+            &mut self.particles,
+            &mut self.neighbors,
+            &mut self.wall_hist,
+            &self.walls,
+            &self.wall_nb,
+            &self.materials,
+        )
+    }
+
+    fn move_walls(&mut self) -> f64 {
+        step::move_walls(&mut self.walls, &mut self.wall_moved, self.dt)
+    }
+
+    fn rebuild_if_finite(&mut self) {
+        if self.positions_finite() {
+            self.rebuild_lists();
         }
+    }
+
+    fn tick(&mut self) {
+        self.step += 1;
+        self.time += self.dt;
+    }
+
+    fn step_count(&self) -> u64 {
+        self.step
+    }
+
+    fn check(&self) -> std::result::Result<(), BlowUp> {
+        Simulation::check(self)
     }
 }

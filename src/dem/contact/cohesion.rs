@@ -1,6 +1,7 @@
 //! Cohesion.
 
-use super::{Cohesion, Contact};
+use super::effects::Cohesion;
+use super::kinematics::Contact;
 use crate::dem::material::PairConstants;
 
 #[derive(Debug, Clone, Copy, Default)]

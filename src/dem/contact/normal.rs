@@ -1,6 +1,7 @@
 //! Normal force models.
 
-use super::{Contact, NormalForce};
+use super::effects::NormalForce;
+use super::kinematics::Contact;
 use crate::dem::material::PairConstants;
 
 /// sqrt(5/6), from LIGGGHTS' damping coefficient.

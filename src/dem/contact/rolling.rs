@@ -1,6 +1,7 @@
 //! Rolling resistance.
 
-use super::{Contact, Rolling};
+use super::effects::Rolling;
+use super::kinematics::Contact;
 use crate::dem::material::PairConstants;
 use crate::dem::vec3::*;
 

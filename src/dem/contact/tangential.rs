@@ -1,6 +1,6 @@
 //! Tangential force: the history spring with Coulomb cap of LIGGGHTS 3.8 `tangential history`.
 
-use super::Contact;
+use super::kinematics::Contact;
 use crate::dem::material::PairConstants;
 use crate::dem::vec3::*;
 

@@ -1,0 +1,67 @@
+//! The contact law: the effects summed into the force and torques of one contact.
+
+use super::effects::{Cohesion, NormalForce, Rolling};
+use super::kinematics::{Contact, History};
+use super::tangential;
+use crate::dem::material::PairConstants;
+use crate::dem::vec3::*;
+
+/// What a contact does to its two bodies.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactOutput {
+    /// Total force on i (j gets the opposite).
+    pub force: V3,
+    pub torque_i: V3,
+    pub torque_j: V3,
+    /// Normal force magnitude (including damping and cohesion), for diagnostics.
+    pub f_n: f64,
+}
+
+/// The contact law for one combination of effects.
+#[derive(Debug, Clone, Copy)]
+pub struct Law<N, C, R> {
+    pub normal: N,
+    pub cohesion: C,
+    pub rolling: R,
+    /// Keep the normal force (before cohesion) from turning attractive, as LIGGGHTS'
+    /// `limitForce on`, with the damping re-solved so that e stays the restitution.
+    pub limit_force: bool,
+    /// Cap spring plus dashpot at mu max(F_n, 0) (LAMMPS `mindlin`) instead of LIGGGHTS' cap
+    /// on the spring alone.
+    pub strict_coulomb: bool,
+}
+
+impl<N: NormalForce, C: Cohesion, R: Rolling> Law<N, C, R> {
+    #[inline(always)]
+    pub fn force(&self, c: &Contact, p: &PairConstants, h: &mut History, dt: f64) -> ContactOutput {
+        let limited;
+        let p = if self.limit_force {
+            limited = PairConstants {
+                beta: p.beta_limited,
+                ..*p
+            };
+            &limited
+        } else {
+            p
+        };
+        let mut f_normal = self.normal.normal(c, p);
+        if self.limit_force && f_normal < 0.0 {
+            f_normal = 0.0;
+        }
+        let f_n = f_normal - self.cohesion.cohesion(c, p);
+        let f_t = tangential::mindlin_history(c, p, f_n, &mut h.shear, dt, self.strict_coulomb);
+        // Torque of the tangential force: lever arm -c_i n for i, +c_j n for j (force -F_t).
+        let nxf = cross(c.n, f_t);
+        let mut torque_i = scale(nxf, -c.lever_i);
+        let mut torque_j = scale(nxf, -c.lever_j);
+        let m = self.rolling.torque(c, p, f_n, &mut h.rolling, dt);
+        sub_assign(&mut torque_i, m);
+        add_assign(&mut torque_j, m);
+        ContactOutput {
+            force: add(scale(c.n, f_n), f_t),
+            torque_i,
+            torque_j,
+            f_n,
+        }
+    }
+}

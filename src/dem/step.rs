@@ -1,0 +1,774 @@
+//! The velocity-Verlet step with rotation (as LIGGGHTS `fix nve/sphere`), written once for the
+//! serial path and the thread team.
+//!
+//! A run is T members stepping together over a [`Board`]; member t owns particles
+//! `n t / T .. n (t + 1) / T`, and member 0, the leader, also does the work that cannot be split.
+//! The serial path is one member whose meetings are no-ops ([`Alone`]); the team
+//! ([`super::team`]) runs T threads whose meetings are spin barriers. A step, for member t:
+//!
+//! 1. half kick and drift of its particles, their largest displacement since the list build, and
+//!    their forces reset to gravity; the leader moves the walls and counts the step. Meet. If the
+//!    skin is used up, the leader rebuilds the lists (reordering the particles) and publishes the
+//!    new array views while the others wait at a second meeting.
+//! 2. contacts of its rows of the half list (rows balanced by list entries) and the wall
+//!    contacts of its particles. The leader accumulates into the particle forces, the others into
+//!    their own buffers, which they clear only from the lowest index they can write. Meet.
+//! 3. the buffers added into its particles' forces, and the second half kick. No meeting: the
+//!    next step's first phase touches only the member's own particles.
+//!
+//! Every `check_every` steps the members meet, the leader looks for a blow-up, and they meet
+//! again so that all stop at the same step.
+//!
+//! With one member this is the serial loop, operation for operation. With more, only the order
+//! of the force sums differs (a particle's contacts are split between the leader's array and the
+//! buffers, gathered in phase 3), so results differ from the serial path by round-off only.
+
+use std::cell::UnsafeCell;
+use std::marker::PhantomData;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use super::blowup::BlowUp;
+use super::contact::{Cohesion, Contact, History, Law, NormalForce, Rolling};
+use super::material::Materials;
+use super::neighbor::NeighborList;
+use super::particles::Particles;
+use super::vec3::*;
+use super::walls::Wall;
+
+/// The simulation as the step sees it. Only the leader calls these, while the other members
+/// wait at a meeting or work on their own particles through a [`Raw`] view.
+pub(crate) trait Host {
+    fn params(&self) -> Params;
+    /// Views of the arrays, valid until the next rebuild.
+    fn views(&mut self) -> Raw;
+    /// Advances the moving walls by one step; returns how far the farthest-moved wall has gone
+    /// since the last list build.
+    fn move_walls(&mut self) -> f64;
+    /// Rebuilds the lists, unless a position is not finite: a blown-up particle must not trigger
+    /// a rebuild every step (the check will stop the run).
+    fn rebuild_if_finite(&mut self);
+    /// Counts one more step (and its time).
+    fn tick(&mut self);
+    fn step_count(&self) -> u64;
+    fn check(&self) -> Result<(), BlowUp>;
+}
+
+#[derive(Clone, Copy)]
+pub(crate) struct Params {
+    pub dt: f64,
+    pub gravity: V3,
+    pub skin: f64,
+}
+
+#[derive(Clone, Copy)]
+pub(crate) struct Plan {
+    pub steps: u64,
+    /// Blow-up checks every so many steps and after the last one; none if `None`.
+    pub check_every: Option<u64>,
+}
+
+/// A meeting point of the members of a run.
+pub(crate) trait Crew: Sync {
+    /// Returns when every member has arrived, or with [`Abandoned`] if a member failed and will
+    /// never arrive.
+    fn meet(&self) -> Result<(), Abandoned>;
+}
+
+/// The run is being abandoned: a member failed.
+#[derive(Debug)]
+pub(crate) struct Abandoned;
+
+/// The serial path: a crew of one, who never waits.
+pub(crate) struct Alone;
+
+impl Crew for Alone {
+    #[inline(always)]
+    fn meet(&self) -> Result<(), Abandoned> {
+        Ok(())
+    }
+}
+
+/// Moves the walls with a velocity by one step; returns the largest distance a wall has moved
+/// since the last list build.
+pub(crate) fn move_walls(walls: &mut [Wall], moved: &mut [f64], dt: f64) -> f64 {
+    let mut farthest = 0.0f64;
+    for (w, m) in walls.iter_mut().zip(moved) {
+        if w.active && w.velocity != [0.0; 3] {
+            w.advance(dt);
+            *m += norm(w.velocity) * dt;
+            farthest = farthest.max(*m);
+        }
+    }
+    farthest
+}
+
+/// Raw views of the simulation's arrays, republished by the leader after every rebuild (which
+/// reorders the particles and may move the arrays).
+#[derive(Clone, Copy)]
+pub(crate) struct Raw {
+    n: usize,
+    x: *mut V3,
+    v: *mut V3,
+    w: *mut V3,
+    f: *mut V3,
+    t: *mut V3,
+    r: *const f64,
+    m: *const f64,
+    inv_m: *const f64,
+    inv_i: *const f64,
+    mat: *const u16,
+    /// Positions at the last list build; null if there is no list for these particles.
+    x_build: *const V3,
+    start: *const u32,
+    nb: *const u32,
+    hist: *mut History,
+    entries: usize,
+    wall_hist: *mut History,
+    walls: *const Wall,
+    n_walls: usize,
+    wall_nb: *const Vec<u32>,
+    materials: *const Materials,
+}
+
+impl Raw {
+    pub(crate) fn new(
+        p: &mut Particles,
+        nl: &mut NeighborList,
+        wall_hist: &mut [History],
+        walls: &[Wall],
+        wall_nb: &[Vec<u32>],
+        materials: &Materials,
+    ) -> Raw {
+        let n = p.len();
+        // The force loops index all of these by particle, list entry or (particle, wall) without
+        // bounds checks.
+        for len in [
+            p.v.len(),
+            p.w.len(),
+            p.f.len(),
+            p.t.len(),
+            p.r.len(),
+            p.m.len(),
+        ] {
+            debug_assert_eq!(len, n, "particle arrays of unequal length");
+        }
+        for len in [p.inv_m.len(), p.inv_i.len(), p.material.len()] {
+            debug_assert_eq!(len, n, "particle arrays of unequal length");
+        }
+        debug_assert_eq!(
+            nl.start.len(),
+            n + 1,
+            "one row start per particle, plus the end"
+        );
+        debug_assert_eq!(
+            nl.start[n] as usize,
+            nl.nb.len(),
+            "rows end at the last entry"
+        );
+        debug_assert_eq!(nl.hist.len(), nl.nb.len(), "one history per list entry");
+        debug_assert_eq!(
+            wall_hist.len(),
+            n * walls.len(),
+            "wall history per particle"
+        );
+        debug_assert_eq!(wall_nb.len(), walls.len(), "one list per wall");
+        let xb = nl.x_build();
+        Raw {
+            n,
+            x: p.x.as_mut_ptr(),
+            v: p.v.as_mut_ptr(),
+            w: p.w.as_mut_ptr(),
+            f: p.f.as_mut_ptr(),
+            t: p.t.as_mut_ptr(),
+            r: p.r.as_ptr(),
+            m: p.m.as_ptr(),
+            inv_m: p.inv_m.as_ptr(),
+            inv_i: p.inv_i.as_ptr(),
+            mat: p.material.as_ptr(),
+            x_build: if xb.len() == n {
+                xb.as_ptr()
+            } else {
+                std::ptr::null()
+            },
+            start: nl.start.as_ptr(),
+            nb: nl.nb.as_ptr(),
+            hist: nl.hist.as_mut_ptr(),
+            entries: nl.nb.len(),
+            wall_hist: wall_hist.as_mut_ptr(),
+            walls: walls.as_ptr(),
+            n_walls: walls.len(),
+            wall_nb: wall_nb.as_ptr(),
+            materials,
+        }
+    }
+
+    /// Half kick and drift of the particles in `own`, forces reset to gravity; returns their
+    /// largest squared displacement since the list build (infinite without a list).
+    ///
+    /// # Safety
+    /// The views are current and nobody else accesses these particles meanwhile.
+    #[inline(always)]
+    unsafe fn kick_drift(&self, own: Range<usize>, dt: f64, g: V3) -> f64 {
+        let half = 0.5 * dt;
+        let (lo, len) = (own.start, own.len());
+        let x = std::slice::from_raw_parts_mut(self.x.add(lo), len);
+        let v = std::slice::from_raw_parts_mut(self.v.add(lo), len);
+        let w = std::slice::from_raw_parts_mut(self.w.add(lo), len);
+        let f = std::slice::from_raw_parts_mut(self.f.add(lo), len);
+        let t = std::slice::from_raw_parts_mut(self.t.add(lo), len);
+        let m = std::slice::from_raw_parts(self.m.add(lo), len);
+        let inv_m = std::slice::from_raw_parts(self.inv_m.add(lo), len);
+        let inv_i = std::slice::from_raw_parts(self.inv_i.add(lo), len);
+        let xb = if self.x_build.is_null() {
+            None
+        } else {
+            Some(std::slice::from_raw_parts(self.x_build.add(lo), len))
+        };
+        let mut max_disp2 = 0.0f64;
+        for k in 0..len {
+            let a = inv_m[k] * half;
+            let vk = &mut v[k];
+            vk[0] += a * f[k][0];
+            vk[1] += a * f[k][1];
+            vk[2] += a * f[k][2];
+            let xk = &mut x[k];
+            xk[0] += dt * vk[0];
+            xk[1] += dt * vk[1];
+            xk[2] += dt * vk[2];
+            let b = inv_i[k] * half;
+            let wk = &mut w[k];
+            wk[0] += b * t[k][0];
+            wk[1] += b * t[k][1];
+            wk[2] += b * t[k][2];
+            if let Some(xb) = xb {
+                max_disp2 = max_disp2.max(norm2(sub(*xk, xb[k])));
+            }
+            // Forces restart from gravity; the contacts accumulate onto them in phase 2.
+            f[k] = scale(g, m[k]);
+            t[k] = [0.0; 3];
+        }
+        if xb.is_none() {
+            max_disp2 = f64::INFINITY;
+        }
+        max_disp2
+    }
+
+    /// Contacts of `rows` of the half list and wall contacts of the particles in `own`, added
+    /// into `f_out` and `t_out` (indexed by particle).
+    ///
+    /// # Safety
+    /// The views are current; nobody writes positions, velocities or properties meanwhile, nor
+    /// the histories of these rows and of these particles' wall contacts.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    unsafe fn contacts<N: NormalForce, C: Cohesion, R: Rolling>(
+        &self,
+        law: &Law<N, C, R>,
+        dt: f64,
+        rows: Range<usize>,
+        own: Range<usize>,
+        f_out: &mut [V3],
+        t_out: &mut [V3],
+    ) {
+        let n = self.n;
+        let view = P {
+            x: std::slice::from_raw_parts(self.x, n),
+            v: std::slice::from_raw_parts(self.v, n),
+            w: std::slice::from_raw_parts(self.w, n),
+            r: std::slice::from_raw_parts(self.r, n),
+            m: std::slice::from_raw_parts(self.m, n),
+            mat: std::slice::from_raw_parts(self.mat, n),
+        };
+        let materials = &*self.materials;
+        let start = std::slice::from_raw_parts(self.start, n + 1);
+        let nb = std::slice::from_raw_parts(self.nb, self.entries);
+        let (e0, e1) = (start[rows.start] as usize, start[rows.end] as usize);
+        let hist = std::slice::from_raw_parts_mut(self.hist.add(e0), e1 - e0);
+        pair_rows(
+            law, materials, dt, rows, start, nb, hist, e0, view, f_out, t_out,
+        );
+        let n_walls = self.n_walls;
+        if n_walls > 0 {
+            let wh = std::slice::from_raw_parts_mut(
+                self.wall_hist.add(own.start * n_walls),
+                own.len() * n_walls,
+            );
+            let walls = WallView {
+                walls: std::slice::from_raw_parts(self.walls, n_walls),
+                lists: std::slice::from_raw_parts(self.wall_nb, n_walls),
+            };
+            wall_contacts(
+                law,
+                materials,
+                dt,
+                walls,
+                own.clone(),
+                own.start * n_walls,
+                wh,
+                view,
+                f_out,
+                t_out,
+            );
+        }
+    }
+}
+
+/// Adds every contact force (pairs, then walls) to the current forces.
+pub(crate) fn add_contact_forces<H: Host, N: NormalForce, C: Cohesion, R: Rolling>(
+    host: &mut H,
+    law: &Law<N, C, R>,
+) {
+    let dt = host.params().dt;
+    let raw = host.views();
+    let n = raw.n;
+    // SAFETY: `host` is borrowed exclusively, so the views are current and ours alone.
+    unsafe {
+        let f = std::slice::from_raw_parts_mut(raw.f, n);
+        let t = std::slice::from_raw_parts_mut(raw.t, n);
+        raw.contacts(law, dt, 0..n, 0..n, f, t);
+    }
+}
+
+/// Runs `plan` with one member: the serial path.
+pub(crate) fn run_alone<H: Host, N: NormalForce, C: Cohesion, R: Rolling>(
+    host: &mut H,
+    law: &Law<N, C, R>,
+    plan: Plan,
+) -> Result<(), BlowUp> {
+    let board = Board::new(host, law, plan, 1);
+    // Alone never abandons.
+    let _ = board.member(0, &Alone);
+    board.into_failure()
+}
+
+/// What members 1..T keep on the board.
+struct Slot {
+    /// Largest squared displacement of its particles since the list build (f64 bits).
+    disp: AtomicU64,
+    /// First row of the half list it handles (its last is the next member's first).
+    row_start: UnsafeCell<usize>,
+    /// Lowest particle index it can write in phase 2: a row i only touches j > i, and walls
+    /// touch its own particles. Its buffers are valid from there on.
+    low: UnsafeCell<usize>,
+    /// Force and torque buffer.
+    buf: UnsafeCell<(Vec<V3>, Vec<V3>)>,
+}
+
+/// The state the members of a run share.
+pub(crate) struct Board<'a, H, N, C, R> {
+    host: *mut H,
+    law: &'a Law<N, C, R>,
+    params: Params,
+    plan: Plan,
+    members: usize,
+    n: usize,
+    raw: UnsafeCell<Raw>,
+    lead_disp: AtomicU64,
+    wall_moved: AtomicU64,
+    /// Members 1..T; empty on the serial path, which so allocates nothing per call.
+    others: Vec<Slot>,
+    /// Set by the leader when a check failed; everybody stops at the same step.
+    abort: AtomicBool,
+    failure: UnsafeCell<Option<BlowUp>>,
+    #[cfg(test)]
+    fail_at: Option<(usize, u64)>,
+    _host: PhantomData<&'a mut H>,
+}
+
+// SAFETY: every access through the raw pointers and cells follows the phase discipline of the
+// module documentation: within a phase, members write disjoint ranges (their particles, their
+// rows, their buffer) and read only data nobody writes in that phase; only the leader touches the
+// host, while the others wait or work on their own particles; the meetings order the phases.
+unsafe impl<H: Send, N: Sync, C: Sync, R: Sync> Sync for Board<'_, H, N, C, R> {}
+
+#[cfg(test)]
+thread_local! {
+    /// Test hook: the next run started on this thread makes member t panic in step s (counted
+    /// from the run's start).
+    pub(crate) static FAIL_AT: std::cell::Cell<Option<(usize, u64)>> =
+        const { std::cell::Cell::new(None) };
+}
+
+impl<'a, H: Host, N: NormalForce, C: Cohesion, R: Rolling> Board<'a, H, N, C, R> {
+    pub(crate) fn new(host: &'a mut H, law: &'a Law<N, C, R>, plan: Plan, members: usize) -> Self {
+        let params = host.params();
+        let raw = host.views();
+        let n = raw.n;
+        let others = (1..members)
+            .map(|_| Slot {
+                disp: AtomicU64::new(0),
+                row_start: UnsafeCell::new(0),
+                low: UnsafeCell::new(0),
+                buf: UnsafeCell::new((vec![[0.0; 3]; n], vec![[0.0; 3]; n])),
+            })
+            .collect();
+        let board = Board {
+            host,
+            law,
+            params,
+            plan,
+            members,
+            n,
+            raw: UnsafeCell::new(raw),
+            lead_disp: AtomicU64::new(0),
+            wall_moved: AtomicU64::new(0),
+            others,
+            abort: AtomicBool::new(false),
+            failure: UnsafeCell::new(None),
+            #[cfg(test)]
+            fail_at: FAIL_AT.with(|f| f.take()),
+            _host: PhantomData,
+        };
+        // SAFETY: nobody else sees the board yet.
+        unsafe { board.split_rows() };
+        board
+    }
+
+    /// The particles member `t` owns; fixed for the run (a rebuild reorders, never adds).
+    fn part(&self, t: usize) -> Range<usize> {
+        self.n * t / self.members..self.n * (t + 1) / self.members
+    }
+
+    /// Splits the rows of the current list so that each member gets about the same number of
+    /// entries, and sets the members' lowest written indices.
+    ///
+    /// # Safety
+    /// Only the leader, while the others wait (or before they start).
+    unsafe fn split_rows(&self) {
+        let raw = *self.raw.get();
+        let n = raw.n;
+        debug_assert_eq!(n, self.n, "a rebuild keeps the particle count");
+        let start = std::slice::from_raw_parts(raw.start, n + 1);
+        let total = start[n] as usize;
+        let mut prev = 0;
+        for (k, slot) in self.others.iter().enumerate() {
+            let c = k + 1;
+            let target = (total * c / self.members) as u32;
+            let row = start.partition_point(|&s| s < target).min(n).max(prev);
+            *slot.row_start.get() = row;
+            *slot.low.get() = row.min(self.part(c).start);
+            prev = row;
+        }
+    }
+
+    /// Rows of the half list member `t` handles.
+    ///
+    /// # Safety
+    /// Not while the leader splits the rows.
+    unsafe fn rows(&self, t: usize) -> Range<usize> {
+        let first = if t == 0 {
+            0
+        } else {
+            *self.others[t - 1].row_start.get()
+        };
+        let end = match self.others.get(t) {
+            Some(next) => *next.row_start.get(),
+            None => self.n,
+        };
+        // The buffers' clearing and the entry ranges of the histories rely on ordered rows.
+        debug_assert!(
+            first <= end && end <= self.n,
+            "rows {first}..{end} of {}",
+            self.n
+        );
+        first..end
+    }
+
+    /// Member `t`'s share of the run; returns early if the run is abandoned or a check failed.
+    pub(crate) fn member<K: Crew>(&self, t: usize, crew: &K) -> Result<(), Abandoned> {
+        let own = self.part(t);
+        let Params { dt, gravity, skin } = self.params;
+        let lim2 = 0.25 * skin * skin;
+        let steps = self.plan.steps;
+        for s in 0..steps {
+            // Phase 1.
+            // SAFETY: own particles only; the leader alone touches the host and the walls.
+            unsafe {
+                let raw = *self.raw.get();
+                let md = raw.kick_drift(own.clone(), dt, gravity);
+                if t == 0 {
+                    self.lead_disp.store(md.to_bits(), Ordering::Relaxed);
+                    let host = &mut *self.host;
+                    let moved = host.move_walls();
+                    self.wall_moved.store(moved.to_bits(), Ordering::Relaxed);
+                    host.tick();
+                } else {
+                    self.others[t - 1]
+                        .disp
+                        .store(md.to_bits(), Ordering::Relaxed);
+                }
+            }
+            crew.meet()?;
+            let max_disp2 = self
+                .others
+                .iter()
+                .map(|o| &o.disp)
+                .chain([&self.lead_disp])
+                .map(|d| f64::from_bits(d.load(Ordering::Relaxed)))
+                .fold(0.0, f64::max);
+            let wall_moved = f64::from_bits(self.wall_moved.load(Ordering::Relaxed));
+            // A moving wall uses up the skin too: rebuild before it can reach unlisted particles.
+            // NaN compares false, so a blown-up particle does not trigger endless rebuilds.
+            if wall_moved > 0.25 * skin || max_disp2 > lim2 {
+                if t == 0 {
+                    // SAFETY: the others wait at the meeting below and hold no references.
+                    unsafe {
+                        let host = &mut *self.host;
+                        host.rebuild_if_finite();
+                        *self.raw.get() = host.views();
+                        self.split_rows();
+                    }
+                }
+                crew.meet()?;
+            }
+
+            #[cfg(test)]
+            if self.fail_at == Some((t, s)) {
+                panic!("injected failure of member {t} in step {s}");
+            }
+
+            // Phase 2.
+            // SAFETY: positions, velocities and properties are only read in this phase; each
+            // member writes its own force target, its rows' histories and its particles' wall
+            // histories.
+            unsafe {
+                let raw = *self.raw.get();
+                let n = raw.n;
+                let (f_out, t_out): (&mut [V3], &mut [V3]) = if t == 0 {
+                    (
+                        std::slice::from_raw_parts_mut(raw.f, n),
+                        std::slice::from_raw_parts_mut(raw.t, n),
+                    )
+                } else {
+                    let slot = &self.others[t - 1];
+                    let lo = *slot.low.get();
+                    let b = &mut *slot.buf.get();
+                    debug_assert!(b.0.len() == n && b.1.len() == n, "buffers sized to n");
+                    b.0[lo..].iter_mut().for_each(|x| *x = [0.0; 3]);
+                    b.1[lo..].iter_mut().for_each(|x| *x = [0.0; 3]);
+                    (&mut b.0[..], &mut b.1[..])
+                };
+                raw.contacts(self.law, dt, self.rows(t), own.clone(), f_out, t_out);
+            }
+            crew.meet()?;
+
+            // Phase 3.
+            // SAFETY: own particles; the buffers are only read until every member has passed
+            // the next step's first meeting.
+            unsafe { self.gather_and_kick(own.clone(), dt) };
+
+            if let Some(every) = self.plan.check_every {
+                let done = s + 1;
+                if done % every == 0 || done == steps {
+                    crew.meet()?;
+                    if t == 0 {
+                        // SAFETY: the others wait at the meeting below.
+                        unsafe {
+                            if let Err(b) = (*self.host).check() {
+                                *self.failure.get() = Some(b);
+                                self.abort.store(true, Ordering::Relaxed);
+                            }
+                        }
+                    }
+                    crew.meet()?;
+                    if self.abort.load(Ordering::Relaxed) {
+                        return Ok(());
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the other members' buffers into the forces of `own` and applies the second half kick.
+    ///
+    /// # Safety
+    /// As phase 3 of the module documentation.
+    #[inline(always)]
+    unsafe fn gather_and_kick(&self, own: Range<usize>, dt: f64) {
+        let half = 0.5 * dt;
+        let raw = *self.raw.get();
+        for i in own {
+            let f = &mut *raw.f.add(i);
+            let tq = &mut *raw.t.add(i);
+            for slot in &self.others {
+                if i >= *slot.low.get() {
+                    let b = &*slot.buf.get();
+                    add_assign(f, b.0[i]);
+                    add_assign(tq, b.1[i]);
+                }
+            }
+            let a = *raw.inv_m.add(i) * half;
+            let v = &mut *raw.v.add(i);
+            v[0] += a * f[0];
+            v[1] += a * f[1];
+            v[2] += a * f[2];
+            let b = *raw.inv_i.add(i) * half;
+            let w = &mut *raw.w.add(i);
+            w[0] += b * tq[0];
+            w[1] += b * tq[1];
+            w[2] += b * tq[2];
+        }
+    }
+
+    /// The failed check that stopped the run, if any.
+    pub(crate) fn into_failure(self) -> Result<(), BlowUp> {
+        match self.failure.into_inner() {
+            Some(b) => Err(b),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Read-only particle data for the force loops.
+#[derive(Clone, Copy)]
+struct P<'a> {
+    x: &'a [V3],
+    v: &'a [V3],
+    w: &'a [V3],
+    r: &'a [f64],
+    m: &'a [f64],
+    mat: &'a [u16],
+}
+
+/// The walls and, per wall, the particles within reach (ascending indices).
+#[derive(Clone, Copy)]
+struct WallView<'a> {
+    walls: &'a [Wall],
+    lists: &'a [Vec<u32>],
+}
+
+/// Wall contacts of the particles in `range`; `wall_hist` holds the wall histories from
+/// (particle, wall) entry `hist_base` on.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn wall_contacts<N: NormalForce, C: Cohesion, R: Rolling>(
+    law: &Law<N, C, R>,
+    materials: &Materials,
+    dt: f64,
+    walls: WallView,
+    range: Range<usize>,
+    hist_base: usize,
+    wall_hist: &mut [History],
+    p: P,
+    f: &mut [V3],
+    t: &mut [V3],
+) {
+    let n_walls = walls.walls.len();
+    for (wi, wall) in walls.walls.iter().enumerate() {
+        if !wall.active {
+            continue;
+        }
+        let list = &walls.lists[wi];
+        // The binary searches below find a member's particles only in an ascending list.
+        debug_assert!(
+            list.windows(2).all(|w| w[0] < w[1]),
+            "wall list {wi} not ascending"
+        );
+        let lo = list.partition_point(|&i| (i as usize) < range.start);
+        let hi = list.partition_point(|&i| (i as usize) < range.end);
+        for &i in &list[lo..hi] {
+            let i = i as usize;
+            let ri = p.r[i];
+            let h = &mut wall_hist[i * n_walls + wi - hist_base];
+            let Some(gap) = wall.gap(p.x[i], ri) else {
+                *h = History::default();
+                continue;
+            };
+            let overlap = ri - gap.distance;
+            let area = if C::ACTIVE {
+                std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
+            } else {
+                0.0
+            };
+            let lever = ri - 0.5 * overlap;
+            let c = Contact::new(
+                gap.normal,
+                overlap,
+                ri,
+                p.m[i],
+                sub(p.v[i], wall.velocity),
+                p.w[i],
+                [0.0; 3],
+                lever,
+                0.0,
+                area,
+            );
+            let pc = materials.pair(p.mat[i], wall.material);
+            let out = law.force(&c, pc, h, dt);
+            add_assign(&mut f[i], out.force);
+            add_assign(&mut t[i], out.torque_i);
+        }
+    }
+}
+
+/// Contacts of rows `rows`; `hist` starts at list entry `base`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
+    law: &Law<N, C, R>,
+    materials: &Materials,
+    dt: f64,
+    rows: Range<usize>,
+    start: &[u32],
+    nb: &[u32],
+    hist: &mut [History],
+    base: usize,
+    p: P,
+    f: &mut [V3],
+    t: &mut [V3],
+) {
+    for i in rows {
+        let (xi, ri, mi, mati) = (p.x[i], p.r[i], p.m[i], p.mat[i]);
+        debug_assert!(start[i] <= start[i + 1], "row starts ascending");
+        for e in start[i] as usize..start[i + 1] as usize {
+            let j = nb[e] as usize;
+            // A half list: the team's buffers are cleared only from a member's first row on.
+            debug_assert!(j > i, "entry {e}: {i} -> {j} is not a half-list entry");
+            let h = &mut hist[e - base];
+            let d = sub(xi, p.x[j]);
+            let rsum = ri + p.r[j];
+            let dist2 = norm2(d);
+            if dist2 >= rsum * rsum {
+                // Most separated pairs already have no history: skip the store.
+                if h.shear[0] != 0.0 || h.shear[1] != 0.0 || h.shear[2] != 0.0 || !h.is_zero() {
+                    *h = History::default();
+                }
+                continue;
+            }
+            let rj = p.r[j];
+            let dist = dist2.sqrt();
+            let inv = 1.0 / dist;
+            let n = scale(d, inv);
+            let overlap = rsum - dist;
+            let r_eff = ri * rj / rsum;
+            let m_eff = mi * p.m[j] / (mi + p.m[j]);
+            let area = if C::ACTIVE {
+                // Area of the intersection circle of the two spheres.
+                let q = (dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) * (dist + ri + rj);
+                -std::f64::consts::PI / 4.0 * q * inv * inv
+            } else {
+                0.0
+            };
+            let c = Contact::new(
+                n,
+                overlap,
+                r_eff,
+                m_eff,
+                sub(p.v[i], p.v[j]),
+                p.w[i],
+                p.w[j],
+                ri - 0.5 * overlap,
+                rj - 0.5 * overlap,
+                area,
+            );
+            let pc = materials.pair(mati, p.mat[j]);
+            let out = law.force(&c, pc, h, dt);
+            add_assign(&mut f[i], out.force);
+            sub_assign(&mut f[j], out.force);
+            add_assign(&mut t[i], out.torque_i);
+            add_assign(&mut t[j], out.torque_j);
+        }
+    }
+}
