@@ -128,6 +128,8 @@ fn tokens(text: &str) -> Vec<Tok> {
                 i += 1;
             }
             out.push(Tok::Ident(c[start..i].iter().collect()));
+        } else if ch.is_whitespace() {
+            i += 1;
         } else if ch == ':' && c.get(i + 1) == Some(&':') {
             out.push(Tok::Sep);
             i += 2;

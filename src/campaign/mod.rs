@@ -15,9 +15,6 @@ pub mod merge;
 pub mod plan;
 pub mod registry;
 pub mod runner;
-#[cfg(any(test, feature = "stand-ins"))]
-#[path = "../../tests/stand_ins/sleep_test.rs"]
-pub(crate) mod sleep_test;
 pub mod status;
 pub mod table;
 

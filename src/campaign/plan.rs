@@ -244,7 +244,7 @@ impl Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::sleep_test::SleepTest;
+    use crate::campaign::registry::sleep_test::SleepTest;
 
     #[test]
     fn shard_parsing_accepts_k_of_n_and_refuses_the_rest_naming_the_option() {

@@ -41,10 +41,15 @@ const EXPERIMENTS: &[(&str, Constructor)] = &[
     }),
 ];
 
+/// The test stand-in experiment, from `tests/stand_ins/`.
+#[cfg(any(test, feature = "stand-ins"))]
+#[path = "../../tests/stand_ins/sleep_test.rs"]
+pub(crate) mod sleep_test;
+
 /// Test stand-ins, compiled only into test builds (`stand-ins` feature, see Cargo.toml).
 #[cfg(feature = "stand-ins")]
 const STAND_INS: &[(&str, Constructor)] =
-    &[("sleep-test", |_| Ok(Box::new(super::sleep_test::SleepTest)))];
+    &[("sleep-test", |_| Ok(Box::new(sleep_test::SleepTest)))];
 #[cfg(not(feature = "stand-ins"))]
 const STAND_INS: &[(&str, Constructor)] = &[];
 

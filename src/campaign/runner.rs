@@ -311,8 +311,8 @@ fn progress_bar(show: bool, len: usize, skipped: usize) -> ProgressBar {
 mod tests {
     use super::*;
     use crate::campaign::plan::Shard;
+    use crate::campaign::registry::sleep_test::SleepTest;
     use crate::campaign::registry::ExperimentSettings;
-    use crate::campaign::sleep_test::SleepTest;
 
     fn setup(design: &str, shard: Option<Shard>) -> (tempfile::TempDir, Plan, CampaignOptions) {
         let dir = tempfile::tempdir().unwrap();
