@@ -16,6 +16,7 @@ pub mod liggghts;
 pub mod material;
 pub mod metamodel;
 pub mod numeric;
+pub mod outputs;
 pub mod plot;
 pub mod psd;
 pub mod sampling;

@@ -1,6 +1,7 @@
 //! `mbgc calibrate`: the parameters of a material from its measurements, by inverting a saved
 //! metamodel; every distinct solution, and what the data cannot decide.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
@@ -45,6 +46,11 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--material", &a.material)];
+        inputs.extend(a.model.iter().map(|m| ("--model", m.as_path())));
+        refuse_overwriting_inputs("--out", out, &inputs)?;
+    }
     let material = Material::from_file(&a.material)?;
     if a.starts == 0 {
         anyhow::bail!("--starts: expected at least 1");

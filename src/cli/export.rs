@@ -1,5 +1,6 @@
 //! `mbgc export`: the fitted equations as Rust, LaTeX or sympy.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -21,6 +22,9 @@ pub struct ExportArgs {
 }
 
 pub fn run(a: &ExportArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        refuse_overwriting_inputs("--out", out, &[("--model", &a.model)])?;
+    }
     let model = Metamodel::load(&a.model)?;
     let text = export(&model, a.format);
     match &a.out {

@@ -1,5 +1,6 @@
 //! `mbgc fit`: one readable equation per response by genetic programming, saved as a model file.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -81,6 +82,11 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
 }
 
 pub fn run(a: &FitArgs) -> anyhow::Result<()> {
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", &a.data)];
+    if let Some(s) = &a.space {
+        inputs.push(("--space", s));
+    }
+    refuse_overwriting_inputs("--out", &a.out, &inputs)?;
     let config = Config {
         population: a.population,
         generations: a.generations,

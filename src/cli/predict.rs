@@ -1,5 +1,6 @@
 //! `mbgc predict`: evaluate a saved metamodel on the rows of a table.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -22,6 +23,11 @@ pub struct PredictArgs {
 }
 
 pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
+    refuse_overwriting_inputs(
+        "--out",
+        &a.out,
+        &[("--model", &a.model), ("--data", &a.data)],
+    )?;
     let model = Metamodel::load(&a.model)?;
     let names = model.input_names();
     let cols = read_columns(&a.data, &names)?;

@@ -1,5 +1,6 @@
 //! `mbgc psd`: fit sieve data, draw particle sets.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -59,6 +60,7 @@ pub struct DrawArgs {
         long = "sigma-ln",
         value_name = "S",
         requires = "d50",
+        conflicts_with = "sieve",
         allow_negative_numbers = true
     )]
     pub sigma_ln: Option<f64>,
@@ -129,6 +131,9 @@ fn run_fit(args: &FitArgs) -> anyhow::Result<()> {
 const ARGS: &str = "command line";
 
 fn run_draw(args: &DrawArgs) -> anyhow::Result<()> {
+    if let Some(sieve) = &args.sieve {
+        refuse_overwriting_inputs("--out", &args.out, &[("--sieve", sieve)])?;
+    }
     let dist = match (&args.sieve, args.d50, args.sigma_ln) {
         (Some(path), _, _) => {
             let data = SieveData::read(path)?;

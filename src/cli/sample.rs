@@ -1,5 +1,6 @@
 //! `mbgc sample`: a new design, or an existing one extended, written as CSV.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -40,6 +41,11 @@ pub struct SampleArgs {
 }
 
 pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
+    let inputs: Vec<(&str, &std::path::Path)> = [("--space", &a.space), ("--extend", &a.extend)]
+        .into_iter()
+        .filter_map(|(n, p)| p.as_deref().map(|p| (n, p)))
+        .collect();
+    refuse_overwriting_inputs("--out", &a.out, &inputs)?;
     let space = a.space.as_deref().map(Space::from_file).transpose()?;
     let dim = match (&space, a.dim) {
         (Some(s), _) => s.dim(),

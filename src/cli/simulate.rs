@@ -1,6 +1,7 @@
 //! `mbgc simulate`: a calibration experiment for every row of a design, appended to a table that
 //! a restart of the same command resumes.
 
+use crate::outputs::refuse_overwriting_inputs;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -42,6 +43,7 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
+    refuse_overwriting_inputs("--out", &a.out, &[("--design", &a.design)])?;
     let settings = ExperimentSettings {
         box_scale: a.box_scale,
     };
