@@ -144,6 +144,8 @@ fn sleep_design(dir: &Path, name: &str, n: usize, fail_row: Option<usize>) -> Pa
     write(dir, name, &t)
 }
 
+/// Runs sleep-test rows and returns standard output. A campaign with failed runs must exit 1
+/// and say so (a job array has to see it); the tests that care check the counts.
 fn simulate_sleep(design: &Path, out: &Path, extra: &[&str]) -> String {
     let mut args = vec![
         "simulate",
@@ -155,7 +157,13 @@ fn simulate_sleep(design: &Path, out: &Path, extra: &[&str]) -> String {
         s(out),
     ];
     args.extend(extra);
-    ok(&args)
+    let o = mbgc(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    if !o.status.success() {
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("rerun with --retry-failed"), "{args:?}: {err}");
+    }
+    String::from_utf8(o.stdout).unwrap()
 }
 
 fn merge(inputs: &[&Path], out: &Path) -> Vec<u8> {
@@ -331,8 +339,10 @@ fn kill_and_resume_gives_the_uninterrupted_table() {
     assert_eq!(status["partial_line"], true);
 
     let o = mbgc(&arg_refs(&kill_args));
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stderr = String::from_utf8_lossy(&o.stderr);
+    // Row 3 fails on request: the resumed campaign still reports it (exit 1).
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("1 of the 60 runs"), "{stderr}");
     assert!(
         stderr.contains("removed an incomplete last line"),
         "{stderr}"
@@ -353,7 +363,8 @@ fn kill_and_resume_gives_the_uninterrupted_table() {
     let mut seen: Vec<usize> = rows.iter().map(|r| r["row"].parse().unwrap()).collect();
     seen.sort();
     assert_eq!(seen, (0..60).collect::<Vec<_>>());
-    assert!(reference_run.wait().unwrap().success());
+    // Row 3 fails on request, so the campaign exits 1.
+    assert_eq!(reference_run.wait().unwrap().code(), Some(1));
     let a = merge(&[&killed], &dir.path().join("a.csv"));
     let b = merge(&[&reference], &dir.path().join("b.csv"));
     assert_eq!(a, b);
@@ -444,8 +455,30 @@ fn failed_and_panicking_runs_are_recorded_and_counted() {
         "x,y,fail,panic\n1,1,0,0\n2,1,1,0\n3,1,0,1\n4,1,0,0\n5,1,0,0\n6,1,0,0\n",
     );
     let out = dir.path().join("out.csv");
-    let stdout = simulate_sleep(&design, &out, &[]);
+    let args = [
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&out),
+    ];
+    let o = mbgc(&args);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "failed runs must fail the command"
+    );
     assert!(stdout.contains("4 done, 2 failed"), "{stdout}");
+    assert!(
+        stderr.contains("2 of the 6 runs") && stderr.contains("(2 in this invocation, 0 earlier)"),
+        "{stderr}"
+    );
     let (_, rows) = read(&out);
     let row = |i: &str| rows.iter().find(|r| r["row"] == i).unwrap();
     assert_eq!(row("1")["status"], "failed");
@@ -486,9 +519,20 @@ fn failed_and_panicking_runs_are_recorded_and_counted() {
     assert_eq!(status["remaining"], 4);
     assert_eq!(status["total"], 10);
 
-    // Resuming on it runs only the new rows; failed runs are not retried.
-    let stdout = simulate_sleep(&bigger, &out, &[]);
+    // Resuming on it runs only the new rows; failed runs are not retried, but still counted.
+    let o = mbgc(&[
+        "simulate",
+        "--design",
+        s(&bigger),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&out),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("6 already in the table, ran 4"), "{stdout}");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("(0 in this invocation, 2 earlier)"));
     let status = last_json(&ok(&["campaign", "status", s(&out), "--json"]));
     assert_eq!(
         (&status["remaining"], &status["total"]),
@@ -774,5 +818,97 @@ fn fit_refuses_a_table_holding_a_run_twice() {
     assert!(
         e.contains("column run_id") && e.contains("also on line 4"),
         "{e}"
+    );
+}
+
+#[test]
+fn retry_failed_reruns_only_the_failed_rows_and_replaces_their_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 8, None);
+    let out = dir.path().join("t.csv");
+    let args = [
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&out),
+    ];
+    // x = 5 fails once (a transient fault), then the fault is gone.
+    let first = command(&args)
+        .env("SLEEP_TEST_FAIL_X", "5")
+        .output()
+        .unwrap();
+    assert_eq!(first.status.code(), Some(1));
+    let (_, rows) = read(&out);
+    let failed: Vec<&str> = rows
+        .iter()
+        .filter(|r| r["status"] == "failed")
+        .map(|r| r["row"].as_str())
+        .collect();
+    assert_eq!(failed, ["5"]);
+    // A plain resume does not retry (and still exits 1); --retry-failed does.
+    assert_eq!(mbgc(&args).status.code(), Some(1));
+    let mut retry = args.to_vec();
+    retry.push("--retry-failed");
+    let o = mbgc(&retry);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("1 failed run(s) of earlier attempts"));
+    let (_, rows) = read(&out);
+    assert_eq!(rows.len(), 8);
+    assert!(rows.iter().all(|r| r["status"] == "done"));
+    let mut ids: Vec<&String> = rows.iter().map(|r| &r["run_id"]).collect();
+    ids.dedup();
+    assert_eq!(ids.len(), 8);
+    // The table equals an uninterrupted run of the same campaign.
+    let clean = dir.path().join("clean.csv");
+    ok(&[
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&clean),
+    ]);
+    let sorted = |p: &Path| {
+        let mut l: Vec<String> = std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect();
+        l.sort();
+        l
+    };
+    assert_eq!(sorted(&out), sorted(&clean));
+}
+
+#[test]
+fn an_unwritable_vtk_directory_is_refused_before_anything_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 3, None);
+    let out = dir.path().join("t.csv");
+    // A file where the directory should be.
+    let blocker = dir.path().join("vtk");
+    std::fs::write(&blocker, "x").unwrap();
+    let e = fails(&[
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&out),
+        "--vtk",
+        s(&blocker.join("sub")),
+    ]);
+    assert!(
+        e.contains("--vtk") && e.contains("expected a writable directory"),
+        "{e}"
+    );
+    assert!(
+        !out.exists(),
+        "a table was started although nothing could run"
     );
 }

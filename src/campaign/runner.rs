@@ -3,7 +3,7 @@
 //! at any moment therefore loses at most the runs in flight and leaves at worst an incomplete last
 //! line, which the next start truncates before redoing that run.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -31,6 +31,8 @@ pub struct CampaignOptions {
     pub vtk_dir: Option<PathBuf>,
     /// Progress bar on stderr (hidden anyway when stderr is not a terminal).
     pub progress: bool,
+    /// Run again the rows whose earlier run failed (their failed lines are removed first).
+    pub retry_failed: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -39,6 +41,10 @@ pub struct Summary {
     pub planned: usize,
     /// Rows already in the table (done or failed) and therefore not run again.
     pub skipped: usize,
+    /// Of those, rows whose earlier run failed (not retried without `retry_failed`).
+    pub failed_before: usize,
+    /// Failed rows removed from the table to be run again (`retry_failed`).
+    pub retried: usize,
     pub done: usize,
     pub failed: usize,
     /// Bytes of an incomplete last line removed from the table before resuming.
@@ -64,20 +70,43 @@ pub fn run_campaign(
         )));
     }
     let t0 = Instant::now();
+    // Outputs are checked before any run: a campaign must not run for hours and then find that
+    // its snapshots cannot be written.
+    if let Some(dir) = &opts.vtk_dir {
+        check_writable_dir(dir, "--vtk")?;
+    }
     // Before the table is read: a second process must not resume from a table that the first
     // is still appending to.
     let _lock = TableLock::acquire(&opts.out)?;
-    let (present, truncated_bytes) = prepare_table(plan, &opts.out)?;
+    let (mut present, truncated_bytes) = prepare_table(plan, &opts.out)?;
     let selected: Vec<&PlannedRun> = plan.selected().collect();
+    let failed_ids: HashSet<String> = selected
+        .iter()
+        .filter(|r| present.get(r.run_id.as_str()) == Some(&true))
+        .map(|r| r.run_id.clone())
+        .collect();
+    let mut retried = 0;
+    if opts.retry_failed && !failed_ids.is_empty() {
+        retried = remove_failed_lines(&opts.out, &failed_ids)?;
+        for id in &failed_ids {
+            present.remove(id.as_str());
+        }
+    }
     let todo: Vec<&PlannedRun> = selected
         .iter()
         .copied()
-        .filter(|r| !present.contains(r.run_id.as_str()))
+        .filter(|r| !present.contains_key(r.run_id.as_str()))
         .collect();
     let threads = opts.threads.min(todo.len()).max(1);
     let mut summary = Summary {
         planned: selected.len(),
         skipped: selected.len() - todo.len(),
+        failed_before: if opts.retry_failed {
+            0
+        } else {
+            failed_ids.len()
+        },
+        retried,
         done: 0,
         failed: 0,
         truncated_bytes,
@@ -139,13 +168,40 @@ pub fn run_campaign(
     Ok(summary)
 }
 
+/// A directory exists (or is created) and takes a file, or the error names `option`.
+fn check_writable_dir(dir: &Path, option: &str) -> Result<()> {
+    let probe = std::fs::create_dir_all(dir).and_then(|()| tempfile::tempfile_in(dir));
+    probe.map(drop).map_err(|e| {
+        Error::invalid(format!(
+            "{option} {}: cannot write there ({e}); expected a writable directory",
+            dir.display()
+        ))
+    })
+}
+
+/// Rewrites the table without the failed lines of `ids`; returns how many were removed.
+fn remove_failed_lines(out: &Path, ids: &HashSet<String>) -> Result<usize> {
+    let t = read_table(out)?;
+    let mut bytes = csv_line(&t.header)?;
+    let mut removed = 0;
+    for (_, rec) in &t.records {
+        if rec[2] == *FAILED && ids.contains(&rec[0]) {
+            removed += 1;
+        } else {
+            bytes.extend(csv_line(rec.iter())?);
+        }
+    }
+    write_atomic(out, &bytes)?;
+    Ok(removed)
+}
+
 /// Creates the table (header only) or checks an existing one against the plan, writes the
-/// sidecar, and truncates an incomplete last line. Returns the run ids already present. Nothing
-/// is modified when the table belongs to another campaign.
-fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashSet<String>, u64)> {
+/// sidecar, and truncates an incomplete last line. Returns the run ids already present, each
+/// with whether its run failed. Nothing is modified when the table belongs to another campaign.
+fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)> {
     let file = out.display().to_string();
     let columns = plan.columns();
-    let mut present = HashSet::new();
+    let mut present = HashMap::new();
     let exists = out.exists();
     let table = if exists { Some(read_table(out)?) } else { None };
     if let Some(t) = &table {
@@ -200,7 +256,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashSet<String>, u64)> {
                     ),
                 ));
             }
-            present.insert(rec[0].to_string());
+            present.insert(rec[0].to_string(), rec[2] == *FAILED);
         }
     }
     Meta::of(plan).write(out)?;
@@ -332,6 +388,7 @@ mod tests {
             threads: 2,
             vtk_dir: None,
             progress: false,
+            retry_failed: false,
         };
         (dir, plan, opts)
     }

@@ -40,6 +40,9 @@ pub struct SimulateArgs {
     /// Size factor of the experiment's box (shear box, hopper); other experiments ignore it.
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     pub box_scale: Option<f64>,
+    /// Run again the rows whose earlier run failed (their failed lines are replaced).
+    #[arg(long)]
+    pub retry_failed: bool,
 }
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
@@ -75,6 +78,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             threads,
             vtk_dir: a.vtk.clone(),
             progress: true,
+            retry_failed: a.retry_failed,
         },
     )?;
     if s.truncated_bytes > 0 {
@@ -110,8 +114,25 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             String::new()
         }
     );
-    if s.failed > 0 {
-        println!("failed runs have status=failed and their reason in the error column");
+    if s.retried > 0 {
+        eprintln!(
+            "{}: {} failed run(s) of earlier attempts removed and run again",
+            a.out.display(),
+            s.retried
+        );
+    }
+    // A cluster job array must see failures in the exit code, including those of an earlier
+    // attempt that this resume skipped.
+    let failed = s.failed + s.failed_before;
+    if failed > 0 {
+        anyhow::bail!(
+            "{failed} of the {} runs of {} failed ({} in this invocation, {} earlier): they have \
+             status=failed and their reason in the error column; rerun with --retry-failed",
+            s.planned,
+            a.out.display(),
+            s.failed,
+            s.failed_before
+        );
     }
     Ok(())
 }

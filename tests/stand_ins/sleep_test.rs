@@ -6,7 +6,8 @@
 //! Parameters: `x` in [-1e6, 1e6], `y` in [0, 1e6] (negative `y` is "impossible", to test
 //! [`Experiment::check`]), optional `sleep_ms` (default 0), `fail` and `panic` (a value >= 0.5
 //! makes the run return an error or panic). Responses: `f = x + 2 y` and `noise`, the row seed
-//! mapped to [0, 1), which shows that seeds reach the experiment.
+//! mapped to [0, 1), which shows that seeds reach the experiment. A transient failure (one that a
+//! retry can cure): the run with `x` equal to the environment variable `SLEEP_TEST_FAIL_X` fails.
 
 use std::time::Duration;
 
@@ -56,6 +57,16 @@ impl Experiment for SleepTest {
         std::thread::sleep(Duration::from_secs_f64(i.sleep_ms * 1e-3));
         if i.panic {
             panic!("sleep-test: panic on request at x = {}", i.x);
+        }
+        let transient = std::env::var("SLEEP_TEST_FAIL_X")
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            == Some(i.x);
+        if transient {
+            return Err(Error::invalid(format!(
+                "sleep-test: transient failure at x = {}",
+                i.x
+            )));
         }
         if i.fail {
             // Comma, quotes and a newline: the table must keep the message intact.
