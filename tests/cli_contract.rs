@@ -235,3 +235,95 @@ fn no_command_overwrites_its_own_input() {
         &model,
     );
 }
+
+/// A steel ball at the wall: the wall-impact experiment measures `cnr`.
+fn impact_files(dir: &Path, measured: &str) -> (PathBuf, PathBuf) {
+    let mat = dir.join("steel.toml");
+    std::fs::write(&mat, format!("[measured]\n{measured}\n")).unwrap();
+    let params = dir.join("p.toml");
+    std::fs::write(
+        &params,
+        "[parameters]\nE_p = 2e11\nnu_p = 0.3\nrho_p = 7800\nd50 = 10\nE_w = 2e11\ne_pw = 0.8\n\
+         mu_pw = 0.1\nimpact_speed = 1.0\nimpact_angle = 0\n",
+    )
+    .unwrap();
+    (mat, params)
+}
+
+#[test]
+fn validate_enforces_a_tolerance_and_refuses_what_would_compare_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |mat: &Path, params: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "validate",
+            "--material",
+            s(mat),
+            "--params",
+            s(params),
+            "--experiment",
+            "wall-impact",
+        ];
+        args.extend(extra);
+        common::mbgc(&args)
+    };
+    // DEM gives cnr 0.80 for e 0.8: 0.85 measured is 6 % off.
+    let (mat, params) = impact_files(dir.path(), "cnr = { value = 0.85, sd = 0.05 }");
+    let o = run(&mat, &params, &[]);
+    assert!(o.status.success(), "without --tolerance only a report");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("largest deviation"));
+    let o = run(&mat, &params, &["--tolerance", "0.02"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("cnr") && e.contains("beyond --tolerance 0.02"),
+        "{e}"
+    );
+    assert!(run(&mat, &params, &["--tolerance", "0.1"]).status.success());
+    assert_eq!(
+        run(&mat, &params, &["--tolerance", "0"]).status.code(),
+        Some(1)
+    );
+
+    // A calibrated value cannot be overridden behind the user's back.
+    let e = fails(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+        "--set",
+        "e_pw=0.9",
+    ]);
+    assert!(
+        e.contains("--set e_pw=0.9") && e.contains("already 0.8"),
+        "{e}"
+    );
+
+    // Nothing measured by the experiment: refused, not a silent success.
+    let (mat2, _) = impact_files(dir.path(), "shear_angle = { value = 35.0, sd = 0.5 }");
+    let e = fails(&[
+        "validate",
+        "--material",
+        s(&mat2),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+    ]);
+    assert!(e.contains("would compare nothing"), "{e}");
+
+    // A picture that cannot be written is refused before the DEM runs.
+    let (mat, params) = impact_files(dir.path(), "cnr = { value = 0.85, sd = 0.05 }");
+    std::fs::write(dir.path().join("file"), "x").unwrap();
+    for bad in ["side.gif", "file/x.svg"] {
+        let p = dir.path().join(bad);
+        let o = run(&mat, &params, &["--picture", s(&p)]);
+        assert_eq!(o.status.code(), Some(1), "{bad}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("--picture"),
+            "{bad}"
+        );
+    }
+}

@@ -33,6 +33,39 @@ pub struct ValidateArgs {
     /// Side view of the final state (SVG or PNG).
     #[arg(long)]
     pub picture: Option<PathBuf>,
+    /// Largest accepted relative deviation |DEM - measured| / |measured| (e.g. 0.05); with it the
+    /// command exits 1 when a response is further off. Without it deviations are only reported.
+    #[arg(long)]
+    pub tolerance: Option<f64>,
+}
+
+/// The picture can be written: a known extension and a directory that takes a file. Checked
+/// before the DEM runs, so a bad path never costs the run's result.
+fn check_picture(p: &std::path::Path) -> anyhow::Result<()> {
+    let ext = p
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("svg" | "png")) {
+        anyhow::bail!(
+            "--picture {}: expected a file ending in .svg or .png",
+            p.display()
+        );
+    }
+    let dir = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => std::path::Path::new("."),
+    };
+    std::fs::create_dir_all(dir)
+        .and_then(|()| tempfile::tempfile_in(dir))
+        .map(drop)
+        .map_err(|e| {
+            anyhow::anyhow!(
+                "--picture {}: cannot write in {} ({e}); expected a writable directory",
+                p.display(),
+                dir.display()
+            )
+        })
 }
 
 fn read_params(path: &std::path::Path) -> anyhow::Result<(ParamSet, Vec<(String, f64)>)> {
@@ -68,6 +101,14 @@ fn read_params(path: &std::path::Path) -> anyhow::Result<(ParamSet, Vec<(String,
 }
 
 pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
+    if let Some(t) = a.tolerance {
+        if !(t.is_finite() && t > 0.0) {
+            anyhow::bail!("--tolerance {t}: expected a positive relative deviation such as 0.05");
+        }
+    }
+    if let Some(p) = &a.picture {
+        check_picture(p)?;
+    }
     let material = Material::from_file(&a.material)?;
     let (mut params, predicted) = read_params(&a.params)?;
     if let Some((d50, sigma)) = material.psd_parameters()? {
@@ -80,6 +121,13 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
     }
     for s in &a.set {
         let (k, v) = crate::campaign::parse_set(s)?;
+        if let Some(old) = params.get(&k) {
+            anyhow::bail!(
+                "--set {s}: {k} is already {old} in {} (calibrated, or from the material's PSD); \
+                 expected --set only for parameters the model did not have",
+                a.params.display()
+            );
+        }
         params.set(&k, v);
     }
     let exp = experiment_by_name(
@@ -88,6 +136,26 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             box_scale: a.box_scale,
         },
     )?;
+    let responses = exp.responses();
+    if !material
+        .measured
+        .iter()
+        .any(|m| responses.contains(&m.response.as_str()))
+    {
+        anyhow::bail!(
+            "{}: none of the measured responses ({}) is measured by the {} experiment (it gives \
+             {}): validation would compare nothing; expected another --experiment",
+            a.material.display(),
+            material
+                .measured
+                .iter()
+                .map(|m| m.response.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            exp.name(),
+            responses.join(", ")
+        );
+    }
     exp.check(&params)
         .with_context(|| format!("{} at the parameters of {}", exp.name(), a.params.display()))?;
     let t = std::time::Instant::now();
@@ -110,6 +178,7 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         "  {:>14} {:>12} {:>8} {:>12} {:>9} {:>8} {:>12}",
         "response", "measured", "sd", "DEM", "off %", "off sd", "metamodel"
     );
+    let mut worst: Option<(String, f64)> = None;
     for m in &material.measured {
         let Some(dem) = out.get(&m.response) else {
             println!(
@@ -134,6 +203,27 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             (dem - m.value) / m.sd,
             model
         );
+        let off = ((dem - m.value) / m.value).abs();
+        if worst.as_ref().is_none_or(|(_, w)| off > *w || off.is_nan()) {
+            worst = Some((m.response.clone(), off));
+        }
+    }
+    if let Some((name, off)) = worst {
+        match a.tolerance {
+            Some(t) if !(off <= t) => anyhow::bail!(
+                "{name} is {:.2} % off the measurement, beyond --tolerance {t} ({:.2} %)",
+                100.0 * off,
+                100.0 * t
+            ),
+            Some(t) => println!(
+                "largest deviation {:.2} % ({name}), within --tolerance {t}",
+                100.0 * off
+            ),
+            None => println!(
+                "largest deviation {:.2} % ({name}); give --tolerance to make it a pass/fail check",
+                100.0 * off
+            ),
+        }
     }
     Ok(())
 }
