@@ -210,7 +210,7 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
     }
     if let Some((name, off)) = worst {
         match a.tolerance {
-            Some(t) if !(off <= t) => anyhow::bail!(
+            Some(t) if off.is_nan() || off > t => anyhow::bail!(
                 "{name} is {:.2} % off the measurement, beyond --tolerance {t} ({:.2} %)",
                 100.0 * off,
                 100.0 * t
