@@ -99,13 +99,30 @@ pub fn csv_error(file: &str, e: csv::Error) -> Error {
 /// Opens a CSV file (fields trimmed) and returns the reader with its header.
 pub fn csv_open(path: &Path) -> Result<(csv::Reader<std::fs::File>, Vec<String>)> {
     let file = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
+    let rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
         .map_err(|e| csv_error(&file, e))?;
+    with_header(&file, rdr)
+}
+
+/// CSV text already in memory, read like [`csv_open`] but with `#` comment lines skipped
+/// (annotated data tables); `file` names the source in errors.
+pub fn csv_open_str<'a>(text: &'a str, file: &str) -> Result<(csv::Reader<&'a [u8]>, Vec<String>)> {
+    let rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    with_header(file, rdr)
+}
+
+fn with_header<R: std::io::Read>(
+    file: &str,
+    mut rdr: csv::Reader<R>,
+) -> Result<(csv::Reader<R>, Vec<String>)> {
     let header = rdr
         .headers()
-        .map_err(|e| csv_error(&file, e))?
+        .map_err(|e| csv_error(file, e))?
         .iter()
         .map(str::to_string)
         .collect();

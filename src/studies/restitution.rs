@@ -38,7 +38,7 @@ use crate::calibrate::tmcmc::{tmcmc, TmcmcOptions, TmcmcResult, UniformBox};
 use crate::dem::contact::NormalKind;
 use crate::dem::experiments::wall_impact::WallImpact;
 use crate::dem::experiments::{Experiment, ParamSet, RunOptions};
-use crate::error::{write_atomic, Error, Result};
+use crate::error::{csv_error, csv_number, csv_open_str, write_atomic, Error, Result};
 
 /// Which coefficient of restitution a measurement is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -76,58 +76,50 @@ pub fn load_csv(path: &Path) -> Result<Vec<Measurement>> {
     parse_csv(&text, &path.display().to_string())
 }
 
-/// Parses the measurement table; errors name `file`, the line and the column. Plain
-/// comma-separated values without quoting; the columns may come in any order.
+/// Parses the measurement table with the shared CSV reader; errors name `file`, the line and
+/// the column. The columns may come in any order; each must appear once.
 pub fn parse_csv(text: &str, file: &str) -> Result<Vec<Measurement>> {
-    let mut header: Option<(usize, [usize; 4], usize)> = None;
-    let mut out = Vec::new();
-    for (k, raw) in text.lines().enumerate() {
-        let line = k + 1;
-        let trimmed = raw.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = trimmed.split(',').map(str::trim).collect();
-        let Some((_, idx, width)) = header else {
-            let mut idx = [0; 4];
-            for (slot, col) in idx.iter_mut().zip(COLUMNS) {
-                *slot = fields.iter().position(|f| *f == col).ok_or_else(|| {
-                    Error::input(
-                        file,
-                        format!("line {line} (header)"),
-                        format!(
-                            "missing column `{col}`; expected the columns {}",
-                            COLUMNS.join(",")
-                        ),
-                    )
-                })?;
-            }
-            header = Some((line, idx, fields.len()));
-            continue;
-        };
-        if fields.len() != width {
+    let (mut rdr, header) = csv_open_str(text, file)?;
+    if header.iter().all(|h| h.is_empty()) {
+        return Err(Error::input(
+            file,
+            "header",
+            format!("no header line; expected {}", COLUMNS.join(",")),
+        ));
+    }
+    for (i, h) in header.iter().enumerate() {
+        if header[..i].contains(h) {
             return Err(Error::input(
                 file,
-                format!("line {line}"),
-                format!(
-                    "expected {width} fields like the header, found {}",
-                    fields.len()
-                ),
+                format!("header, column {h}"),
+                "appears twice; a measurement needs one value per column",
             ));
         }
+    }
+    let mut idx = [0; 4];
+    for (slot, col) in idx.iter_mut().zip(COLUMNS) {
+        *slot = header.iter().position(|f| f == col).ok_or_else(|| {
+            Error::input(
+                file,
+                "header",
+                format!(
+                    "missing column `{col}`; expected the columns {}",
+                    COLUMNS.join(",")
+                ),
+            )
+        })?;
+    }
+    let mut out = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| csv_error(file, e))?;
+        let line = rec.position().map_or(0, |p| p.line());
+        let at = |c: usize| format!("line {line}, column {}", COLUMNS[c]);
         let num = |c: usize, lo: f64, hi: f64, what: &str| -> Result<f64> {
-            let s = fields[idx[c]];
-            let v: f64 = s.parse().map_err(|_| {
-                Error::input(
-                    file,
-                    format!("line {line}, column `{}`", COLUMNS[c]),
-                    format!("expected a number, found `{s}`"),
-                )
-            })?;
-            if !(v.is_finite() && v >= lo && v <= hi) {
+            let v = csv_number(file, line, COLUMNS[c], &rec[idx[c]])?;
+            if !(v >= lo && v <= hi) {
                 return Err(Error::input(
                     file,
-                    format!("line {line}, column `{}`", COLUMNS[c]),
+                    at(c),
                     format!("expected {what}, found {v}"),
                 ));
             }
@@ -137,17 +129,17 @@ pub fn parse_csv(text: &str, file: &str) -> Result<Vec<Measurement>> {
         if angle_deg == 0.0 {
             return Err(Error::input(
                 file,
-                format!("line {line}, column `impact_angle_deg`"),
+                at(0),
                 "expected an oblique impact (angle > 0): ctr is undefined at 0 degrees",
             ));
         }
-        let response = match fields[idx[1]] {
+        let response = match &rec[idx[1]] {
             "cnr" => Response::Cnr,
             "ctr" => Response::Ctr,
             other => {
                 return Err(Error::input(
                     file,
-                    format!("line {line}, column `type`"),
+                    at(1),
                     format!("expected `cnr` or `ctr`, found `{other}`"),
                 ))
             }
@@ -157,7 +149,7 @@ pub fn parse_csv(text: &str, file: &str) -> Result<Vec<Measurement>> {
         if sd <= 0.0 {
             return Err(Error::input(
                 file,
-                format!("line {line}, column `sd`"),
+                at(3),
                 "expected a standard deviation > 0, found 0",
             ));
         }
@@ -167,13 +159,6 @@ pub fn parse_csv(text: &str, file: &str) -> Result<Vec<Measurement>> {
             value,
             sd,
         });
-    }
-    if header.is_none() {
-        return Err(Error::input(
-            file,
-            "header",
-            format!("no header line; expected {}", COLUMNS.join(",")),
-        ));
     }
     if out.is_empty() {
         return Err(Error::input(
@@ -1948,17 +1933,20 @@ mod tests {
         let bad = TABLE2.replace("40,cnr,0.896", "40,cnr,0.8x6");
         let e = parse_csv(&bad, "t.csv").unwrap_err().to_string();
         assert!(
-            e.contains("t.csv") && e.contains("line 12") && e.contains("`value`"),
+            e.contains("t.csv") && e.contains("line 12, column value"),
             "{e}"
         );
         let e = parse_csv(&TABLE2.replace("20,ctr", "20,ctx"), "t.csv")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("line 4, column `type`"), "{e}");
+        assert!(
+            e.contains("t.csv") && e.contains("line 4, column type"),
+            "{e}"
+        );
         let e = parse_csv(&TABLE2.replace("0.044", "0"), "t.csv")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("line 5, column `sd`"), "{e}");
+        assert!(e.contains("line 5, column sd"), "{e}");
         let e = parse_csv(&TABLE2.replace(",sd", ",sigma"), "t.csv")
             .unwrap_err()
             .to_string();
@@ -1971,6 +1959,10 @@ mod tests {
         .to_string();
         assert!(e.contains("line 14") && e.contains("found 3"), "{e}");
         assert!(parse_csv("# nothing\n", "t.csv").is_err());
+        let e = parse_csv(&TABLE2.replace(",sd", ",value"), "t.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("column value") && e.contains("twice"), "{e}");
     }
 
     #[test]
