@@ -1856,7 +1856,7 @@ fn discussion(study: &Study, w: &mut String) {
         let unidentified = m3.iter().all(|(_, c)| share(c) >= UNIDENTIFIED_SHARE);
         let _ = writeln!(
             w,
-            "**M3: {}; the exponent {} seed 003's, {}.** Tolerances: a ridge needs \
+            "**M3: {}; the exponent {} seed 003's and is {} determined.** Tolerances: a ridge needs \
              |corr(ln gamma_n, alpha_n)| >= {RIDGE_CORR} over the posterior samples; alpha_n \
              agrees within {MU_TOL_SD} posterior sd; gamma_n is unidentified when its 5-95 % \
              interval covers at least {:.0} % of its prior. mbgc: {} against seed 003's \
@@ -1878,7 +1878,7 @@ fn discussion(study: &Study, w: &mut String) {
             if wider {
                 "less sharply"
             } else {
-                "not less sharply"
+                "as sharply or more sharply"
             },
             100.0 * UNIDENTIFIED_SHARE,
             m3.iter()
@@ -1966,7 +1966,7 @@ fn discussion(study: &Study, w: &mut String) {
          right one. Seed 003 (Sec. 4) reports a bimodal k_t posterior in every class, peaks at \
          0.4 and 1.33, the upper about 2.1 times more probable. mbgc (bins in u_E, with their \
          posterior share): {}. With the other parameters at the M1 posterior mean, ctr at {} deg \
-         equals the measured {} at k_t = {} u_E (sweep over the prior){}. Values differ for \
+         equals the measured {} at k_t = {} (sweep over the prior){}. Values differ for \
          reasons of dimension: the tangential effective mass m / (1 + m R^2 / I) is 2/7 m for \
          the sphere and 1/3 m for the disk (a 14 % softer spring gives the sphere the same \
          period), the rigid-rolling ctr is 5/7 against 2/3, and k_t's unit is unknown.\n",
@@ -1989,10 +1989,13 @@ fn discussion(study: &Study, w: &mut String) {
                 if x.is_empty() {
                     "none".to_string()
                 } else {
-                    x.iter()
-                        .map(|k| format!("{k:.2}"))
-                        .collect::<Vec<_>>()
-                        .join(" and ")
+                    format!(
+                        "{} u_E",
+                        x.iter()
+                            .map(|k| format!("{k:.2}"))
+                            .collect::<Vec<_>>()
+                            .join(" and ")
+                    )
                 },
                 at(g)
             ))
@@ -2192,7 +2195,7 @@ fn evidence_paragraph(study: &Study, w: &mut String, all: &[(&Group, &ClassResul
             little.push(gain < FIT_GAIN_TOL);
             let _ = write!(
                 t,
-                "; M3's best fit is {gain:.2} in ln L above the better of M1 and M2"
+                "; M3's best fit differs by {gain:+.2} in ln L from the better of M1 and M2"
             );
         }
         ev.push(t);
