@@ -2581,7 +2581,7 @@ mod tests {
     }
 
     #[test]
-    fn likelihood_prefers_the_papers_friction_and_a_tiny_tmcmc_runs() {
+    fn likelihood_prefers_the_papers_friction() {
         let data = parse_csv(TABLE2, "t.csv").unwrap();
         // At the printed modulus the paper's k_t (in 1e7 N/m) fits ctr at 10-30 degrees.
         let setup = Setup::seed003(E_PRINTED, DEFAULT_SPEED);
@@ -2601,30 +2601,74 @@ mod tests {
         let (cnr, ctr) = simulate(&setup, &c, 60.0).unwrap();
         let want = 1.0 - 0.109 * (1.0 + cnr) / 60f64.to_radians().tan();
         assert!((ctr - want).abs() < 0.01, "ctr {ctr} vs sliding {want}");
+    }
 
-        let s = StudySettings {
+    /// TMCMC on data the DEM generated at a known friction (everything else fixed at the
+    /// paper's M1 values) must find that friction: a wrong likelihood, prior mapping or sampler
+    /// lands elsewhere in [0.05, 0.2].
+    #[test]
+    fn tmcmc_recovers_a_known_friction_from_dem_data() {
+        let mu_true = 0.16;
+        let setup = Setup::seed003(E_PRINTED, DEFAULT_SPEED);
+        let fixed = |mu: f64| vec![mu, 0.81e4, 0.99, 0.0, 0.0];
+        let truth = ModelClass::M1.split(&fixed(mu_true), setup.k_t_unit()).0;
+        // The sliding impacts carry mu; three impacts keep an evaluation cheap.
+        let mut data = Vec::new();
+        for a in [40.0, 50.0, 60.0] {
+            let (cnr, ctr) = simulate(&setup, &truth, a).unwrap();
+            for (response, value) in [(Response::Cnr, cnr), (Response::Ctr, ctr)] {
+                data.push(Measurement {
+                    angle_deg: a,
+                    response,
+                    value,
+                    sd: 0.01,
+                });
+            }
+        }
+        let like = Likelihood::new(ModelClass::M1, setup, &data);
+        let prior = UniformBox {
+            lower: vec![0.05],
+            upper: vec![0.2],
+        };
+        let opts = TmcmcOptions {
             samples: 200,
+            seed: 7,
+            ..TmcmcOptions::default()
+        };
+        let r = tmcmc(
+            &prior,
+            |th: &[f64]| like.ln_likelihood(&fixed(th[0])),
+            &opts,
+        )
+        .unwrap();
+        let (mean, sd) = (r.mean()[0], r.std()[0]);
+        assert!(
+            (mean - mu_true).abs() < 0.005 && sd < 0.01,
+            "posterior mu {mean} +- {sd}, true {mu_true}"
+        );
+    }
+
+    #[test]
+    fn report_of_a_tiny_run_has_the_table_rows() {
+        let data = parse_csv(TABLE2, "t.csv").unwrap();
+        let setup = Setup::seed003(E_PRINTED, DEFAULT_SPEED);
+        let s = StudySettings {
+            samples: 100,
             burn_in: 0,
             replicates: 1,
             youngs_moduli: vec![E_PRINTED],
             classes: vec![ModelClass::M1],
-            ..StudySettings::new(200, 1, 0)
+            ..StudySettings::new(100, 1, 0)
         };
         let r = run_class(ModelClass::M1, &setup, &data, &s).unwrap();
-        assert!(r.ln_evidence.is_finite());
-        let mu = &r.parameters[0];
-        assert!(mu.mean > 0.05 && mu.mean < 0.2 && mu.q05 <= mu.q95);
         assert!(
-            r.evaluations > 200 && r.stages >= 2,
+            r.evaluations > 100 && r.stages >= 2,
             "{} evaluations, {} stages",
             r.evaluations,
             r.stages
         );
+        assert_eq!(r.ln_gamma_alpha_corr, None);
         let study = Study {
-            data_file: "t.csv".into(),
-            data: data.clone(),
-            settings: s,
-            likelihood_ms: 0.3,
             groups: vec![Group {
                 setup,
                 classes: vec![ClassResult {
@@ -2635,12 +2679,257 @@ mod tests {
                 ctr_with_k_t_1_5e5: 1.0,
                 ctr_k_t_sweep: vec![],
             }],
-            speed_groups: vec![],
-            wall_time_s: 1.0,
+            settings: s,
+            ..fake_study(&[], |_, _| {})
         };
         let text = report(&study, "mbgc bench restitution");
         assert!(text.contains("| M1 | mbgc, E = 2.1e10 |"), "{text}");
         assert!(text.contains("Evidence ranking: seed 003 M3 > M2 > M1."));
+    }
+
+    /// A class posterior at seed 003's Table 4 means with 10 % sd, three replicate evidences
+    /// 0.1 apart, a k_t histogram with the paper's two modes, and (M3) a strong ridge.
+    fn fake_class(class: ModelClass) -> ClassResult {
+        let row = paper_row(class);
+        let mut means = vec![("mu", row.mu.0)];
+        if class == ModelClass::M3 {
+            means.push(("alpha_n", row.alpha_n.0));
+        }
+        means.extend([
+            ("gamma_n", row.gamma_n.0),
+            ("k_t", row.k_t.0),
+            ("sigma1_sq", row.sigma1_sq),
+            ("sigma2_sq", row.sigma2_sq),
+        ]);
+        let mut c = ClassResult {
+            class,
+            parameters: vec![],
+            ln_evidence: row.ln_evidence,
+            ln_evidence_replicates: vec![
+                row.ln_evidence - 0.1,
+                row.ln_evidence,
+                row.ln_evidence + 0.1,
+            ],
+            probability: 1.0 / 3.0,
+            stages: 5,
+            final_acceptance: 0.2,
+            evaluations: 1000,
+            wall_time_s: 1.0,
+            max_ln_likelihood: 30.0,
+            best: vec![],
+            robust: vec![],
+            k_t_histogram: vec![0.0, 0.0, 0.0, 0.3, 0.05, 0.6, 0.05, 0.0, 0.0, 0.0],
+            ln_gamma_alpha_corr: (class == ModelClass::M3).then_some(0.9),
+        };
+        for (n, m) in means {
+            c.parameters.push(ParameterSummary {
+                name: n.into(),
+                mean: 0.0,
+                sd: 0.0,
+                cov: 0.0,
+                q05: 0.0,
+                q95: 0.0,
+            });
+            set(&mut c, n, m);
+        }
+        c
+    }
+
+    /// Sets a parameter's mean, keeping a 10 % sd and a +-1.645 sd interval.
+    fn set(c: &mut ClassResult, name: &str, mean: f64) {
+        let p = c.parameters.iter_mut().find(|p| p.name == name).unwrap();
+        *p = ParameterSummary {
+            name: name.into(),
+            mean,
+            sd: 0.1 * mean,
+            cov: 0.1,
+            q05: 0.8355 * mean,
+            q95: 1.1645 * mean,
+        };
+    }
+
+    /// A study on Table 2 with one group per modulus, every class from [`fake_class`], then
+    /// `edit(modulus, class)`; the literal-reading checks put cnr and ctr far outside the data.
+    fn fake_study(moduli: &[f64], edit: impl Fn(f64, &mut ClassResult)) -> Study {
+        let data = parse_csv(TABLE2, "t.csv").unwrap();
+        let groups = moduli
+            .iter()
+            .map(|&e| Group {
+                setup: Setup::seed003(e, DEFAULT_SPEED),
+                classes: ModelClass::ALL
+                    .iter()
+                    .map(|&cl| {
+                        let mut c = fake_class(cl);
+                        edit(e, &mut c);
+                        c
+                    })
+                    .collect(),
+                cnr_with_gamma_15: 0.999,
+                ctr_with_k_t_1_5e5: 0.98,
+                ctr_k_t_sweep: vec![[0.1, 0.6], [0.5, 0.5], [1.0, 0.45], [2.0, 0.55]],
+            })
+            .collect();
+        Study {
+            data_file: "t.csv".into(),
+            data,
+            settings: StudySettings::new(100, 1, 1),
+            likelihood_ms: 0.3,
+            groups,
+            speed_groups: vec![],
+            wall_time_s: 1.0,
+        }
+    }
+
+    fn discussion_of(study: &Study) -> String {
+        let text = report(study, "test");
+        text[text.find("## Discussion").unwrap()..].to_string()
+    }
+
+    #[test]
+    fn friction_far_from_the_paper_differs_never_agrees() {
+        let near = discussion_of(&fake_study(&[E_STEEL], |_, _| {}));
+        assert!(near.contains("**Friction mu agrees.**"), "{near}");
+        // 0.16 +- 0.016 is 3 sd above the paper's 0.108-0.111.
+        let far = discussion_of(&fake_study(&[E_STEEL], |_, c| set(c, "mu", 0.16)));
+        assert!(!far.contains("mu agrees"), "{far}");
+        assert!(far.contains("**Friction mu differs by up to 3."), "{far}");
+    }
+
+    #[test]
+    fn gamma_n_verdict_and_the_misprint_follow_the_ratios() {
+        let scale = |f: fn(f64) -> f64| {
+            move |e: f64, c: &mut ClassResult| {
+                let g = param(c, "gamma_n").unwrap().mean;
+                set(c, "gamma_n", g * f(e));
+            }
+        };
+        // Off by 0.27 at the printed modulus, exact at steel's: the misprint reading.
+        let t = discussion_of(&fake_study(
+            &[E_PRINTED, E_STEEL],
+            scale(|e| if e == E_PRINTED { 0.27 } else { 1.0 }),
+        ));
+        assert!(
+            t.contains("**gamma_n matches at E = 2.1e11 Pa, not at 2.1e10 Pa.**"),
+            "{t}"
+        );
+        assert!(t.contains("misprint"), "{t}");
+        // The other way round: consistent with the printed modulus, no misprint.
+        let t = discussion_of(&fake_study(
+            &[E_PRINTED, E_STEEL],
+            scale(|e| if e == E_STEEL { 3.2 } else { 1.0 }),
+        ));
+        assert!(
+            t.contains("matches at E = 2.1e10 Pa, not at 2.1e11 Pa") && !t.contains("misprint"),
+            "{t}"
+        );
+        // Off everywhere: no match and no misprint.
+        let t = discussion_of(&fake_study(&[E_PRINTED, E_STEEL], scale(|_| 4.0)));
+        assert!(
+            t.contains("**gamma_n matches at no modulus.**") && !t.contains("misprint"),
+            "{t}"
+        );
+        // Matching at both moduli decides nothing about the printed one.
+        let t = discussion_of(&fake_study(&[E_PRINTED, E_STEEL], scale(|_| 1.2)));
+        assert!(!t.contains("misprint") && !t.contains("not at"), "{t}");
+    }
+
+    #[test]
+    fn ridge_is_claimed_only_when_the_samples_are_correlated() {
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, _| {}));
+        assert!(t.contains("ridge is reproduced"), "{t}");
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, c| {
+            if c.class == ModelClass::M3 {
+                c.ln_gamma_alpha_corr = Some(0.2);
+            }
+        }));
+        assert!(
+            t.contains("ridge is not reproduced") && !t.contains("ridge is reproduced"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn bimodality_is_counted_per_run() {
+        assert_eq!(mode_bins(&[0.0, 0.3, 0.05, 0.6, 0.05]), vec![1, 3]);
+        // A plateau is one mode; a bump under the share threshold is none.
+        assert_eq!(mode_bins(&[0.0, 0.45, 0.45, 0.04, 0.06]), vec![1, 4]);
+        assert_eq!(mode_bins(&[0.0, 0.45, 0.45, 0.06, 0.04]), vec![1]);
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, _| {}));
+        assert!(
+            t.contains("**k_t: bimodal in every run, as in seed 003"),
+            "{t}"
+        );
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, c| {
+            if c.class == ModelClass::M2 {
+                c.k_t_histogram = vec![0.0, 0.0, 0.0, 0.0, 0.2, 0.6, 0.2, 0.0, 0.0, 0.0];
+            }
+        }));
+        assert!(
+            t.contains("**k_t: bimodal in 2 of 3 runs") && !t.contains("bimodal in every run"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn evidence_verdicts_follow_the_gaps_and_the_fits() {
+        // Table 4's own evidences (replicate sd 0.1): M3 on top, M2 over M1 (0.93 > 2 se).
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, _| {}));
+        assert!(
+            t.contains("**Evidence ranking: M2 over M1 agrees, M3 on top agrees too.**"),
+            "{t}"
+        );
+        // Equal fits, gamma_n 10x apart at equal COV: the lead is prior volume.
+        assert!(t.contains("M2 beats M1 on prior volume, not on fit"), "{t}");
+        // M2 fitting far better than M1 is a lead on fit, whatever the Occam factors say.
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, c| {
+            if c.class == ModelClass::M2 {
+                c.max_ln_likelihood += 5.0;
+            }
+        }));
+        assert!(
+            !t.contains("on prior volume, not on fit") && t.contains("not explained by prior"),
+            "{t}"
+        );
+        // Gaps inside the replicate scatter are not an order.
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, c| {
+            c.ln_evidence_replicates =
+                vec![c.ln_evidence - 3.0, c.ln_evidence, c.ln_evidence + 3.0];
+        }));
+        assert!(t.contains("M2 over M1 is not resolved"), "{t}");
+        // M3 below M2 by many standard errors.
+        let t = discussion_of(&fake_study(&[E_STEEL], |_, c| {
+            if c.class == ModelClass::M3 {
+                c.ln_evidence = 10.0;
+                c.ln_evidence_replicates = vec![9.9, 10.0, 10.1];
+            }
+        }));
+        assert!(t.contains("M3 on top does not."), "{t}");
+    }
+
+    #[test]
+    fn literal_reading_is_confirmed_only_outside_the_measured_range() {
+        let t = report(&fake_study(&[E_STEEL], |_, _| {}), "test");
+        assert!(t.contains("The DEM confirms it: both"), "{t}");
+        let mut s = fake_study(&[E_STEEL], |_, _| {});
+        s.groups[0].cnr_with_gamma_15 = 0.9;
+        s.groups[0].ctr_with_k_t_1_5e5 = 0.52;
+        let t = report(&s, "test");
+        assert!(
+            t.contains("The DEM does not decide it") && !t.contains("confirms"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn sweep_crossings_are_interpolated_in_ln_k_t() {
+        let g = &fake_study(&[E_STEEL], |_, _| {}).groups[0];
+        // Measured ctr at 10 deg is 0.523: crossed between 0.1 and 0.5 and between 1 and 2.
+        let x = sweep_crossings(g, &parse_csv(TABLE2, "t.csv").unwrap());
+        assert_eq!(x.len(), 2, "{x:?}");
+        assert!(
+            x[0] > 0.1 && x[0] < 0.5 && x[1] > 1.0 && x[1] < 2.0,
+            "{x:?}"
+        );
     }
 
     /// The full M1 calibration on steel's modulus: mu is fixed by the sliding branch (40-60 deg)
