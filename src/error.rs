@@ -147,20 +147,37 @@ pub fn csv_error(file: &str, e: csv::Error) -> Error {
 /// appears twice is refused: a reader looking it up would silently take the first.
 pub fn csv_open(path: &Path) -> Result<(csv::Reader<std::fs::File>, Vec<String>)> {
     let file = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
+    let rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
         .map_err(|e| csv_error(&file, e))?;
+    with_header(&file, rdr)
+}
+
+/// CSV text already in memory, read like [`csv_open`] but with `#` comment lines skipped
+/// (annotated data tables); `file` names the source in errors.
+pub fn csv_open_str<'a>(text: &'a str, file: &str) -> Result<(csv::Reader<&'a [u8]>, Vec<String>)> {
+    let rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    with_header(file, rdr)
+}
+
+fn with_header<R: std::io::Read>(
+    file: &str,
+    mut rdr: csv::Reader<R>,
+) -> Result<(csv::Reader<R>, Vec<String>)> {
     let header: Vec<String> = rdr
         .headers()
-        .map_err(|e| csv_error(&file, e))?
+        .map_err(|e| csv_error(file, e))?
         .iter()
         .map(str::to_string)
         .collect();
     for (i, h) in header.iter().enumerate() {
         if !h.is_empty() && header[..i].contains(h) {
             return Err(Error::input(
-                &file,
+                file,
                 format!("column {h}"),
                 format!(
                     "appears twice in the header (columns {} and {}): expected unique column names",
