@@ -150,24 +150,27 @@ fn no_command_overwrites_its_own_input() {
         "--out",
         s(&design),
     ]);
-    refused(
-        &[
-            "sample",
-            "--method",
-            "sobol",
-            "--n",
-            "4",
-            "--space",
-            s(&space),
-            "--seed",
-            "1",
-            "--extend",
-            s(&design),
-            "--out",
-            s(&design),
-        ],
+    // Extending a design in place is documented: the old points stay first and unchanged.
+    let before = std::fs::read_to_string(&design).unwrap();
+    ok(&[
+        "sample",
+        "--method",
+        "sobol",
+        "--n",
+        "4",
+        "--space",
+        s(&space),
+        "--seed",
+        "1",
         "--extend",
-        &design,
+        s(&design),
+        "--out",
+        s(&design),
+    ]);
+    let after = std::fs::read_to_string(&design).unwrap();
+    assert!(
+        after.starts_with(&before) && after.lines().count() == 13,
+        "{after}"
     );
     refused(
         &[

@@ -41,11 +41,11 @@ pub struct SampleArgs {
 }
 
 pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
-    let inputs: Vec<(&str, &std::path::Path)> = [("--space", &a.space), ("--extend", &a.extend)]
-        .into_iter()
-        .filter_map(|(n, p)| p.as_deref().map(|p| (n, p)))
-        .collect();
-    refuse_overwriting_inputs("--out", &a.out, &inputs)?;
+    // `--extend D --out D` is the documented in-place update: the old points stay first and
+    // unchanged, and the file is replaced atomically.
+    if let Some(space) = &a.space {
+        refuse_overwriting_inputs("--out", &a.out, &[("--space", space)])?;
+    }
     let space = a.space.as_deref().map(Space::from_file).transpose()?;
     let dim = match (&space, a.dim) {
         (Some(s), _) => s.dim(),
