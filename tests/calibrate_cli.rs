@@ -87,11 +87,22 @@ fn calibrate_writes_parameters_and_reports_the_posterior() {
         "500",
     ]);
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
-    let post = &v["posterior"]["parameters"];
-    assert_eq!(post[0]["name"], "a");
-    let mean_a = post[0]["mean"].as_f64().unwrap();
+    // The interface scripts use: named parameters (fixed ones included), predictions by
+    // response, the objective; posterior summaries by parameter name and the log-evidence.
+    let best = &v["solutions"][0];
+    assert!(
+        (best["params"]["a"].as_f64().unwrap() - 0.3).abs() < 0.01,
+        "{best}"
+    );
+    assert_eq!(best["params"]["c"].as_f64().unwrap(), 1.5);
+    assert!(!best["predicted"].as_object().unwrap().is_empty(), "{best}");
+    assert!(best["objective"].as_f64().unwrap() < 1.0);
+    let mean_a = v["posterior"]["a"]["mean"].as_f64().unwrap();
     assert!((mean_a - 0.3).abs() < 0.03, "posterior mean of a {mean_a}");
-    assert!(v["calibration"]["optima"][0]["chi2"].as_f64().unwrap() < 1.0);
+    for k in ["cov", "q05", "q95"] {
+        assert!(v["posterior"]["a"][k].as_f64().is_some(), "{k}");
+    }
+    assert!(v["log_evidence"].as_f64().unwrap().is_finite());
 }
 
 /// A model class that lacks an effect (y without b) loses against the full one by evidence when

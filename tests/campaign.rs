@@ -512,8 +512,10 @@ fn failed_and_panicking_runs_are_recorded_and_counted() {
         s(&bigger),
         "--json",
     ]);
-    assert!(text.contains("remaining  4"), "{text}");
     let status = last_json(&text);
+    // With --json the text goes to standard error; without it, to standard output.
+    let human = ok(&["campaign", "status", s(&out), "--design", s(&bigger)]);
+    assert!(human.contains("remaining  4"), "{human}");
     assert_eq!(status["done"], 4);
     assert_eq!(status["failed"], 2);
     assert_eq!(status["remaining"], 4);

@@ -330,3 +330,188 @@ fn validate_enforces_a_tolerance_and_refuses_what_would_compare_nothing() {
         );
     }
 }
+
+/// Standard output of `args` is exactly one JSON object (and the command succeeded).
+fn one_json_object(args: &[&str]) -> serde_json::Value {
+    let o = common::mbgc(args);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{args:?}: {err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| {
+        panic!("{args:?}: standard output is not one JSON value ({e}):\n{out}")
+    });
+    assert!(v.is_object(), "{args:?}: {out}");
+    v
+}
+
+#[test]
+fn every_reporting_command_prints_one_json_object_with_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (data, model) = table_and_model(d);
+    let p = |name: &str| d.join(name);
+
+    let space = p("space.toml");
+    std::fs::write(
+        &space,
+        "[parameters]\nx = { min = 0.0, max = 1.0 }\nz = { min = 0.0, max = 1.0 }\n",
+    )
+    .unwrap();
+    let design = p("design.csv");
+    let v = one_json_object(&[
+        "sample",
+        "--method",
+        "fssf-f",
+        "--n",
+        "12",
+        "--space",
+        s(&space),
+        "--seed",
+        "1",
+        "--out",
+        s(&design),
+        "--json",
+    ]);
+    assert_eq!(v["n"], 12);
+    let v = one_json_object(&["metrics", s(&design), "--space", s(&space), "--json"]);
+    assert!(v["mid"].as_f64().unwrap() > 0.0);
+
+    let sieve = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sieve_gravel_8_16.csv");
+    let v = one_json_object(&["psd", "fit", s(&sieve), "--json"]);
+    assert_eq!(v["best"], "lognormal");
+    let v = one_json_object(&[
+        "psd",
+        "draw",
+        "--d50",
+        "5",
+        "--sigma-ln",
+        "0.2",
+        "--n",
+        "50",
+        "--seed",
+        "1",
+        "--out",
+        s(&p("particles.csv")),
+        "--json",
+    ]);
+    assert_eq!(v["n"], 50);
+
+    let v = one_json_object(&[
+        "fit",
+        "--data",
+        s(&data),
+        "--inputs",
+        "x,z",
+        "--targets",
+        "y",
+        "--out",
+        s(&p("m2.json")),
+        "--population",
+        "100",
+        "--generations",
+        "2",
+        "--no-figures",
+        "--json",
+    ]);
+    assert_eq!(v["responses"][0]["name"], "y");
+    let v = one_json_object(&[
+        "predict",
+        "--model",
+        s(&model),
+        "--data",
+        s(&data),
+        "--out",
+        s(&p("pred.csv")),
+        "--json",
+    ]);
+    assert_eq!(v["rows"], 40);
+
+    let material = p("material.toml");
+    std::fs::write(&material, "[measured]\ny = { value = 1.5, sd = 0.1 }\n").unwrap();
+    let v = one_json_object(&[
+        "calibrate",
+        "--material",
+        s(&material),
+        "--model",
+        s(&model),
+        "--starts",
+        "8",
+        "--json",
+    ]);
+    assert!(v["solutions"][0]["params"]["x"].is_number(), "{v}");
+    let v = one_json_object(&[
+        "calibrate",
+        "--material",
+        s(&material),
+        "--model",
+        s(&model),
+        "--model",
+        s(&model),
+        "--starts",
+        "8",
+        "--json",
+    ]);
+    assert_eq!(v["classes"].as_array().unwrap().len(), 2);
+
+    let wall = p("wall.csv");
+    std::fs::write(&wall, "impact_angle\n0\n30\n").unwrap();
+    let table = p("table.csv");
+    let set = [
+        "--set",
+        "E_p=2e11",
+        "--set",
+        "nu_p=0.3",
+        "--set",
+        "rho_p=7800",
+        "--set",
+        "d50=10",
+        "--set",
+        "E_w=2e11",
+        "--set",
+        "e_pw=0.8",
+        "--set",
+        "mu_pw=0.1",
+        "--set",
+        "impact_speed=1",
+    ];
+    let mut args = vec![
+        "simulate",
+        "--design",
+        s(&wall),
+        "--experiment",
+        "wall-impact",
+        "--out",
+        s(&table),
+        "--json",
+    ];
+    args.extend(set);
+    let v = one_json_object(&args);
+    assert_eq!(v["done"], 2);
+    let v = one_json_object(&["campaign", "status", s(&table), "--json"]);
+    assert_eq!(v["done"], 2);
+    let v = one_json_object(&[
+        "campaign",
+        "merge",
+        s(&table),
+        "--out",
+        s(&p("merged.csv")),
+        "--json",
+    ]);
+    assert_eq!(v["summary"]["rows"], 2);
+
+    let (mat, params) = impact_files(d, "cnr = { value = 0.8, sd = 0.05 }");
+    let v = one_json_object(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+        "--json",
+    ]);
+    assert_eq!(v["responses"][0]["response"], "cnr");
+    assert_eq!(v["pass"], true);
+}

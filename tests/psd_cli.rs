@@ -22,7 +22,7 @@ fn text(bytes: &[u8]) -> String {
 }
 
 #[test]
-fn fit_json_last_line_has_best_models_and_metamodel_inputs() {
+fn fit_json_is_the_whole_stdout_with_best_models_and_metamodel_inputs() {
     let out = mbgc(&["psd", "fit", &example(), "--json"]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
@@ -55,7 +55,9 @@ fn fit_json_last_line_has_best_models_and_metamodel_inputs() {
         .max_by(|a, b| a["r2"].as_f64().partial_cmp(&b["r2"].as_f64()).unwrap())
         .and_then(|m| m["model"].as_str());
     assert_eq!(Some(best), top);
-    assert!(stdout.contains("<- best"));
+    // Standard output is the JSON object alone; the table went to standard error.
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(text(&out.stderr).contains("<- best"));
 
     let d50 = v["d50_mm"].as_f64().expect("d50_mm");
     let sigma = v["sigma_ln"].as_f64().expect("sigma_ln");

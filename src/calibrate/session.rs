@@ -203,13 +203,61 @@ impl Session {
     }
 
     /// The machine-readable record of `mbgc calibrate --json`.
+    /// The machine-readable result (`calibrate --json`): `solutions` best first, each with every
+    /// model input by name (fixed ones included), the predicted responses and the objective;
+    /// with a posterior, per parameter its mean, COV and 5/95 % quantiles, and the
+    /// log-evidence. `calibration` keeps the full optimiser record.
     pub fn json(&self) -> serde_json::Value {
+        use serde_json::{Map, Value};
+        let solutions: Vec<Value> = self
+            .calibration
+            .optima
+            .iter()
+            .map(|o| {
+                let mut params = Map::new();
+                for (name, v) in &self.fixed {
+                    params.insert(name.clone(), Value::from(*v));
+                }
+                for (name, v) in self.free.iter().zip(&o.x) {
+                    params.insert(name.clone(), Value::from(*v));
+                }
+                let predicted: Map<String, Value> = self
+                    .measured
+                    .iter()
+                    .zip(&o.predictions)
+                    .map(|(m, p)| (m.name.clone(), Value::from(*p)))
+                    .collect();
+                serde_json::json!({
+                    "params": params,
+                    "predicted": predicted,
+                    "objective": o.chi2,
+                    "constraint_violation": o.violation,
+                    "starts": o.starts,
+                })
+            })
+            .collect();
+        let posterior = self.posterior.as_ref().map(|p| {
+            p.parameters
+                .iter()
+                .map(|s| {
+                    (
+                        s.name.clone(),
+                        serde_json::json!({
+                            "mean": s.mean, "sd": s.sd, "cov": s.cov, "q05": s.q05, "q95": s.q95,
+                        }),
+                    )
+                })
+                .collect::<Map<String, Value>>()
+        });
         serde_json::json!({
             "material": self.material,
             "model": self.model,
             "notes": self.notes,
+            "solutions": solutions,
+            "posterior": posterior,
+            "log_evidence": self.posterior.as_ref().map(|p| p.ln_evidence),
+            "posterior_details": self.posterior,
             "calibration": self.calibration,
-            "posterior": self.posterior,
         })
     }
 }

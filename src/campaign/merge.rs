@@ -11,7 +11,7 @@ use super::lock::TableLock;
 use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
 use crate::error::{write_atomic, Error, Result};
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct MergeSummary {
     pub rows: usize,
     /// Records seen more than once (kept once).

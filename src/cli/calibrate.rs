@@ -102,9 +102,13 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             }
         }
     } else if a.json {
-        for s in &sessions {
-            println!("{}", serde_json::to_string_pretty(&s.json())?);
-        }
+        // Exactly one object on standard output, however many models.
+        let v = if sessions.len() == 1 {
+            sessions[0].json()
+        } else {
+            serde_json::json!({ "classes": sessions.iter().map(Session::json).collect::<Vec<_>>() })
+        };
+        println!("{}", serde_json::to_string_pretty(&v)?);
     }
     Ok(())
 }

@@ -1,5 +1,7 @@
 //! `mbgc campaign`: merge campaign tables, report their progress.
 
+use crate::cli::output::Output;
+use crate::say;
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
@@ -28,6 +30,9 @@ pub struct MergeArgs {
     /// Merged table (written atomically; may be one of the inputs).
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
+    /// Standard output holds one JSON object; the text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -38,7 +43,7 @@ pub struct StatusArgs {
     /// Design to count remaining rows against [default: the one recorded in <CSV>.meta.json].
     #[arg(long, value_name = "CSV")]
     pub design: Option<PathBuf>,
-    /// Print a JSON object as the last line.
+    /// Standard output holds one JSON object; the text goes to standard error.
     #[arg(long)]
     pub json: bool,
 }
@@ -51,6 +56,7 @@ pub fn run(a: &CampaignArgs) -> anyhow::Result<()> {
 }
 
 fn run_merge(a: &MergeArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     let s = merge(&a.tables, &a.out)?;
     for p in &s.partial_lines {
         eprintln!(
@@ -59,20 +65,27 @@ fn run_merge(a: &MergeArgs) -> anyhow::Result<()> {
             p.display()
         );
     }
-    println!(
+    say!(
+        out,
         "{}: {} runs from {} tables ({} duplicates dropped)",
         a.out.display(),
         s.rows,
         a.tables.len(),
         s.duplicates
     );
-    Ok(())
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "tables": a.tables,
+        "summary": s,
+    }))
 }
 
 fn run_status(a: &StatusArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     let s = status(&a.table, a.design.as_deref())?;
     let opt = |v: Option<usize>| v.map_or("unknown (pass --design)".to_string(), |v| v.to_string());
-    println!(
+    say!(
+        out,
         "{}{}",
         s.out,
         s.experiment
@@ -80,15 +93,15 @@ fn run_status(a: &StatusArgs) -> anyhow::Result<()> {
             .map(|e| format!(" ({e})"))
             .unwrap_or_default()
     );
-    println!("  done       {}", s.done);
-    println!("  failed     {}", s.failed);
-    println!("  remaining  {}", opt(s.remaining));
-    println!("  total      {}", opt(s.total));
+    say!(out, "  done       {}", s.done);
+    say!(out, "  failed     {}", s.failed);
+    say!(out, "  remaining  {}", opt(s.remaining));
+    say!(out, "  total      {}", opt(s.total));
     if s.partial_line {
-        println!("  (an incomplete last line: its run counts as remaining)");
+        say!(
+            out,
+            "  (an incomplete last line: its run counts as remaining)"
+        );
     }
-    if a.json {
-        println!("{}", serde_json::to_string(&s)?);
-    }
-    Ok(())
+    out.object(&s)
 }

@@ -1,6 +1,8 @@
 //! `mbgc fit`: one readable equation per response by genetic programming, saved as a model file.
 
+use crate::cli::output::Output;
 use crate::outputs::refuse_overwriting_inputs;
+use crate::say;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -62,6 +64,10 @@ pub struct FitArgs {
     /// Do not draw figures.
     #[arg(long)]
     pub no_figures: bool,
+    /// Standard output holds one JSON object (equations and metrics); text goes to standard
+    /// error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `90`, `90s`, `10m`, `1.5h` -> seconds.
@@ -82,11 +88,23 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
 }
 
 pub fn run(a: &FitArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", &a.data)];
     if let Some(s) = &a.space {
         inputs.push(("--space", s));
     }
     refuse_overwriting_inputs("--out", &a.out, &inputs)?;
+    // Values the engine would silently bend: 0 generations ran one, an infinite parsimony
+    // made every tree equal.
+    if a.generations == 0 {
+        anyhow::bail!("--generations 0: expected at least 1 generation");
+    }
+    if !(a.parsimony.is_finite() && a.parsimony >= 0.0) {
+        anyhow::bail!(
+            "--parsimony {}: expected a finite penalty >= 0 (default 0.001)",
+            a.parsimony
+        );
+    }
     let config = Config {
         population: a.population,
         generations: a.generations,
@@ -152,7 +170,8 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
             .test
             .map(|t| format!("test R2 {:.5} RMSE {:.4e}", t.r2, t.rmse))
             .unwrap_or_else(|| "no test rows".into());
-        println!(
+        say!(
+            out,
             "{} = {}\n    size {}, train R2 {:.5} RMSE {:.4e}, {test}; {} generations, {:.1} s, {:.2e} node-evals/s",
             r.name,
             r.equation,
@@ -164,9 +183,21 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
             r.node_evals as f64 / r.seconds.max(1e-9)
         );
     }
-    println!("wrote {}", a.out.display());
+    say!(out, "wrote {}", a.out.display());
     for f in &report.figures {
-        println!("wrote {}", f.display());
+        say!(out, "wrote {}", f.display());
     }
-    Ok(())
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "figures": report.figures,
+        "responses": model.responses.iter().map(|r| serde_json::json!({
+            "name": r.name,
+            "equation": r.equation,
+            "size": r.size,
+            "train": r.train,
+            "test": r.test,
+            "generations": r.generations,
+            "seconds": r.seconds,
+        })).collect::<Vec<_>>(),
+    }))
 }

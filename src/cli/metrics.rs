@@ -1,5 +1,7 @@
 //! `mbgc metrics`: space-filling metrics of a design file.
 
+use crate::cli::output::Output;
+use crate::say;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -14,7 +16,7 @@ pub struct MetricsArgs {
     /// Space file to map physical values back to the unit cube.
     #[arg(long)]
     pub space: Option<PathBuf>,
-    /// Print one JSON object as the last line.
+    /// Standard output holds one JSON object; the text goes to standard error.
     #[arg(long)]
     pub json: bool,
 }
@@ -30,18 +32,30 @@ pub fn run(a: &MetricsArgs) -> anyhow::Result<()> {
         );
     }
     let m = metrics::metrics(&design.unit);
-    println!("design  {}", a.design.display());
-    println!("n       {}", m.n);
-    println!("dim     {}", m.dim);
-    println!(
+    let out = Output::new(a.json);
+    say!(out, "design  {}", a.design.display());
+    say!(out, "n       {}", m.n);
+    say!(out, "dim     {}", m.dim);
+    say!(
+        out,
         "MID     {:.6}   minimum intersite distance (larger is better)",
         m.mid
     );
-    println!("COV     {:.6}   cover measure (smaller is better)", m.cov);
-    println!("CD^2    {:.6e}   centered L2 discrepancy, squared", m.cd);
-    println!("WD^2    {:.6e}   wrap-around L2 discrepancy, squared", m.wd);
-    if a.json {
-        println!("{}", serde_json::to_string(&m)?);
-    }
+    say!(
+        out,
+        "COV     {:.6}   cover measure (smaller is better)",
+        m.cov
+    );
+    say!(
+        out,
+        "CD^2    {:.6e}   centered L2 discrepancy, squared",
+        m.cd
+    );
+    say!(
+        out,
+        "WD^2    {:.6e}   wrap-around L2 discrepancy, squared",
+        m.wd
+    );
+    out.object(&m)?;
     Ok(())
 }

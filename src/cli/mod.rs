@@ -8,6 +8,7 @@ pub mod campaign;
 pub mod export;
 pub mod fit;
 pub mod metrics;
+pub mod output;
 pub mod predict;
 pub mod psd;
 pub mod sample;

@@ -1,6 +1,8 @@
 //! `mbgc predict`: evaluate a saved metamodel on the rows of a table.
 
+use crate::cli::output::Output;
 use crate::outputs::refuse_overwriting_inputs;
+use crate::say;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -20,9 +22,13 @@ pub struct PredictArgs {
     /// Output CSV: the input rows with one column per response appended.
     #[arg(long)]
     pub out: PathBuf,
+    /// Standard output holds one JSON object; text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     refuse_overwriting_inputs(
         "--out",
         &a.out,
@@ -77,6 +83,12 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
     if nan > 0 {
         eprintln!("warning: {nan} predictions are not finite (written as NaN)");
     }
-    println!("wrote {} ({rows} rows)", a.out.display());
-    Ok(())
+    say!(out, "wrote {} ({rows} rows)", a.out.display());
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "rows": rows,
+        "responses": model.responses.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(),
+        "outside_domain": outside.len(),
+        "non_finite": nan,
+    }))
 }

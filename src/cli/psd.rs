@@ -1,6 +1,8 @@
 //! `mbgc psd`: fit sieve data, draw particle sets.
 
+use crate::cli::output::Output;
 use crate::outputs::refuse_overwriting_inputs;
+use crate::say;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -30,7 +32,7 @@ pub enum PsdCommand {
 pub struct FitArgs {
     /// Sieve CSV with columns size_mm and passing (fraction 0..1) or passing_pct (0..100).
     pub sieve: PathBuf,
-    /// Print a JSON summary as the last line.
+    /// Standard output holds one JSON object; the text goes to standard error.
     #[arg(long)]
     pub json: bool,
     /// Write a figure of the data and the fitted curves (.svg or .png).
@@ -79,6 +81,9 @@ pub struct DrawArgs {
     /// Output CSV with one column diameter_mm.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
+    /// Standard output holds one JSON object (the summary); text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(args: &PsdArgs) -> anyhow::Result<()> {
@@ -89,19 +94,25 @@ pub fn run(args: &PsdArgs) -> anyhow::Result<()> {
 }
 
 fn run_fit(args: &FitArgs) -> anyhow::Result<()> {
+    let out = Output::new(args.json);
     // Refuse a bad figure name before any output.
     if let Some(plot) = &args.plot {
         crate::plot::format_of(plot)?;
     }
     let data = SieveData::read(&args.sieve)?;
     let report = fit_all(&data)?;
-    println!("{}: {} sieve points", data.source, data.len());
-    println!(
+    say!(out, "{}: {} sieve points", data.source, data.len());
+    say!(
+        out,
         "{:<10} {:<38} {:>9} {:>11}",
-        "model", "parameters", "R^2", "MSE"
+        "model",
+        "parameters",
+        "R^2",
+        "MSE"
     );
     for f in &report.models {
-        println!(
+        say!(
+            out,
             "{:<10} {:<38} {:>9.5} {:>11.3e}{}",
             f.model.name(),
             f.dist.describe(),
@@ -114,23 +125,23 @@ fn run_fit(args: &FitArgs) -> anyhow::Result<()> {
             }
         );
     }
-    println!(
+    say!(
+        out,
         "metamodel inputs (log-normal): d50 = {:.4} mm, sigma_ln = {:.4}",
-        report.d50_mm, report.sigma_ln
+        report.d50_mm,
+        report.sigma_ln
     );
     if let Some(plot) = &args.plot {
         crate::plot::psd::write_fit(plot, &data, &report)?;
-        println!("figure: {}", plot.display());
+        say!(out, "figure: {}", plot.display());
     }
-    if args.json {
-        println!("{}", serde_json::to_string(&report)?);
-    }
-    Ok(())
+    out.object(&report)
 }
 
 const ARGS: &str = "command line";
 
 fn run_draw(args: &DrawArgs) -> anyhow::Result<()> {
+    let out = Output::new(args.json);
     if let Some(sieve) = &args.sieve {
         refuse_overwriting_inputs("--out", &args.out, &[("--sieve", sieve)])?;
     }
@@ -139,7 +150,8 @@ fn run_draw(args: &DrawArgs) -> anyhow::Result<()> {
             let data = SieveData::read(path)?;
             let model = args.model.unwrap_or(Model::LogNormal);
             let fit = fit_model(&data, model)?;
-            println!(
+            say!(
+                out,
                 "{model} fitted to {}: {} (R^2 = {:.5})",
                 data.source,
                 fit.dist.describe(),
@@ -186,7 +198,8 @@ fn run_draw(args: &DrawArgs) -> anyhow::Result<()> {
             format!(" (default: Q3 = {q})")
         }
     };
-    println!(
+    say!(
+        out,
         "range: d_min = {:.4} mm{}, d_max = {:.4} mm{}; holds {:.2} % of the mass",
         set.d_min,
         tag(args.d_min, DEFAULT_TRIM),
@@ -195,22 +208,37 @@ fn run_draw(args: &DrawArgs) -> anyhow::Result<()> {
         100.0 * set.mass_fraction
     );
     if args.d_min.is_some() || args.d_max.is_some() {
-        println!("(default range would be [{dmin_default:.4}, {dmax_default:.4}] mm)");
+        say!(
+            out,
+            "(default range would be [{dmin_default:.4}, {dmax_default:.4}] mm)"
+        );
     }
     let target_median =
         dist.q3_inv(dist.q3(set.d_min) + 0.5 * (dist.q3(set.d_max) - dist.q3(set.d_min)));
-    println!(
+    say!(
+        out,
         "{} particles (seed {}) written to {}",
         set.diameters_mm.len(),
         args.seed,
         args.out.display()
     );
-    println!(
+    say!(
+        out,
         "count-mean diameter: {:.4} mm; mass-median diameter: {:.4} mm (truncated distribution: \
          {:.4} mm)",
         set.count_mean(),
         set.mass_median(),
         target_median
     );
-    Ok(())
+    out.object(&serde_json::json!({
+        "out": args.out,
+        "n": set.diameters_mm.len(),
+        "seed": args.seed,
+        "d_min_mm": set.d_min,
+        "d_max_mm": set.d_max,
+        "mass_fraction": set.mass_fraction,
+        "count_mean_mm": set.count_mean(),
+        "mass_median_mm": set.mass_median(),
+        "target_mass_median_mm": target_median,
+    }))
 }

@@ -1,6 +1,8 @@
 //! `mbgc sample`: a new design, or an existing one extended, written as CSV.
 
+use crate::cli::output::Output;
 use crate::outputs::refuse_overwriting_inputs;
+use crate::say;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -38,9 +40,18 @@ pub struct SampleArgs {
     /// FSSF candidate count (default 1000 d + 2 n_max).
     #[arg(long)]
     pub fssf_candidates: Option<usize>,
+    /// Standard output holds one JSON object (the summary); text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
+/// The largest design `sample` makes: beyond this the design file alone is gigabytes.
+pub const MAX_VALUES: usize = 50_000_000;
+/// Above this many points the summary skips the O(n^2) metrics (`mbgc metrics` computes them).
+pub const SUMMARY_MAX_POINTS: usize = 20_000;
+
 pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     // `--extend D --out D` is the documented in-place update: the old points stay first and
     // unchanged, and the file is replaced atomically.
     if let Some(space) = &a.space {
@@ -55,6 +66,12 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
     };
     if a.n == 0 {
         anyhow::bail!("--n: expected at least one new point");
+    }
+    if a.n.checked_mul(dim).is_none_or(|v| v > MAX_VALUES) {
+        anyhow::bail!(
+            "--n {} in {dim} dimensions: expected at most {MAX_VALUES} values in all (n x dim)",
+            a.n
+        );
     }
     let mut design = match &a.extend {
         Some(path) => {
@@ -91,8 +108,10 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
         .with_context(|| format!("sampling with {}", a.method.name()))?;
     design.append_unit(space.as_ref(), &new);
     design.write(&a.out)?;
-    let m = (design.len() >= 2).then(|| metrics::metrics(&design.unit));
-    println!(
+    let m = (design.len() >= 2 && design.len() <= SUMMARY_MAX_POINTS)
+        .then(|| metrics::metrics(&design.unit));
+    say!(
+        out,
         "{}: {} points ({} existing + {} new, {}, seed {}) in {} dimensions{}",
         a.out.display(),
         design.len(),
@@ -101,8 +120,22 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
         a.method.name(),
         a.seed,
         dim,
-        m.map(|m| format!("; MID {:.4}, COV {:.4}", m.mid, m.cov))
-            .unwrap_or_default()
+        match &m {
+            Some(m) => format!("; MID {:.4}, COV {:.4}", m.mid, m.cov),
+            None if design.len() > SUMMARY_MAX_POINTS => {
+                format!("; metrics skipped above {SUMMARY_MAX_POINTS} points (mbgc metrics)")
+            }
+            None => String::new(),
+        }
     );
-    Ok(())
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "method": a.method.name(),
+        "seed": a.seed,
+        "dim": dim,
+        "existing": n_old,
+        "new": a.n,
+        "n": design.len(),
+        "metrics": m,
+    }))
 }

@@ -1,7 +1,9 @@
 //! `mbgc simulate`: a calibration experiment for every row of a design, appended to a table that
 //! a restart of the same command resumes.
 
+use crate::cli::output::Output;
 use crate::outputs::refuse_overwriting_inputs;
+use crate::say;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -43,9 +45,13 @@ pub struct SimulateArgs {
     /// Run again the rows whose earlier run failed (their failed lines are replaced).
     #[arg(long)]
     pub retry_failed: bool,
+    /// Standard output holds one JSON object (the run counts); text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     refuse_overwriting_inputs("--out", &a.out, &[("--design", &a.design)])?;
     let settings = ExperimentSettings {
         box_scale: a.box_scale,
@@ -90,7 +96,8 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         );
     }
     let ran = s.done + s.failed;
-    println!(
+    say!(
+        out,
         "{}: {} on {} ({} rows{}): {} already in the table, ran {ran} ({} done, {} failed) in \
          {:.2} s{}",
         a.out.display(),
@@ -121,6 +128,22 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             s.retried
         );
     }
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "experiment": plan.experiment,
+        "design": a.design,
+        "design_rows": plan.rows.len(),
+        "shard": shard.map(|k| k.to_string()),
+        "planned": s.planned,
+        "skipped": s.skipped,
+        "done": s.done,
+        "failed": s.failed,
+        "failed_before": s.failed_before,
+        "retried": s.retried,
+        "truncated_bytes": s.truncated_bytes,
+        "threads": s.threads,
+        "elapsed_s": s.elapsed_s,
+    }))?;
     // A cluster job array must see failures in the exit code, including those of an earlier
     // attempt that this resume skipped.
     let failed = s.failed + s.failed_before;

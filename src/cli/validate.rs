@@ -1,6 +1,8 @@
 //! `mbgc validate`: rerun the DEM experiment at calibrated parameters and compare with the
 //! measurements (and with what the metamodel predicted there).
 
+use crate::cli::output::Output;
+use crate::say;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -37,6 +39,9 @@ pub struct ValidateArgs {
     /// command exits 1 when a response is further off. Without it deviations are only reported.
     #[arg(long)]
     pub tolerance: Option<f64>,
+    /// Standard output holds one JSON object (the comparison); text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The picture can be written: a known extension and a directory that takes a file. Checked
@@ -101,6 +106,7 @@ fn read_params(path: &std::path::Path) -> anyhow::Result<(ParamSet, Vec<(String,
 }
 
 pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
+    let report = Output::new(a.json);
     if let Some(t) = a.tolerance {
         if !(t.is_finite() && t > 0.0) {
             anyhow::bail!("--tolerance {t}: expected a positive relative deviation such as 0.05");
@@ -168,20 +174,30 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             ..RunOptions::default()
         },
     )?;
-    println!(
+    say!(
+        report,
         "{} at {} ({:.1} s):",
         exp.name(),
         a.params.display(),
         t.elapsed().as_secs_f64()
     );
-    println!(
+    say!(
+        report,
         "  {:>14} {:>12} {:>8} {:>12} {:>9} {:>8} {:>12}",
-        "response", "measured", "sd", "DEM", "off %", "off sd", "metamodel"
+        "response",
+        "measured",
+        "sd",
+        "DEM",
+        "off %",
+        "off sd",
+        "metamodel"
     );
     let mut worst: Option<(String, f64)> = None;
+    let mut rows = Vec::new();
     for m in &material.measured {
         let Some(dem) = out.get(&m.response) else {
-            println!(
+            say!(
+                report,
                 "  {:>14} {:>12} (the {} experiment does not measure it)",
                 m.response,
                 m.value,
@@ -193,7 +209,8 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             .iter()
             .find(|(k, _)| *k == m.response)
             .map_or("-".to_string(), |(_, v)| format!("{v:.4}"));
-        println!(
+        say!(
+            report,
             "  {:>14} {:>12.4} {:>8.3} {:>12.4} {:>+9.2} {:>+8.2} {:>12}",
             m.response,
             m.value,
@@ -203,11 +220,31 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             (dem - m.value) / m.sd,
             model
         );
+        rows.push(serde_json::json!({
+            "response": m.response,
+            "measured": m.value,
+            "sd": m.sd,
+            "dem": dem,
+            "off_relative": (dem - m.value) / m.value,
+            "off_sd": (dem - m.value) / m.sd,
+            "metamodel": predicted.iter().find(|(k, _)| *k == m.response).map(|(_, v)| *v),
+        }));
         let off = ((dem - m.value) / m.value).abs();
         if worst.as_ref().is_none_or(|(_, w)| off > *w || off.is_nan()) {
             worst = Some((m.response.clone(), off));
         }
     }
+    let pass = worst
+        .as_ref()
+        .is_none_or(|(_, off)| a.tolerance.is_none_or(|t| *off <= t));
+    report.object(&serde_json::json!({
+        "experiment": exp.name(),
+        "params": a.params,
+        "seed": a.seed,
+        "responses": rows,
+        "tolerance": a.tolerance,
+        "pass": pass,
+    }))?;
     if let Some((name, off)) = worst {
         match a.tolerance {
             Some(t) if off.is_nan() || off > t => anyhow::bail!(
@@ -215,11 +252,13 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
                 100.0 * off,
                 100.0 * t
             ),
-            Some(t) => println!(
+            Some(t) => say!(
+                report,
                 "largest deviation {:.2} % ({name}), within --tolerance {t}",
                 100.0 * off
             ),
-            None => println!(
+            None => say!(
+                report,
                 "largest deviation {:.2} % ({name}); give --tolerance to make it a pass/fail check",
                 100.0 * off
             ),

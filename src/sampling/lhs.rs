@@ -50,6 +50,13 @@ impl Sampler for Lhs {
     }
 
     fn extend(&self, existing: &Points, n: usize, seed: u64) -> Result<Points> {
+        // Before anything is drawn or allocated.
+        if self.maximin && n > MAXIMIN_MAX_POINTS {
+            return Err(Error::invalid(format!(
+                "--n {n}: lhs-maximin is limited to {MAXIMIN_MAX_POINTS} points (it keeps the \
+                 full distance matrix); use fssf-f for larger space-filling designs"
+            )));
+        }
         if !existing.is_empty() {
             return Err(Error::invalid(
                 "a Latin hypercube is one-shot and cannot extend an existing design",
@@ -67,12 +74,6 @@ impl Sampler for Lhs {
         }
         let mut pts = Points::from_flat(d, data);
         if self.maximin && n > 2 {
-            if n > MAXIMIN_MAX_POINTS {
-                return Err(Error::invalid(format!(
-                    "lhs-maximin is limited to {MAXIMIN_MAX_POINTS} points (it keeps the full \
-                     distance matrix); use fssf-f for larger space-filling designs"
-                )));
-            }
             pts = optimise_phi_p(pts, self.p, &mut r);
         }
         Ok(pts)

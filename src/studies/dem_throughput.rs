@@ -4,8 +4,10 @@
 
 use super::dem_scene::{initial_packing, liggghts_case, scene, settled_measures, BenchSpec};
 use super::reference::Reference;
+use crate::cli::output::Output;
 use crate::dem::Simulation;
 use crate::error::{write_atomic, Error, Result};
+use crate::say;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -144,12 +146,13 @@ pub struct Args {
     /// Write the results as a Markdown report (e.g. docs/dem_benchmark.md).
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Print one JSON object as the last line.
+    /// Standard output holds one JSON object; the text goes to standard error.
     #[arg(long)]
     pub json: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     if a.particles == 0 || a.steps == 0 || a.threads == 0 {
         anyhow::bail!("--particles, --steps and --threads must be at least 1");
     }
@@ -173,13 +176,16 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         eprintln!("{m}")
     })?;
     let m = 1e6;
-    println!("scene: {} spheres d = {}-{} mm, box {:?} m, dt {} s, skin {} m; {} settle + {} timed steps",
+    say!(out, "scene: {} spheres d = {}-{} mm, box {:?} m, dt {} s, skin {} m; {} settle + {} timed steps",
         rep.particles, spec.d_min * 1e3, spec.d_max * 1e3, spec.box_hi, spec.dt, spec.skin, rep.settle_steps, rep.timed_steps);
-    println!("mbgc      {:>8.2} M particle-steps/s per core (1 thread); {} threads: {:.2} M/s in all, speed-up {:.2}",
+    say!(out, "mbgc      {:>8.2} M particle-steps/s per core (1 thread); {} threads: {:.2} M/s in all, speed-up {:.2}",
         rep.mbgc_particle_steps_per_s / m, rep.threads, rep.mbgc_particle_steps_per_s_threads / m, rep.thread_speedup);
-    println!(
+    say!(
+        out,
         "mbgc      packing fraction {:.4}, coordination {:.3}, {} pairs in the list",
-        rep.packing_fraction_mbgc, rep.coordination_mbgc, rep.mbgc_pairs
+        rep.packing_fraction_mbgc,
+        rep.coordination_mbgc,
+        rep.mbgc_pairs
     );
     if let (Some(l), Some(r), Some(phi), Some(z)) = (
         rep.liggghts_particle_steps_per_s,
@@ -187,8 +193,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         rep.packing_fraction_liggghts,
         rep.coordination_liggghts,
     ) {
-        println!("LIGGGHTS  {:>8.2} M particle-steps/s per core; packing fraction {phi:.4}, coordination {z:.3}", l / m);
-        println!(
+        say!(out, "LIGGGHTS  {:>8.2} M particle-steps/s per core; packing fraction {phi:.4}, coordination {z:.3}", l / m);
+        say!(
+            out,
             "ratio mbgc / LIGGGHTS per core: {r:.2}; packing {:+.2} %, coordination {:+.2} %",
             100.0 * (rep.packing_fraction_mbgc / phi - 1.0),
             100.0 * (rep.coordination_mbgc / z - 1.0)
@@ -196,12 +203,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     if let Some(path) = &a.report {
         write_atomic(path, report(a, &spec, &rep).as_bytes())?;
-        println!("wrote {}", path.display());
+        say!(out, "wrote {}", path.display());
     }
-    if a.json {
-        println!("{}", serde_json::to_string(&rep)?);
-    }
-    Ok(())
+    out.object(&rep)
 }
 
 fn report(a: &Args, spec: &BenchSpec, rep: &BenchReport) -> String {

@@ -3,6 +3,8 @@
 //! extended from half its size against a one-shot design) and the generation time of large
 //! designs.
 
+use crate::cli::output::Output;
+use crate::say;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -199,12 +201,13 @@ pub struct Args {
     /// Figure path (.svg or .png); default <out-dir>/sampling_benchmark.svg.
     #[arg(long)]
     pub figure: Option<PathBuf>,
-    /// Print the raw results as one JSON object (last line).
+    /// Standard output holds one JSON object (the raw results); the text goes to standard error.
     #[arg(long)]
     pub json: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     if a.n < 4 || a.seeds == 0 {
         anyhow::bail!("--n must be at least 4 and --seeds at least 1");
     }
@@ -252,15 +255,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let report = render_report(a, &runs, &ext, &times);
     let md = a.out_dir.join("sampling_benchmark.md");
     write_atomic(&md, report.as_bytes())?;
-    println!("{report}");
-    println!("wrote {} and {}", md.display(), figure.display());
-    if a.json {
-        println!(
-            "{}",
-            serde_json::json!({ "quality": runs, "extension": ext, "timing": times })
-        );
-    }
-    Ok(())
+    say!(out, "{report}");
+    say!(out, "wrote {} and {}", md.display(), figure.display());
+    out.object(&serde_json::json!({ "quality": runs, "extension": ext, "timing": times }))
 }
 
 /// Method names ordered best first by the mean of a metric.
