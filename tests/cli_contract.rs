@@ -515,3 +515,13 @@ fn every_reporting_command_prints_one_json_object_with_json() {
     assert_eq!(v["responses"][0]["response"], "cnr");
     assert_eq!(v["pass"], true);
 }
+
+#[test]
+fn the_experiment_help_lists_the_registered_experiments() {
+    let help = ok(&["simulate", "--help"]);
+    for name in mbgc::campaign::experiment_names() {
+        if name != "sleep-test" {
+            assert!(help.contains(name), "{name} missing from:\n{help}");
+        }
+    }
+}

@@ -17,8 +17,8 @@ pub struct SimulateArgs {
     /// Design CSV: a header of parameter names, one run per row (extra columns are carried along).
     #[arg(long, value_name = "CSV")]
     pub design: PathBuf,
-    /// Experiment run on every row (wall-impact).
-    #[arg(long)]
+    /// Experiment run on every row.
+    #[arg(long, help = experiment_help())]
     pub experiment: String,
     /// Output table; if it exists, the campaign resumes where it stopped.
     #[arg(long, value_name = "CSV")]
@@ -48,6 +48,14 @@ pub struct SimulateArgs {
     /// Standard output holds one JSON object (the run counts); text goes to standard error.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The `--experiment` help, listing the experiments the registry knows.
+pub fn experiment_help() -> String {
+    format!(
+        "Experiment run on every row: {}",
+        crate::campaign::experiment_names().join(", ")
+    )
 }
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {

@@ -20,7 +20,7 @@ pub struct ValidateArgs {
     /// Parameter file written by `mbgc calibrate --out` (`[parameters]`, optional `[predicted]`).
     #[arg(long)]
     pub params: PathBuf,
-    #[arg(long, default_value = "shear-box")]
+    #[arg(long, default_value = "shear-box", help = crate::cli::simulate::experiment_help())]
     pub experiment: String,
     /// Box scale of the experiment (use the campaign's).
     #[arg(long)]
