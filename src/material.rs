@@ -37,6 +37,9 @@ pub enum PsdSpec {
     },
 }
 
+/// The smallest accepted standard deviation of a measurement, relative to its value.
+pub const MIN_RELATIVE_SD: f64 = 1e-9;
+
 /// `sum coef * x[name] + constant <= 0`, from a text such as `e_pw <= e_pp` or
 /// `mu_pp + 0.5*mu_r_pp <= 1`.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,37 +68,106 @@ pub struct Material {
     pub constraints: Vec<Constraint>,
 }
 
-/// Parses `a*x + b - y` into terms and a constant.
+/// Parses a linear expression such as `0.5*mu_r_pp + mu_pp - 3e-1` into terms and a constant.
+/// Grammar: `expr = ["+"|"-"] term {("+"|"-") term}`, `term = number | name | number "*" name |
+/// name "*" number`; numbers as in Rust and TOML (`3e-1`, `1.5E+2`, `.5`), finite only.
 fn linear(side: &str, file: &str, field: &str) -> Result<(Vec<(String, f64)>, f64)> {
-    let mut terms = Vec::new();
+    #[derive(Debug, PartialEq)]
+    enum Tok {
+        Num(f64),
+        Name(String),
+        Plus,
+        Minus,
+        Times,
+    }
+    let expected = "a linear inequality such as \"e_pw <= e_pp\" or \"mu_pp + 0.5*mu_r_pp <= 1\"";
+    let bad = |what: String| Error::input(file, field, format!("{expected}; {what}"));
+    let c: Vec<char> = side.chars().collect();
+    let mut toks = Vec::new();
+    let mut i = 0;
+    while i < c.len() {
+        let ch = c[i];
+        if ch.is_whitespace() {
+            i += 1;
+        } else if ch.is_ascii_digit() || ch == '.' {
+            let start = i;
+            while i < c.len() && (c[i].is_ascii_digit() || c[i] == '.') {
+                i += 1;
+            }
+            if i < c.len() && (c[i] == 'e' || c[i] == 'E') {
+                i += 1;
+                if i < c.len() && (c[i] == '+' || c[i] == '-') {
+                    i += 1;
+                }
+                while i < c.len() && c[i].is_ascii_digit() {
+                    i += 1;
+                }
+            }
+            let text: String = c[start..i].iter().collect();
+            match text.parse::<f64>() {
+                Ok(v) if v.is_finite() => toks.push(Tok::Num(v)),
+                _ => return Err(bad(format!("\"{text}\" is not a finite number"))),
+            }
+        } else if ch.is_alphabetic() || ch == '_' {
+            let start = i;
+            while i < c.len() && (c[i].is_alphanumeric() || c[i] == '_') {
+                i += 1;
+            }
+            let name: String = c[start..i].iter().collect();
+            // f64's parser would read these as numbers; a bound of infinity or NaN means nothing.
+            if ["inf", "infinity", "nan"].contains(&name.to_ascii_lowercase().as_str()) {
+                return Err(bad(format!("\"{name}\": expected a finite number")));
+            }
+            toks.push(Tok::Name(name));
+        } else {
+            toks.push(match ch {
+                '+' => Tok::Plus,
+                '-' => Tok::Minus,
+                '*' => Tok::Times,
+                other => return Err(bad(format!("unexpected \"{other}\""))),
+            });
+            i += 1;
+        }
+    }
+    let mut terms: Vec<(String, f64)> = Vec::new();
     let mut constant = 0.0;
-    let text = side.replace('-', "+-");
-    for raw in text.split('+').map(str::trim).filter(|s| !s.is_empty()) {
-        let (sign, body) = match raw.strip_prefix('-') {
-            Some(b) => (-1.0, b.trim()),
-            None => (1.0, raw),
+    let mut k = 0;
+    let mut first = true;
+    while k < toks.len() || first {
+        let mut sign = 1.0;
+        match toks.get(k) {
+            Some(Tok::Plus) => k += 1,
+            Some(Tok::Minus) => {
+                sign = -1.0;
+                k += 1;
+            }
+            _ if first => {}
+            _ => return Err(bad("expected + or - between terms".into())),
+        }
+        first = false;
+        let term = match (toks.get(k), toks.get(k + 1), toks.get(k + 2)) {
+            (Some(Tok::Num(a)), Some(Tok::Times), Some(Tok::Name(n))) => {
+                k += 3;
+                (Some(n.clone()), *a)
+            }
+            (Some(Tok::Name(n)), Some(Tok::Times), Some(Tok::Num(a))) => {
+                k += 3;
+                (Some(n.clone()), *a)
+            }
+            (Some(Tok::Num(a)), _, _) => {
+                k += 1;
+                (None, *a)
+            }
+            (Some(Tok::Name(n)), _, _) => {
+                k += 1;
+                (Some(n.clone()), 1.0)
+            }
+            _ => return Err(bad("expected a number or a parameter name".into())),
         };
-        let bad = || {
-            Error::input(
-                file,
-                field,
-                format!(
-                    "a linear inequality such as \"e_pw <= e_pp\" or \"mu_pp + 0.5*mu_r_pp <= 1\", \
-                     could not read \"{raw}\""
-                ),
-            )
-        };
-        let (coef, name) = match body.split_once('*') {
-            Some((c, n)) => (c.trim().parse::<f64>().map_err(|_| bad())?, Some(n.trim())),
-            None => match body.parse::<f64>() {
-                Ok(c) => (c, None),
-                Err(_) => (1.0, Some(body)),
-            },
-        };
-        match name {
-            Some(n) if crate::space::is_identifier(n) => terms.push((n.to_string(), sign * coef)),
-            Some(_) => return Err(bad()),
-            None => constant += sign * coef,
+        match term {
+            (Some(n), coef) if crate::space::is_identifier(&n) => terms.push((n, sign * coef)),
+            (Some(n), _) => return Err(bad(format!("\"{n}\" is not a parameter name"))),
+            (None, v) => constant += sign * v,
         }
     }
     Ok((terms, constant))
@@ -136,10 +208,22 @@ fn constraint(text: &str, file: &str, field: &str) -> Result<Constraint> {
             format!("an inequality between parameters, \"{text}\" names none"),
         ));
     }
+    // Scaled so that the largest coefficient is 1: the penalty then means the same for
+    // `1e300*x >= 1e300` as for `x >= 1` and cannot overflow.
+    let scale = terms.iter().map(|(_, c)| c.abs()).fold(0.0, f64::max);
+    let constant = s * (lc - rc) / scale;
+    let terms: Vec<(String, f64)> = terms.into_iter().map(|(n, c)| (n, c / scale)).collect();
+    if !constant.is_finite() || terms.iter().any(|(_, c)| !c.is_finite()) {
+        return Err(Error::input(
+            file,
+            field,
+            format!("\"{text}\": coefficients and bounds must be finite once scaled"),
+        ));
+    }
     Ok(Constraint {
         text: text.trim().to_string(),
         terms,
-        constant: s * (lc - rc),
+        constant,
     })
 }
 
@@ -261,6 +345,18 @@ impl MaterialFile {
                     file,
                     format!("{field}.sd"),
                     format!("a standard deviation > 0, got {sd}"),
+                ));
+            }
+            // No bulk-material measurement is known to 1e-9 of its value; such an sd only makes
+            // chi^2 overflow the optimiser.
+            if sd < MIN_RELATIVE_SD * value.abs() {
+                return Err(Error::input(
+                    file,
+                    format!("{field}.sd"),
+                    format!(
+                        "a realistic standard deviation, at least {MIN_RELATIVE_SD:e} of the value \
+                         {value:e}; got {sd:e}"
+                    ),
                 ));
             }
             measured.push(Measured {
@@ -496,5 +592,39 @@ expr = ["e_pw <= e_pp", "mu_pp + 0.5*mu_r_pp >= 0.2"]
         assert_eq!(names, ["z", "a"]);
         assert_eq!(m.fixed, [("z9".to_string(), 1.0), ("b".to_string(), 2.0)]);
         assert!(m.psd.is_none() && m.bounds.is_empty() && m.constraints.is_empty());
+    }
+
+    #[test]
+    fn constraints_read_rust_numbers_and_refuse_non_finite_bounds() {
+        let c = |t: &str| constraint(t, "m.toml", "constraints.expr[0]");
+        // `3e-1` used to be split at its minus sign.
+        let k = c("mu_pw <= 3e-1").unwrap();
+        assert_eq!(k.terms, [("mu_pw".to_string(), 1.0)]);
+        assert!((k.constant + 0.3).abs() < 1e-15);
+        let k = c("0.5*mu_r_pp + mu_pp - 1.5E+0 >= -.5").unwrap();
+        assert_eq!(k.terms.len(), 2);
+        assert!((k.constant - 1.0).abs() < 1e-15, "{k:?}");
+        // x*2 and 2*x read alike.
+        assert_eq!(c("x*2 <= y").unwrap().terms, c("2*x <= y").unwrap().terms);
+        for bad in [
+            "mu_pw <= nan",
+            "x >= inf",
+            "x <= -inf",
+            "x <= 1e999",
+            "x <= 2*3",
+            "x <= y z",
+        ] {
+            let e = c(bad).unwrap_err().to_string();
+            assert!(e.contains("constraints.expr[0]"), "{bad}: {e}");
+        }
+        // Scaled to a largest coefficient of 1: the same constraint however it is written.
+        assert_eq!(
+            c("1e300*x >= 1e300").unwrap().terms,
+            c("x >= 1").unwrap().terms
+        );
+        assert_eq!(
+            c("1e300*x >= 1e300").unwrap().constant,
+            c("x >= 1").unwrap().constant
+        );
     }
 }

@@ -525,3 +525,89 @@ fn the_experiment_help_lists_the_registered_experiments() {
         }
     }
 }
+
+/// Runs `args` with a deadline: a hang is a failure, not a stuck test suite.
+fn within(seconds: u64, args: &[&str]) -> std::process::Output {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if t0.elapsed() > std::time::Duration::from_secs(seconds) {
+            let _ = child.kill();
+            panic!("{args:?} still running after {seconds} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn calibrate_neither_hangs_nor_panics_on_extreme_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, model) = table_and_model(dir.path());
+    let material = dir.path().join("m.toml");
+    let run = |text: &str, extra: &[&str]| {
+        std::fs::write(&material, text).unwrap();
+        let mut args = vec![
+            "calibrate",
+            "--material",
+            s(&material),
+            "--model",
+            s(&model),
+        ];
+        args.extend(extra);
+        let o = within(60, &args);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(!err.contains("panicked"), "{text}: {err}");
+        (o.status.code(), err)
+    };
+    // Refused up front, naming the field.
+    for (text, field) in [
+        (
+            "[measured]\ny = { value = 1.5, sd = 1e-80 }\n",
+            "measured.y.sd",
+        ),
+        (
+            "[measured]\ny = { value = 1e200, sd = 0.1 }\n",
+            "measured.y.sd",
+        ),
+        (
+            "[measured]\ny = { value = 1.5, sd = 0.1 }\n[constraints]\nexpr = [\"x >= inf\"]\n",
+            "constraints.expr[0]",
+        ),
+    ] {
+        let (code, err) = run(text, &[]);
+        assert_eq!(code, Some(1), "{text}");
+        assert!(err.contains(field), "{text}: {err}");
+    }
+    // Allowed, but the objective's scale is extreme: the optimiser must stop, not spin.
+    let (code, err) = run(
+        "[measured]\ny = { value = 0.0, sd = 1e-80 }\n",
+        &["--starts", "4"],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let (code, err) = run(
+        "[measured]\ny = { value = 1.5, sd = 0.1 }\n[constraints]\nexpr = [\"1e300*x >= 1e300\"]\n",
+        &["--starts", "4"],
+    );
+    assert!(code == Some(0) || err.contains("cannot be met"), "{err}");
+    // Everything fixed: the residuals at the fixed point, no panic.
+    let (code, err) = run(
+        "[measured]\ny = { value = 1.5, sd = 0.1 }\n[fixed]\nx = 0.5\nz = 0.5\n",
+        &[],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    // Absurd numbers of starts are refused before any memory is taken.
+    let (code, err) = run(
+        "[measured]\ny = { value = 1.5, sd = 0.1 }\n",
+        &["--starts", "100000000"],
+    );
+    assert_eq!(code, Some(1));
+    assert!(err.contains("--starts"), "{err}");
+}

@@ -26,12 +26,23 @@ impl Transformed<'_, '_> {
 
 /// Large but finite, so the line search backs off instead of failing.
 const OUTSIDE: f64 = 1e30;
+/// Largest objective or gradient entry the optimiser works with: its products in L-BFGS must stay
+/// finite.
+const HUGE: f64 = 1e100;
 
 impl CostFunction for Transformed<'_, '_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, z: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-        Ok(self.p.objective(&self.x(z)).map_or(OUTSIDE, |(f, _)| f))
+        let f = self.p.objective(&self.x(z)).map_or(OUTSIDE, |(f, _)| f);
+        // argmin's line search has no iteration bound of its own: a NaN or an objective whose
+        // squares overflow would keep it searching forever. Stop this start instead.
+        if !(f.is_finite() && f.abs() <= HUGE) {
+            return Err(argmin::core::Error::msg(format!(
+                "objective {f:e} is beyond {HUGE:e}"
+            )));
+        }
+        Ok(f)
     }
 }
 
@@ -42,10 +53,17 @@ impl Gradient for Transformed<'_, '_> {
         let Some((_, g)) = self.p.objective(&self.x(z)) else {
             return Ok(vec![0.0; z.len()]);
         };
-        Ok(g.iter()
+        let g: Vec<f64> = g
+            .iter()
             .enumerate()
             .map(|(j, g)| g * (self.p.upper[j] - self.p.lower[j]) * 0.5 * z[j].cos())
-            .collect())
+            .collect();
+        if g.iter().any(|v| !(v.is_finite() && v.abs() <= HUGE)) {
+            return Err(argmin::core::Error::msg(
+                "gradient beyond the representable range",
+            ));
+        }
+        Ok(g)
     }
 }
 
@@ -238,8 +256,10 @@ pub fn calibrate(p: &Problem, n_starts: usize, seed: u64) -> Calibration {
             None => optima.push(o),
         }
     }
+    // With every parameter fixed there is nothing to vary (and no Jacobian to decompose).
     let flat = optima
         .first()
+        .filter(|_| n > 0)
         .map(|o| flat_directions(p, &o.x))
         .unwrap_or_default();
     Calibration {

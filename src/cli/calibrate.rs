@@ -45,6 +45,9 @@ pub struct CalibrateArgs {
     pub out: Option<PathBuf>,
 }
 
+/// More starts than this find nothing new and only cost memory (each start keeps its optimum).
+pub const MAX_STARTS: usize = 65_536;
+
 pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--material", &a.material)];
@@ -52,8 +55,11 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
         refuse_overwriting_inputs("--out", out, &inputs)?;
     }
     let material = Material::from_file(&a.material)?;
-    if a.starts == 0 {
-        anyhow::bail!("--starts: expected at least 1");
+    if a.starts == 0 || a.starts > MAX_STARTS {
+        anyhow::bail!(
+            "--starts {}: expected 1 to {MAX_STARTS} starting points",
+            a.starts
+        );
     }
     let opts = SessionOptions {
         starts: a.starts,
