@@ -232,6 +232,28 @@ impl ParameterFile {
                 format!("log scale needs min > 0, found {min}"),
             ));
         }
+        // The unit-cube mapping computes max - min (or max / min); a span that overflows would
+        // put inf into every design.
+        let span = match scale {
+            Scale::Linear => max - min,
+            Scale::Log => max / min,
+        };
+        if !span.is_finite() {
+            return Err(Error::input(
+                source,
+                field("max"),
+                match scale {
+                    Scale::Linear => format!(
+                        "a range [{min:e}, {max:e}] whose width max - min is a finite number (it \
+                         overflows); expected narrower bounds or scale = \"log\""
+                    ),
+                    Scale::Log => format!(
+                        "a log range [{min:e}, {max:e}] whose ratio max / min is a finite number \
+                         (it overflows); expected narrower bounds"
+                    ),
+                },
+            ));
+        }
         if let Some(v) = self.fixed {
             if !v.is_finite() || v < min || v > max {
                 return Err(Error::input(
@@ -358,5 +380,30 @@ e_pp = { min = 0.05, max = 0.95, fixed = 0.6 }
         )
         .unwrap();
         assert_eq!(s.names(), ["b", "a"]);
+    }
+
+    #[test]
+    fn ranges_whose_width_overflows_are_refused() {
+        for text in [
+            "[parameters]\na = { min = -1e308, max = 1e308 }",
+            "[parameters]\na = { min = 1e-300, max = 1e300, scale = \"log\" }",
+        ] {
+            let e = Space::from_toml_str(text, "s.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("parameters.a.max") && e.contains("overflows"),
+                "{e}"
+            );
+        }
+        // Wide but representable: every mapped value finite.
+        let s = Space::from_toml_str(
+            "[parameters]\na = { min = 1e-150, max = 1e150, scale = \"log\" }",
+            "s.toml",
+        )
+        .unwrap();
+        for u in [0.0, 0.3, 1.0] {
+            assert!(s.parameters[0].from_unit(u).is_finite());
+        }
     }
 }

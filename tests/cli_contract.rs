@@ -611,3 +611,44 @@ fn calibrate_neither_hangs_nor_panics_on_extreme_input() {
     assert_eq!(code, Some(1));
     assert!(err.contains("--starts"), "{err}");
 }
+
+#[test]
+fn fit_refuses_a_column_given_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let (data, _) = table_and_model(dir.path());
+    for (inputs, targets, option) in [("x,z,x", "y", "--inputs"), ("x,z", "y,y", "--targets")] {
+        let e = fails(&[
+            "fit",
+            "--data",
+            s(&data),
+            "--inputs",
+            inputs,
+            "--targets",
+            targets,
+            "--out",
+            s(&dir.path().join("m2.json")),
+        ]);
+        assert!(e.contains(option) && e.contains("given twice"), "{e}");
+    }
+}
+
+#[test]
+fn a_model_with_an_absurdly_deep_equation_is_refused_not_a_stack_overflow() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, model) = table_and_model(dir.path());
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    // x negated 200 000 times: a valid postfix program, a tree 200 001 levels deep.
+    let mut program = vec![serde_json::json!({"var": 0})];
+    program.extend(std::iter::repeat_n(serde_json::json!("neg"), 200_000));
+    m["responses"][0]["program"] = serde_json::Value::Array(program);
+    let deep = dir.path().join("deep.json");
+    std::fs::write(&deep, serde_json::to_string(&m).unwrap()).unwrap();
+    for format in ["rust", "latex", "sympy"] {
+        let e = fails(&["export", "--model", s(&deep), "--format", format]);
+        assert!(
+            e.contains("responses.y.program") && e.contains("levels deep"),
+            "{format}: {e}"
+        );
+    }
+}

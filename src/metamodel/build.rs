@@ -82,6 +82,18 @@ pub fn fit_table(
             "--targets: expected at least one target column",
         ));
     }
+    for (option, list) in [("--inputs", &opts.inputs), ("--targets", &opts.targets)] {
+        if let Some((k, name)) = list
+            .iter()
+            .enumerate()
+            .find(|(k, n)| list[..*k].contains(n))
+        {
+            return Err(Error::invalid(format!(
+                "{option}: {name} is given twice (position {}); expected each column once",
+                k + 1
+            )));
+        }
+    }
     for t in &opts.targets {
         if opts.inputs.contains(t) {
             return Err(Error::invalid(format!(

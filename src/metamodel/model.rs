@@ -7,6 +7,28 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const FORMAT: &str = "mbgc-metamodel";
+/// Deepest equation tree a model file may hold (`mbgc fit` limits trees to 64 nodes).
+pub const MAX_TREE_DEPTH: usize = 512;
+
+/// Depth of the tree a valid postfix program encodes (a single leaf has depth 1).
+fn tree_depth(program: &[Node]) -> usize {
+    let mut stack: Vec<usize> = Vec::with_capacity(program.len());
+    let mut deepest = 0;
+    for n in program {
+        let d = match n.arity() {
+            0 => 1,
+            1 => stack.pop().unwrap_or(0) + 1,
+            _ => {
+                let r = stack.pop().unwrap_or(0);
+                let l = stack.pop().unwrap_or(0);
+                l.max(r) + 1
+            }
+        };
+        deepest = deepest.max(d);
+        stack.push(d);
+    }
+    deepest
+}
 pub const VERSION: u32 = 1;
 
 /// How a physical input becomes the equation's variable: `(t(x) - offset) / width`, with `t` the
@@ -191,15 +213,34 @@ impl Metamodel {
             ));
         }
         for r in &m.responses {
-            if !gp::program::is_valid(&r.program, m.inputs.len()) {
-                return Err(Error::input(
-                    &file,
-                    format!("responses.{}.program", r.name),
-                    format!(
-                        "a well-formed postfix program over {} inputs",
-                        m.inputs.len()
-                    ),
-                ));
+            let programs = std::iter::once(("program".to_string(), &r.program)).chain(
+                r.pareto_front
+                    .iter()
+                    .enumerate()
+                    .map(|(k, f)| (format!("pareto_front[{k}].program"), &f.program)),
+            );
+            for (field, program) in programs {
+                let field = format!("responses.{}.{field}", r.name);
+                if !gp::program::is_valid(program, m.inputs.len()) {
+                    return Err(Error::input(
+                        &file,
+                        field,
+                        format!(
+                            "a well-formed postfix program over {} inputs",
+                            m.inputs.len()
+                        ),
+                    ));
+                }
+                // Printing and simplifying walk the tree recursively; a fitted equation is a few
+                // levels deep, a hand-made one of thousands would overflow the stack.
+                let depth = tree_depth(program);
+                if depth > MAX_TREE_DEPTH {
+                    return Err(Error::input(
+                        &file,
+                        field,
+                        format!("a tree at most {MAX_TREE_DEPTH} levels deep, found {depth}"),
+                    ));
+                }
             }
         }
         Ok(m)
