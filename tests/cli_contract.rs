@@ -652,3 +652,149 @@ fn a_model_with_an_absurdly_deep_equation_is_refused_not_a_stack_overflow() {
         );
     }
 }
+
+#[test]
+fn exports_of_awkwardly_named_columns_compile_parse_and_agree_with_predict() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // `x-y` and `x_y` sanitise alike; `lambda` is a Python keyword; the target has a space.
+    let mut csv = String::from("x-y,x_y,lambda,y out\n");
+    for i in 0..48 {
+        let (a, b, c) = (
+            (i % 8) as f64 / 8.0,
+            ((i * 5) % 12) as f64 / 12.0,
+            1.0 + (i % 3) as f64,
+        );
+        csv.push_str(&format!("{a},{b},{c},{}\n", 3.0 * a - b + 0.5 * c));
+    }
+    let data = d.join("awkward.csv");
+    std::fs::write(&data, csv).unwrap();
+    let model = d.join("awkward.json");
+    ok(&[
+        "fit",
+        "--data",
+        s(&data),
+        "--inputs",
+        "x-y,x_y,lambda",
+        "--targets",
+        "y out",
+        "--out",
+        s(&model),
+        "--population",
+        "500",
+        "--generations",
+        "10",
+        "--no-figures",
+    ]);
+    let pred = d.join("pred.csv");
+    ok(&[
+        "predict",
+        "--model",
+        s(&model),
+        "--data",
+        s(&data),
+        "--out",
+        s(&pred),
+    ]);
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&pred)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .take(6)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+
+    // Rust: compiles and gives predict's values.
+    let rs = ok(&["export", "--model", s(&model), "--format", "rust"]);
+    assert!(
+        rs.contains("pub fn y_out(x_y: f64, x_y_2: f64, lambda: f64)"),
+        "{rs}"
+    );
+    let mut main = rs.clone();
+    main.push_str("\nfn main() {\n");
+    for r in &rows {
+        main.push_str(&format!(
+            "    println!(\"{{:?}}\", y_out({:?}, {:?}, {:?}));\n",
+            r[0], r[1], r[2]
+        ));
+    }
+    main.push_str("}\n");
+    let src = d.join("awkward.rs");
+    std::fs::write(&src, main).unwrap();
+    let exe = d.join("awkward_bin");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let o = std::process::Command::new(rustc)
+        .args(["--edition", "2021", "-o", s(&exe), s(&src)])
+        .output()
+        .expect("rustc");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(std::process::Command::new(&exe).output().unwrap().stdout).unwrap();
+    for (line, r) in out.lines().zip(&rows) {
+        let v: f64 = line.parse().unwrap();
+        assert!(
+            (v - r[4]).abs() <= 1e-12 * r[4].abs().max(1.0),
+            "{v} vs {}",
+            r[4]
+        );
+    }
+    assert_eq!(out.lines().count(), rows.len());
+
+    // LaTeX: special characters escaped, braces balanced (escaped braces aside).
+    let tex = ok(&["export", "--model", s(&model), "--format", "latex"]);
+    let mut depth = 0i32;
+    let mut prev = ' ';
+    for c in tex.chars() {
+        if prev != '\\' {
+            depth += match c {
+                '{' => 1,
+                '}' => -1,
+                _ => 0,
+            };
+        }
+        assert!(depth >= 0, "{tex}");
+        prev = if prev == '\\' && c == '\\' { ' ' } else { c };
+    }
+    assert_eq!(depth, 0, "{tex}");
+
+    // sympy: valid names (no `x - y`), `lambda` as a Symbol.
+    let sy = ok(&["export", "--model", s(&model), "--format", "sympy"]);
+    assert!(sy.starts_with("y_out = "), "{sy}");
+    assert!(!sy.contains("x-y") && !sy.contains("x - y"), "{sy}");
+    let python = std::env::var("MBGC_PYTHON").unwrap_or_else(|_| "python3".into());
+    let has_sympy = std::process::Command::new(&python)
+        .args(["-c", "import sympy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has_sympy {
+        assert!(
+            std::env::var("MBGC_REQUIRE_SYMPY").is_err(),
+            "sympy required"
+        );
+        return;
+    }
+    let (_, e) = sy.lines().next().unwrap().split_once(" = ").unwrap();
+    let mut script = format!(
+        "import sympy\nfrom sympy import Symbol\ne = sympy.sympify({e:?})\n\
+         s = {{x.name: x for x in e.free_symbols}}\n"
+    );
+    for r in &rows {
+        script.push_str(&format!(
+            "print(repr(float(e.subs({{s.get('x_y', 0): {:?}, s.get('x_y_2', 0): {:?}, s.get('lambda', 0): {:?}}}).evalf(30))))\n",
+            r[0], r[1], r[2]
+        ));
+    }
+    let o = std::process::Command::new(&python)
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    for (line, r) in out.lines().zip(&rows) {
+        let v: f64 = line.parse().unwrap();
+        assert!(
+            (v - r[4]).abs() <= 1e-9 * r[4].abs().max(1.0),
+            "sympy {v} vs {}",
+            r[4]
+        );
+    }
+}

@@ -11,10 +11,15 @@ const GREEK: &[&str] = &[
     "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Phi", "Psi", "Omega",
 ];
 
+/// Text that LaTeX prints as written: its special characters escaped.
 fn escape(s: &str) -> String {
     s.chars()
         .map(|c| match c {
-            '_' | '%' | '&' | '#' | '$' => format!("\\{c}"),
+            '_' | '%' | '&' | '#' | '$' | '{' | '}' => format!("\\{c}"),
+            '\\' => "\\textbackslash{}".to_string(),
+            '~' => "\\textasciitilde{}".to_string(),
+            '^' => "\\textasciicircum{}".to_string(),
+            c if c.is_control() => " ".to_string(),
             c => c.to_string(),
         })
         .collect()
@@ -23,7 +28,7 @@ fn escape(s: &str) -> String {
 fn base(b: &str) -> String {
     if GREEK.contains(&b) {
         format!("\\{b}")
-    } else if b.chars().count() == 1 {
+    } else if b.chars().count() == 1 && b.chars().all(|c| c.is_ascii_alphanumeric()) {
         b.to_string()
     } else {
         format!("\\mathrm{{{}}}", escape(b))
@@ -38,7 +43,7 @@ pub fn symbol(name: &str) -> String {
     let split = head.find(|c: char| c.is_ascii_digit()).filter(|&i| i > 0);
     let b = match split {
         Some(i) => {
-            subs.insert(0, head[i..].to_string());
+            subs.insert(0, escape(&head[i..]));
             base(&head[..i])
         }
         None => base(head),

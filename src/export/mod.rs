@@ -2,6 +2,7 @@
 //! LaTeX (for reading and papers) and sympy (for algebra and the SRBench exact-recovery rule).
 
 pub mod latex;
+pub mod names;
 pub mod rust;
 pub mod sympy;
 

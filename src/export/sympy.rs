@@ -1,5 +1,6 @@
 //! Equations as strings that sympy's `sympify` reads with their intended meaning.
 
+use super::names::{ascii_identifier, unique};
 use crate::gp::expr::{exact_constant, infix, Expr};
 use crate::metamodel::{Metamodel, Transform};
 
@@ -94,14 +95,20 @@ fn definition(name: &str, t: &Transform) -> Option<String> {
     }
 }
 
+/// The inputs' names as distinct Python identifiers (`x-y` would read as x minus y).
+pub fn input_names(m: &Metamodel) -> Vec<String> {
+    unique(&m.input_names(), ascii_identifier, &[])
+}
+
 /// The equation of one response in the physical inputs (transforms substituted).
 pub fn equation(m: &Metamodel, response: usize) -> String {
     let names: Vec<String> = m
         .inputs
         .iter()
-        .map(|i| match definition(&i.name, &i.transform) {
+        .zip(input_names(m))
+        .map(|(i, name)| match definition(&name, &i.transform) {
             Some(d) => format!("({d})"),
-            None => symbol(&i.name),
+            None => symbol(&name),
         })
         .collect();
     infix(
@@ -113,7 +120,10 @@ pub fn equation(m: &Metamodel, response: usize) -> String {
 
 /// `name = expression` per response, one per line.
 pub fn lines(m: &Metamodel) -> String {
-    (0..m.responses.len())
-        .map(|r| format!("{} = {}\n", m.responses[r].name, equation(m, r)))
+    let names: Vec<String> = m.responses.iter().map(|r| r.name.clone()).collect();
+    unique(&names, ascii_identifier, &[])
+        .iter()
+        .enumerate()
+        .map(|(r, name)| format!("{name} = {}\n", equation(m, r)))
         .collect()
 }
