@@ -16,13 +16,10 @@ pub enum Error {
         field: String,
         expected: String,
     },
-    /// The file could not be read or written.
-    #[error("{file}: {source}")]
-    Io {
-        file: String,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The file could not be read or written. The OS error is part of the message and not a
+    /// `source`, or `{:#}` (anyhow's chain) would print it twice.
+    #[error("{file}: {cause}")]
+    Io { file: String, cause: std::io::Error },
     /// A request that cannot be satisfied (bad combination of options, impossible size, ...).
     #[error("{0}")]
     Invalid(String),
@@ -46,7 +43,7 @@ impl Error {
     pub fn io(file: &Path, source: std::io::Error) -> Self {
         Error::Io {
             file: file.display().to_string(),
-            source,
+            cause: source,
         }
     }
 

@@ -798,3 +798,25 @@ fn exports_of_awkwardly_named_columns_compile_parse_and_agree_with_predict() {
         );
     }
 }
+
+#[test]
+fn a_missing_file_is_named_once_with_the_os_error_once() {
+    for args in [
+        vec![
+            "fit",
+            "--data",
+            "/nonexistent/t.csv",
+            "--inputs",
+            "x",
+            "--targets",
+            "y",
+            "--out",
+            "/tmp/never.json",
+        ],
+        vec!["metrics", "/nonexistent/t.csv"],
+    ] {
+        let e = fails(&args);
+        assert_eq!(e.matches("/nonexistent/t.csv").count(), 1, "{e}");
+        assert_eq!(e.matches("No such file or directory").count(), 1, "{e}");
+    }
+}

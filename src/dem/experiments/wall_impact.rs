@@ -100,7 +100,10 @@ fn physical(imp: &Impact, r: &crate::dem::impact::ImpactResult) -> Result<()> {
         let sq = |a: &[f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
         0.5 * mass * sq(v) + 0.5 * inertia * sq(w)
     };
-    let (before, after) = (energy(&imp.velocity, &imp.spin), energy(&r.velocity, &r.spin));
+    let (before, after) = (
+        energy(&imp.velocity, &imp.spin),
+        energy(&r.velocity, &r.spin),
+    );
     if !(after.is_finite() && after <= before * (1.0 + 1e-3)) {
         return Err(Error::invalid(format!(
             "wall-impact: kinetic energy {after:.4e} J after the impact exceeds {before:.4e} J \
@@ -260,7 +263,10 @@ mod tests {
                 .run(&p, 1, &RunOptions::default())
                 .unwrap_err()
                 .to_string();
-            assert!(e.contains("overlap") || e.contains("kinetic energy"), "{speed}: {e}");
+            assert!(
+                e.contains("overlap") || e.contains("kinetic energy"),
+                "{speed}: {e}"
+            );
         }
         // The same sphere at a sensible speed is a result, and within the checks.
         let mut p = params(30.0);
