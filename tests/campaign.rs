@@ -914,3 +914,65 @@ fn an_unwritable_vtk_directory_is_refused_before_anything_runs() {
         "a table was started although nothing could run"
     );
 }
+
+#[test]
+fn tables_that_do_not_belong_are_refused_by_resume_status_and_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 6, None);
+    let out = dir.path().join("t.csv");
+    simulate_sleep(&design, &out, &[]);
+
+    // An input edited by hand: resume refuses instead of counting the line as this run.
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let x_col = lines[0].split(',').position(|c| c == "x").unwrap();
+    let mut fields: Vec<String> = lines[2].split(',').map(String::from).collect();
+    fields[x_col] = "99.0".into();
+    lines[2] = fields.join(",");
+    let edited = dir.path().join("edited.csv");
+    std::fs::write(&edited, lines.join("\n") + "\n").unwrap();
+    std::fs::copy(
+        dir.path().join("t.csv.meta.json"),
+        dir.path().join("edited.csv.meta.json"),
+    )
+    .unwrap();
+    let e = fails(&[
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&edited),
+    ]);
+    assert!(
+        e.contains("line 3, column x") && e.contains("edited"),
+        "{e}"
+    );
+
+    // Status against an unrelated design (same size, other values).
+    let other = write(
+        dir.path(),
+        "other.csv",
+        "x,y,fail\n9,9,0\n9,9,0\n9,9,0\n9,9,0\n9,9,0\n9,9,0\n",
+    );
+    let e = fails(&["campaign", "status", s(&out), "--design", s(&other)]);
+    assert!(
+        e.contains("not a campaign of") && e.contains("other.csv"),
+        "{e}"
+    );
+
+    // Shards run with different seeds do not merge.
+    let (a, b) = (dir.path().join("a.csv"), dir.path().join("b.csv"));
+    simulate_sleep(&design, &a, &["--shard", "1/2"]);
+    simulate_sleep(&design, &b, &["--shard", "2/2", "--seed", "9"]);
+    let e = fails(&[
+        "campaign",
+        "merge",
+        s(&a),
+        s(&b),
+        "--out",
+        s(&dir.path().join("m.csv")),
+    ]);
+    assert!(e.contains("--seed") && e.contains("b.csv"), "{e}");
+}

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use csv::StringRecord;
 
 use super::lock::TableLock;
+use super::status::Meta;
 use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
 use crate::error::{write_atomic, Error, Result};
 
@@ -34,6 +35,45 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     }
     write_atomic(out, &bytes)?;
     Ok(summary)
+}
+
+/// Refuses tables whose sidecars say they were run as different campaigns (another seed, `--set`,
+/// box scale, experiment or design size): their rows would not collide by run id, so nothing
+/// else would notice. Tables without a sidecar (already merged) are not compared.
+fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
+    let mut first: Option<(&PathBuf, Meta)> = None;
+    for path in inputs {
+        let Some(m) = Meta::read(path)? else { continue };
+        let Some((p0, m0)) = &first else {
+            first = Some((path, m));
+            continue;
+        };
+        let differs = [
+            ("experiment", m.experiment != m0.experiment),
+            ("--seed", m.seed != m0.seed),
+            ("--set", m.set != m0.set),
+            ("--box-scale", m.box_scale != m0.box_scale),
+            ("design rows", m.design_rows != m0.design_rows),
+        ];
+        if let Some((what, _)) = differs.iter().find(|(_, d)| *d) {
+            return Err(Error::input(
+                path.display(),
+                *what,
+                format!(
+                    "the same as {} (one campaign in shards); the sidecars differ ({} has seed {}, \
+                     set {:?}; {} has seed {}, set {:?})",
+                    p0.display(),
+                    p0.display(),
+                    m0.seed,
+                    m0.set,
+                    path.display(),
+                    m.seed,
+                    m.set
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The merged header and records, sorted by row.
@@ -137,6 +177,8 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
             }
         }
     }
+    // After the line-by-line checks, which name the offending line when tables collide.
+    same_campaign(inputs)?;
     let mut records: Vec<(u64, StringRecord)> =
         by_id.into_values().map(|(row, _, _, r)| (row, r)).collect();
     records.sort_by_key(|(row, _)| *row);

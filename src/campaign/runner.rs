@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::Meta;
-use super::table::{self, csv_line, read_table, DONE, FAILED};
+use super::table::{self, csv_line, read_table, DONE, FAILED, FIXED_COLUMNS};
 use crate::dem::experiments::{Experiment, Outcome, RunOptions};
 use crate::error::{write_atomic, Error, Result};
 
@@ -255,6 +255,36 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                         &rec[0], plan.experiment, planned.run_id
                     ),
                 ));
+            }
+            // The run id is not recomputed from the line, so a hand-edited input would otherwise
+            // pass as this campaign's run.
+            for (k, (name, want)) in planned.params.iter().enumerate() {
+                let field = &rec[FIXED_COLUMNS.len() + k];
+                let same = field
+                    .parse::<f64>()
+                    .is_ok_and(|v| v.to_bits() == want.to_bits());
+                if !same {
+                    return Err(Error::input(
+                        &file,
+                        format!("line {line}, column {name}"),
+                        format!(
+                            "{want:?} as planned for row {row}, found \"{field}\": the line was \
+                             edited or comes from another campaign; choose another --out"
+                        ),
+                    ));
+                }
+            }
+            if rec[2] == *DONE {
+                for (k, name) in plan.responses.iter().enumerate() {
+                    let field = &rec[FIXED_COLUMNS.len() + plan.inputs.len() + k];
+                    if field.parse::<f64>().is_err() {
+                        return Err(Error::input(
+                            &file,
+                            format!("line {line}, column {name}"),
+                            format!("a number for a done run, found \"{field}\""),
+                        ));
+                    }
+                }
             }
             present.insert(rec[0].to_string(), rec[2] == *FAILED);
         }

@@ -91,6 +91,63 @@ pub struct Status {
     pub partial_line: bool,
 }
 
+/// Refuses to count a table against a design it was not run on: every line's design columns must
+/// hold that row's values.
+fn same_design(
+    file: &str,
+    t: &table::Table,
+    design: &Path,
+    names: &[String],
+    values: &[Vec<f64>],
+) -> Result<()> {
+    let mismatch = |line: u64, what: String| {
+        Error::input(
+            file,
+            format!("line {line}"),
+            format!(
+                "{what}: the table is not a campaign of {}",
+                design.display()
+            ),
+        )
+    };
+    let columns: Vec<Option<usize>> = names
+        .iter()
+        .map(|n| t.header.iter().position(|h| h == n))
+        .collect();
+    if let Some(k) = columns.iter().position(Option::is_none) {
+        return Err(Error::input(
+            file,
+            "header",
+            format!(
+                "a column {} as in {}: the table is not a campaign of that design",
+                names[k],
+                design.display()
+            ),
+        ));
+    }
+    for (line, r) in &t.records {
+        let Ok(row) = r[1].parse::<usize>() else {
+            continue;
+        };
+        let Some(want) = values.get(row) else {
+            return Err(mismatch(
+                *line,
+                format!("row {row} is beyond the design's {} rows", values.len()),
+            ));
+        };
+        for ((name, col), v) in names.iter().zip(&columns).zip(want) {
+            let field = &r[col.unwrap_or(0)];
+            if field.parse::<f64>().map_or(true, |x| x != *v) {
+                return Err(mismatch(
+                    *line,
+                    format!("row {row} has {name} = {field} but the design has {v:?}"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Counts the runs of a table. `design` overrides the sidecar's row count; the sidecar's shard,
 /// if any, still applies.
 pub fn status(out: &Path, design: Option<&Path>) -> Result<Status> {
@@ -135,7 +192,11 @@ pub fn status(out: &Path, design: Option<&Path>) -> Result<Status> {
         None => None,
     };
     let design_rows = match (design, &meta) {
-        (Some(d), _) => Some(read_numeric_csv(d)?.1.len()),
+        (Some(d), _) => {
+            let (names, values) = read_numeric_csv(d)?;
+            same_design(&file, &t, d, &names, &values)?;
+            Some(values.len())
+        }
         (None, Some(m)) => Some(m.design_rows),
         (None, None) => None,
     };
