@@ -137,7 +137,7 @@ fn same_design(
         };
         for ((name, col), v) in names.iter().zip(&columns).zip(want) {
             let field = &r[col.unwrap_or(0)];
-            if field.parse::<f64>().map_or(true, |x| x != *v) {
+            if !field.parse::<f64>().is_ok_and(|x| x == *v) {
                 return Err(mismatch(
                     *line,
                     format!("row {row} has {name} = {field} but the design has {v:?}"),
