@@ -976,3 +976,30 @@ fn tables_that_do_not_belong_are_refused_by_resume_status_and_merge() {
     ]);
     assert!(e.contains("--seed") && e.contains("b.csv"), "{e}");
 }
+
+#[test]
+fn a_set_constant_the_experiment_does_not_read_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 3, None);
+    let out = dir.path().join("t.csv");
+    let e = fails(&[
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        s(&out),
+        "--set",
+        "sleep_mss=3",
+    ]);
+    assert!(
+        e.contains("--set sleep_mss=3")
+            && e.contains("no parameter sleep_mss")
+            && e.contains("sleep_ms"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    // Optional parameters are accepted.
+    simulate_sleep(&design, &out, &["--set", "sleep_ms=1"]);
+}

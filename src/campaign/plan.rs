@@ -143,7 +143,20 @@ impl Plan {
                 ));
             }
         }
+        let known: Vec<&str> = experiment
+            .parameters()
+            .into_iter()
+            .chain(experiment.optional_parameters())
+            .collect();
         for (i, (name, v)) in set.iter().enumerate() {
+            // A typo would otherwise become an extra column that changes nothing.
+            if !known.contains(&name.as_str()) {
+                return Err(Error::invalid(format!(
+                    "--set {name}={v}: {} has no parameter {name}; expected one of {}",
+                    experiment.name(),
+                    known.join(", ")
+                )));
+            }
             if set[..i].iter().any(|(n, _)| n == name) {
                 return Err(Error::invalid(format!("--set {name}: given twice")));
             }

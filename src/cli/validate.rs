@@ -125,8 +125,26 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             params.set("sigma_ln", sigma);
         }
     }
+    let exp = experiment_by_name(
+        &a.experiment,
+        &ExperimentSettings {
+            box_scale: a.box_scale,
+        },
+    )?;
+    let known: Vec<&str> = exp
+        .parameters()
+        .into_iter()
+        .chain(exp.optional_parameters())
+        .collect();
     for s in &a.set {
         let (k, v) = crate::campaign::parse_set(s)?;
+        if !known.contains(&k.as_str()) {
+            anyhow::bail!(
+                "--set {s}: {} has no parameter {k}; expected one of {}",
+                exp.name(),
+                known.join(", ")
+            );
+        }
         if let Some(old) = params.get(&k) {
             anyhow::bail!(
                 "--set {s}: {k} is already {old} in {} (calibrated, or from the material's PSD); \
@@ -136,12 +154,6 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         }
         params.set(&k, v);
     }
-    let exp = experiment_by_name(
-        &a.experiment,
-        &ExperimentSettings {
-            box_scale: a.box_scale,
-        },
-    )?;
     let responses = exp.responses();
     if !material
         .measured

@@ -44,6 +44,10 @@ impl Experiment for SleepTest {
         vec!["x", "y"]
     }
 
+    fn optional_parameters(&self) -> Vec<&'static str> {
+        vec!["sleep_ms", "fail", "panic"]
+    }
+
     fn responses(&self) -> Vec<&'static str> {
         vec!["f", "noise"]
     }

@@ -871,6 +871,12 @@ impl Experiment for Hopper {
         super::SEED004_PARAMETERS.to_vec()
     }
 
+    fn optional_parameters(&self) -> Vec<&'static str> {
+        let mut v = vec!["fill_mass", "scale", "sigma_ln"];
+        v.extend(super::MATERIAL_OPTIONAL);
+        v
+    }
+
     fn responses(&self) -> Vec<&'static str> {
         vec![
             "flow_rate",

@@ -93,6 +93,9 @@ pub const RHO_RANGE: (f64, f64) = (1.0, 1e5);
 /// particles' Poisson ratio, as in seed 004), e_pp, e_pw, mu_pp, mu_pw, mu_r_pp, mu_r_pw, and
 /// optionally `ced_pp`/`ced_pw` (cohesion energy density, J/m^3). Returns (materials, particle
 /// material, wall material).
+/// The optional parameters [`materials_from`] reads.
+pub const MATERIAL_OPTIONAL: [&str; 2] = ["ced_pp", "ced_pw"];
+
 pub fn materials_from(p: &ParamSet) -> Result<(Materials, u16, u16)> {
     let nu = p.require("nu_p", NU_RANGE.0, NU_RANGE.1)?;
     let mut m = Materials::new();
@@ -171,6 +174,11 @@ pub trait Experiment: Send + Sync {
     fn name(&self) -> &'static str;
     /// Parameters the experiment needs.
     fn parameters(&self) -> Vec<&'static str>;
+    /// Parameters it reads when given (with a default otherwise). A constant that is neither a
+    /// parameter nor an optional one is refused by campaigns: it would do nothing.
+    fn optional_parameters(&self) -> Vec<&'static str> {
+        Vec::new()
+    }
     /// Response names, in output order.
     fn responses(&self) -> Vec<&'static str>;
     /// Refuses an impossible parameter set before anything runs; the error names the parameter.

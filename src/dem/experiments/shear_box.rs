@@ -293,6 +293,12 @@ impl Experiment for ShearBox {
         super::SEED004_PARAMETERS.to_vec()
     }
 
+    fn optional_parameters(&self) -> Vec<&'static str> {
+        let mut v = vec!["sigma_ln"];
+        v.extend(super::MATERIAL_OPTIONAL);
+        v
+    }
+
     fn responses(&self) -> Vec<&'static str> {
         vec![
             "shear_angle",

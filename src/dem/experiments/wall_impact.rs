@@ -132,6 +132,10 @@ impl Experiment for WallImpact {
         ]
     }
 
+    fn optional_parameters(&self) -> Vec<&'static str> {
+        vec!["k_t", "gamma_n", "spin"]
+    }
+
     fn responses(&self) -> Vec<&'static str> {
         vec!["cnr", "ctr"]
     }
