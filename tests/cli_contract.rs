@@ -303,6 +303,18 @@ fn validate_enforces_a_tolerance_and_refuses_what_would_compare_nothing() {
         e.contains("--set e_pw=0.9") && e.contains("already 0.8"),
         "{e}"
     );
+    let e = fails(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+        "--set",
+        "k_tt=5",
+    ]);
+    assert!(e.contains("no parameter k_tt"), "{e}");
 
     // Nothing measured by the experiment: refused, not a silent success.
     let (mat2, _) = impact_files(dir.path(), "shear_angle = { value = 35.0, sd = 0.5 }");
