@@ -103,10 +103,17 @@ pub fn draw_by_number(
         }
     }
     if d_min >= d_max {
+        // Name the bound the user gave; the other one is the distribution's default.
+        let given = |v: Option<f64>| if v.is_some() { "given" } else { "default" };
+        let field = if range.0.is_some() { "d_min" } else { "d_max" };
         return Err(Error::input(
             source,
-            "d_min",
-            format!("expected d_min < d_max, found d_min = {d_min} mm >= d_max = {d_max} mm"),
+            field,
+            format!(
+                "expected d_min < d_max, found d_min = {d_min} mm ({}) >= d_max = {d_max} mm ({})",
+                given(range.0),
+                given(range.1)
+            ),
         ));
     }
     let mass_fraction = dist.q3(d_max) - dist.q3(d_min);

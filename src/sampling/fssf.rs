@@ -80,8 +80,11 @@ impl Sampler for Fssf {
                 "fssf draws Sobol candidates and supports at most {MAX_DIM} dimensions"
             )));
         }
-        let n_max = existing.len() + n_new;
-        let n_cand = self.candidates.unwrap_or(1000 * d + 2 * n_max);
+        let n_max = existing.len().saturating_add(n_new);
+        // Saturating: a wrapped count once reported "1998 candidates" for a huge request.
+        let n_cand = self
+            .candidates
+            .unwrap_or(1000usize.saturating_mul(d).saturating_add(n_max.saturating_mul(2)));
         if n_cand < n_new {
             return Err(Error::invalid(format!(
                 "fssf needs at least as many candidates ({n_cand}) as new points ({n_new})"
