@@ -101,9 +101,16 @@ impl ShearBox {
             / 6.0;
         let n = (0.78 * v_box / mean_vol).ceil() as usize;
         if n > self.max_particles {
+            // The count follows box_scale (the box is k d_max wide) and the PSD's width; name
+            // both, the box scale first, since it is the setting the user chose.
             return Err(Error::invalid(format!(
-                "parameter sigma_ln = {sigma}: the box would hold about {n} particles (limit {}); \
-                 lower the box scale k",
+                "--box-scale {}: the box ({:.0} x {:.0} x {:.0} mm, k d_max with d_max = {d_max_mm:.2} \
+                 mm for d50 = {d50_mm} mm, sigma_ln = {sigma}) would hold about {n} particles, \
+                 more than the limit {}; expected a smaller box scale or a narrower PSD",
+                self.box_scale,
+                size[0] * 1e3,
+                size[1] * 1e3,
+                size[2] * 1e3,
                 self.max_particles
             )));
         }
@@ -658,4 +665,23 @@ pub fn side_view(path: &Path, p: &Particles, size: V3, flank: &Flank) -> Result<
         Ok(())
     }
     crate::draw_figure!(path, (800, 640), draw(p, size, flank))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_oversized_box_is_refused_naming_the_box_scale() {
+        let sb = ShearBox {
+            max_particles: 1000,
+            ..ShearBox::default()
+        };
+        let p = ParamSet::from_pairs(&[("d50", 5.0), ("sigma_ln", 0.3)]);
+        let e = sb.layout(&p, 1).unwrap_err().to_string();
+        assert!(
+            e.starts_with("--box-scale 10") && e.contains("sigma_ln = 0.3") && e.contains("1000"),
+            "{e}"
+        );
+    }
 }
