@@ -82,9 +82,11 @@ impl Sampler for Fssf {
         }
         let n_max = existing.len().saturating_add(n_new);
         // Saturating: a wrapped count once reported "1998 candidates" for a huge request.
-        let n_cand = self
-            .candidates
-            .unwrap_or(1000usize.saturating_mul(d).saturating_add(n_max.saturating_mul(2)));
+        let n_cand = self.candidates.unwrap_or(
+            1000usize
+                .saturating_mul(d)
+                .saturating_add(n_max.saturating_mul(2)),
+        );
         if n_cand < n_new {
             return Err(Error::invalid(format!(
                 "fssf needs at least as many candidates ({n_cand}) as new points ({n_new})"

@@ -3,11 +3,13 @@
 //! gplearn's results come from `benches/gp/run_gplearn.py`; exact recovery of both engines is
 //! judged by the same SRBench rule (`benches/gp/srbench_check.py`, sympy).
 
+use crate::cli::output::Output;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::export::sympy;
 use crate::gp::Config;
 use crate::metamodel::{fit_table, table::read_columns, FitOptions, Metrics};
 use crate::numeric::quantile;
+use crate::say;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -273,9 +275,13 @@ pub struct Args {
     /// Markdown report (e.g. docs/gp_benchmark.md).
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (the results); the text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
     let equations: Vec<_> = read_equations(&a.dir)?
         .into_iter()
         .filter(|e| a.only.is_empty() || a.only.contains(&e.name))
@@ -294,7 +300,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let mut ours = Vec::new();
     for eq in &equations {
         let r = run_mbgc(&a.dir, eq, &cfg)?;
-        println!(
+        say!(
+            out,
             "{:>10}: test R2 {}, size {}, {:.2} s, {} generations: {}",
             eq.name,
             r.test_r2.map_or("n/a".into(), |v| format!("{v:.6}")),
@@ -335,11 +342,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     match &a.report {
         Some(p) => {
             write_atomic(p, text.as_bytes())?;
-            println!("wrote {}", p.display());
+            say!(out, "wrote {}", p.display());
         }
-        None => print!("{text}"),
+        None => say!(out, "{text}"),
     }
     let json = a.dir.join("mbgc_results.json");
     write_atomic(&json, serde_json::to_string_pretty(&ours)?.as_bytes())?;
-    Ok(())
+    out.object(&serde_json::json!({ "mbgc": ours, "gplearn": theirs }))
 }

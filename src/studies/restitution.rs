@@ -26,6 +26,8 @@
 //! E = 2.1e10 Pa and steel's 2.1e11 Pa, because the paper's posterior only makes sense with the
 //! latter, see the report), and [`report`] writes the comparison with seed 003 Table 4.
 
+use crate::cli::output::Output;
+use crate::say;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -2458,6 +2460,9 @@ pub struct Args {
     /// Markdown report (e.g. docs/bayes_restitution.md).
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (the results); the text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -2495,14 +2500,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             .unwrap_or_default()
     );
     let text = report(&study, &command);
+    let out = Output::new(a.json);
     match &a.report {
         Some(p) => {
             write_atomic(p, text.as_bytes())?;
-            println!("wrote {}", p.display());
+            say!(out, "wrote {}", p.display());
         }
-        None => print!("{text}"),
+        None => say!(out, "{text}"),
     }
-    Ok(())
+    out.object(&study)
 }
 
 #[cfg(test)]

@@ -2,6 +2,8 @@
 //! ([`crate::liggghts::shear_box`] writes the deck: mbgc's initial particles, walls and schedule).
 //! Both final states are measured by the same code, so the difference is the codes' alone.
 
+use crate::cli::output::Output;
+use crate::say;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -95,6 +97,9 @@ pub struct Args {
     /// Markdown report (e.g. docs/experiments.md).
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (the results); the text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 fn shear_box_params(
@@ -123,6 +128,8 @@ fn shear_box_params(
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
+    let mut rows: Vec<serde_json::Value> = Vec::new();
     if a.seeds == 0 {
         anyhow::bail!("--seeds must be at least 1");
     }
@@ -219,7 +226,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                 let se = sd_diff / (a.seeds as f64).sqrt();
                 let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | {la:.2} (sd {ls:.2}) | {:+.2} +- {se:.2} | {mr:.1} | {lr:.1} | {:+.2} % |",
                 fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"), ma - la, 100.0 * (mr / lr - 1.0));
-                println!("{name}: shear angle mbgc {ma:.2} LIGGGHTS {la:.2} ({:+.2} +- {se:.2}); bulk density mbgc {mr:.1} LIGGGHTS {lr:.1} ({:+.2} %)", ma - la, 100.0 * (mr / lr - 1.0));
+                say!(out, "{name}: shear angle mbgc {ma:.2} LIGGGHTS {la:.2} ({:+.2} +- {se:.2}); bulk density mbgc {mr:.1} LIGGGHTS {lr:.1} ({:+.2} %)", ma - la, 100.0 * (mr / lr - 1.0));
+                rows.push(serde_json::json!({
+                    "set": name,
+                    "shear_angle_mbgc": ma,
+                    "shear_angle_liggghts": la,
+                    "difference_se": se,
+                    "bulk_density_mbgc": mr,
+                    "bulk_density_liggghts": lr,
+                }));
             } else {
                 let _ = writeln!(s, "| {name} | {}, {}, {}, {} | {ma:.2} (sd {sa:.2}) | not run | | {mr:.1} | not run | |", fr("mu_pp"), fr("mu_r_pp"), fr("mu_pw"), fr("mu_r_pw"));
             }
@@ -277,9 +292,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     if let Some(path) = &a.report {
         write_atomic(path, s.as_bytes())?;
-        println!("wrote {}", path.display());
+        say!(out, "wrote {}", path.display());
     } else {
-        println!("{s}");
+        say!(out, "{s}");
     }
-    Ok(())
+    out.object(&serde_json::json!({ "report": a.report, "text": s, "comparison": rows }))
 }
