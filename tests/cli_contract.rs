@@ -832,3 +832,120 @@ fn a_missing_file_is_named_once_with_the_os_error_once() {
         assert_eq!(e.matches("No such file or directory").count(), 1, "{e}");
     }
 }
+
+#[test]
+fn absurd_sizes_and_meaningless_options_are_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d.csv");
+    let o = s(&out);
+    for (args, needle) in [
+        (
+            vec![
+                "sample",
+                "--method",
+                "sobol",
+                "--n",
+                "18446744073709551615",
+                "--dim",
+                "2",
+                "--seed",
+                "1",
+                "--out",
+                o,
+            ],
+            "--n",
+        ),
+        (
+            vec![
+                "sample", "--method", "random", "--n", "10000000", "--dim", "12", "--seed", "1",
+                "--out", o,
+            ],
+            "--n",
+        ),
+        (
+            vec![
+                "sample",
+                "--method",
+                "lhs-maximin",
+                "--n",
+                "5000",
+                "--dim",
+                "2",
+                "--seed",
+                "1",
+                "--out",
+                o,
+            ],
+            "lhs-maximin is limited",
+        ),
+    ] {
+        let t0 = std::time::Instant::now();
+        let e = fails(&args);
+        assert!(e.contains(needle), "{args:?}: {e}");
+        assert!(
+            t0.elapsed().as_secs_f64() < 5.0,
+            "{args:?} took {:?}",
+            t0.elapsed()
+        );
+        assert!(!out.exists());
+    }
+    let (data, _) = table_and_model(dir.path());
+    let m = dir.path().join("m.json");
+    for (extra, needle) in [
+        (["--generations", "0"], "--generations 0"),
+        (["--parsimony", "inf"], "--parsimony inf"),
+    ] {
+        let mut args = vec![
+            "fit",
+            "--data",
+            s(&data),
+            "--inputs",
+            "x,z",
+            "--targets",
+            "y",
+            "--out",
+            s(&m),
+        ];
+        args.extend(extra);
+        let e = fails(&args);
+        assert!(e.contains(needle), "{e}");
+    }
+    // --sigma-ln with --sieve would be ignored: refused (usage error).
+    let sieve = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sieve_gravel_8_16.csv");
+    let o2 = common::mbgc(&[
+        "psd",
+        "draw",
+        "--sieve",
+        s(&sieve),
+        "--sigma-ln",
+        "0.3",
+        "--n",
+        "10",
+        "--seed",
+        "1",
+        "--out",
+        o,
+    ]);
+    assert_eq!(o2.status.code(), Some(2));
+    // A given d_max below the default d_min: the message names the bound that was given.
+    let e = fails(&[
+        "psd",
+        "draw",
+        "--d50",
+        "5",
+        "--sigma-ln",
+        "0.2",
+        "--n",
+        "10",
+        "--seed",
+        "1",
+        "--d-max",
+        "1",
+        "--out",
+        o,
+    ]);
+    assert!(
+        e.contains("d_max:") && e.contains("(default)") && e.contains("(given)"),
+        "{e}"
+    );
+}
