@@ -92,12 +92,18 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
         .file_name()
         .ok_or_else(|| Error::invalid(format!("{}: not a file path", path.display())))?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    // Dropping the temporary file on an error path deletes it.
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(".{}.", file_name.to_string_lossy()))
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(dir, e))?;
+    // Dropping the temporary file on an error path deletes it. A new file gets 0666 less the
+    // umask, as `std::fs::write` would give it (tempfile's own default is 0600); a replaced file
+    // keeps its mode (set below).
+    let prefix = format!(".{}.", file_name.to_string_lossy());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
     {
         use std::io::Write;
         let f = tmp.as_file_mut();
@@ -105,16 +111,9 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
             .and_then(|()| f.sync_all())
             .map_err(|e| Error::io(&target, e))?;
     }
-    // The temporary file is created with mode 0600; a result file should be as readable as one
-    // written by `std::fs::write`.
     #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let keep = std::fs::metadata(&target).map(|m| m.permissions().mode());
-        let mode = keep.unwrap_or(0o644);
-        let _ = tmp
-            .as_file()
-            .set_permissions(std::fs::Permissions::from_mode(mode));
+    if let Ok(meta) = std::fs::metadata(&target) {
+        let _ = tmp.as_file().set_permissions(meta.permissions());
     }
     tmp.persist(&target)
         .map_err(|e| Error::io(&target, e.error))?;
@@ -373,6 +372,15 @@ mod tests {
         write_atomic(&p, b"one").unwrap();
         write_atomic(&p, b"two").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
+        // A replaced file keeps its mode (a private result stays private).
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o600)).unwrap();
+            write_atomic(&p, b"three").unwrap();
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o600);
+        }
         assert!(leftovers(dir.path()).is_empty());
     }
 

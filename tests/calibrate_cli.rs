@@ -95,6 +95,12 @@ fn calibrate_writes_parameters_and_reports_the_posterior() {
         "{best}"
     );
     assert_eq!(best["params"]["c"].as_f64().unwrap(), 1.5);
+    // Every model input is named, the fixed one included.
+    let model_inputs = mbgc::metamodel::Metamodel::load(&model)
+        .unwrap()
+        .inputs
+        .len();
+    assert_eq!(best["params"].as_object().unwrap().len(), model_inputs);
     assert!(!best["predicted"].as_object().unwrap().is_empty(), "{best}");
     assert!(best["objective"].as_f64().unwrap() < 1.0);
     let mean_a = v["posterior"]["a"]["mean"].as_f64().unwrap();

@@ -47,6 +47,7 @@ enum Tok {
     Close,
     Comma,
     Semi,
+    Dot,
     Other,
 }
 
@@ -139,6 +140,7 @@ fn tokens(text: &str) -> Vec<Tok> {
                 '}' => Tok::Close,
                 ',' => Tok::Comma,
                 ';' => Tok::Semi,
+                '.' => Tok::Dot,
                 _ => Tok::Other,
             });
             i += 1;
@@ -147,14 +149,20 @@ fn tokens(text: &str) -> Vec<Tok> {
     out
 }
 
-/// Expands a `use` tree starting at `t[*i]` (after `use`) into full paths.
-fn use_tree(t: &[Tok], i: &mut usize, prefix: &[String], out: &mut Vec<Vec<String>>) {
+/// Expands a `use` tree starting at `t[*i]` (after `use`) into full paths, each with the name
+/// it binds in the file (its last segment, or the `as` alias).
+fn use_tree(t: &[Tok], i: &mut usize, prefix: &[String], out: &mut Vec<(Vec<String>, String)>) {
     let mut path = prefix.to_vec();
+    let bind = |path: &Vec<String>| path.last().cloned().unwrap_or_default();
     loop {
         match t.get(*i) {
             Some(Tok::Ident(s)) if s == "as" => {
+                let alias = match t.get(*i + 1) {
+                    Some(Tok::Ident(a)) => a.clone(),
+                    _ => bind(&path),
+                };
                 *i += 2;
-                out.push(path);
+                out.push((path, alias));
                 return;
             }
             Some(Tok::Ident(s)) => {
@@ -183,25 +191,31 @@ fn use_tree(t: &[Tok], i: &mut usize, prefix: &[String], out: &mut Vec<Vec<Strin
                 }
             }
             _ => {
-                out.push(path);
+                let name = bind(&path);
+                out.push((path, name));
                 return;
             }
         }
     }
 }
 
-/// Every path the file names: `use` trees and inline `a::b::c` chains.
+/// Every path the file names: `use` trees, and inline `a::b::c` chains with a first segment
+/// that a `use` brought in expanded to its full path (`use crate::dem; dem::sim::f()` names
+/// `crate::dem::sim`).
 fn paths(t: &[Tok]) -> Vec<Vec<String>> {
-    let mut out = Vec::new();
+    let mut uses = Vec::new();
+    let mut chains = Vec::new();
     let mut i = 0;
     while i < t.len() {
         if let Tok::Ident(s) = &t[i] {
             if s == "use" {
                 i += 1;
-                use_tree(t, &mut i, &[], &mut out);
+                use_tree(t, &mut i, &[], &mut uses);
                 continue;
             }
-            if t.get(i + 1) == Some(&Tok::Sep) && (i == 0 || t[i - 1] != Tok::Sep) {
+            // Not after `::` (inside a chain) or `.` (a method call such as `x.parse::<f64>()`).
+            let starts = i == 0 || !matches!(t[i - 1], Tok::Sep | Tok::Dot);
+            if t.get(i + 1) == Some(&Tok::Sep) && starts {
                 let mut p = vec![s.clone()];
                 let mut j = i + 1;
                 while t.get(j) == Some(&Tok::Sep) {
@@ -213,12 +227,26 @@ fn paths(t: &[Tok]) -> Vec<Vec<String>> {
                         _ => break,
                     }
                 }
-                out.push(p);
+                chains.push(p);
                 i = j;
                 continue;
             }
         }
         i += 1;
+    }
+    let imported: std::collections::HashMap<String, Vec<String>> = uses
+        .iter()
+        .filter(|(p, name)| {
+            !name.is_empty() && !["crate", "self", "super"].contains(&name.as_str()) && p.len() > 1
+        })
+        .map(|(p, name)| (name.clone(), p.clone()))
+        .collect();
+    let mut out: Vec<Vec<String>> = uses.into_iter().map(|(p, _)| p).collect();
+    for c in chains {
+        match imported.get(&c[0]) {
+            Some(full) => out.push(full.iter().chain(&c[1..]).cloned().collect()),
+            None => out.push(c),
+        }
     }
     out
 }
@@ -399,6 +427,12 @@ fn the_checker_sees_cycles_and_nested_use_trees() {
         "use crate::{a::{b::{self, Y}, c::Z}, error};\n#[cfg(test)]\nmod tests { use super::super::b; }",
     );
     assert_eq!(c, [m(&["a", "b"])].into());
+    // A module brought in by `use` (or under an alias) and then used by an inline path.
+    let via_use = edges(
+        &m(&["a"]),
+        "use crate::a as top;\nfn f() { top::c::g(); let n = x.c::<u8>(); }",
+    );
+    assert_eq!(via_use, [m(&["a", "c"])].into());
     let mut g = BTreeMap::new();
     g.insert(m(&["a", "b"]), b);
     g.insert(m(&["a", "c"]), c);

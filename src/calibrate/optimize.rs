@@ -13,8 +13,14 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 use serde::Serialize;
 
+type Best = std::sync::Arc<std::sync::Mutex<Option<(f64, Vec<f64>)>>>;
+
 struct Transformed<'a, 'm> {
     p: &'a Problem<'m>,
+    /// The lowest finite objective evaluated so far and where: argmin returns no state when a
+    /// cost or gradient stops the run, and the start must then report where it got to, not where
+    /// it began.
+    best: Best,
 }
 
 impl Transformed<'_, '_> {
@@ -35,6 +41,12 @@ impl CostFunction for Transformed<'_, '_> {
     type Output = f64;
     fn cost(&self, z: &Vec<f64>) -> Result<f64, argmin::core::Error> {
         let f = self.p.objective(&self.x(z)).map_or(OUTSIDE, |(f, _)| f);
+        if f.is_finite() && f <= HUGE {
+            let mut best = self.best.lock().unwrap_or_else(|e| e.into_inner());
+            if best.as_ref().is_none_or(|(b, _)| f < *b) {
+                *best = Some((f, z.clone()));
+            }
+        }
         // argmin's line search has no iteration bound of its own: a NaN or an objective whose
         // squares overflow would keep it searching forever. Stop this start instead.
         if !(f.is_finite() && f.abs() <= HUGE) {
@@ -81,7 +93,11 @@ pub struct Optimum {
 
 /// One L-BFGS run from unit coordinates `u0`.
 pub fn local(p: &Problem, u0: &[f64], max_iters: u64) -> Option<Optimum> {
-    let op = Transformed { p };
+    let best = Best::default();
+    let op = Transformed {
+        p,
+        best: best.clone(),
+    };
     let z0: Vec<f64> = u0
         .iter()
         .map(|u| (2.0 * u.clamp(0.0, 1.0) - 1.0).asin())
@@ -96,9 +112,16 @@ pub fn local(p: &Problem, u0: &[f64], max_iters: u64) -> Option<Optimum> {
         .run()
     {
         Ok(r) => r.state.get_best_param().cloned().unwrap_or(z0),
-        Err(_) => z0,
+        Err(_) => best
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take()
+            .map_or(z0, |(_, z)| z),
     };
-    let op = Transformed { p };
+    let op = Transformed {
+        p,
+        best: Best::default(),
+    };
     let x = op.x(&z);
     let (chi2_total, _) = p.objective(&x)?;
     let violation = p.violation(&x);

@@ -214,8 +214,10 @@ impl Session {
             .optima
             .iter()
             .map(|o| {
+                // Every model input: the inputs that no optimum varies (fixed in the material or by
+                // its PSD) as at the best optimum, then this optimum's free values.
                 let mut params = Map::new();
-                for (name, v) in &self.fixed {
+                for (name, v) in &self.best_inputs {
                     params.insert(name.clone(), Value::from(*v));
                 }
                 for (name, v) in self.free.iter().zip(&o.x) {

@@ -38,6 +38,10 @@ pub fn ascii_identifier(name: &str) -> String {
     if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
         s.insert(0, '_');
     }
+    // `_` alone (from `μ`, `%`, `-`) is a pattern, not a variable, in Rust.
+    if s.chars().all(|c| c == '_') {
+        s.push('x');
+    }
     s
 }
 
@@ -60,7 +64,9 @@ mod tests {
             .map(|s| s.to_string())
             .collect();
         let ids = unique(&names, ascii_identifier, &["x_y_2".to_string()]);
-        assert_eq!(ids, ["x_y", "x_y_3", "x_y_4", "_2nd", "_"]);
+        assert_eq!(ids, ["x_y", "x_y_3", "x_y_4", "_2nd", "_x"]);
+        assert_eq!(ascii_identifier("μ"), "_x");
+        assert_eq!(ascii_identifier("--"), "__x");
         assert_eq!(comment_text("a\nb\r"), "a b ");
     }
 }

@@ -16,6 +16,10 @@ const KEYWORDS: &[&str] = &[
 /// A Rust identifier for a column name (raw identifier for keywords).
 pub fn ident(name: &str) -> String {
     let s = ascii_identifier(name);
+    // These four cannot be raw identifiers.
+    if ["self", "Self", "super", "crate"].contains(&s.as_str()) {
+        return format!("{s}_");
+    }
     if KEYWORDS.contains(&s.as_str()) {
         format!("r#{s}")
     } else {
@@ -134,4 +138,22 @@ pub fn module(m: &Metamodel) -> String {
         out.push_str(&format!("    {body}\n}}\n"));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identifiers_are_valid_rust_for_any_name() {
+        assert_eq!(ident("mu_pp"), "mu_pp");
+        assert_eq!(ident("type"), "r#type");
+        // Raw identifiers cannot spell these.
+        for k in ["self", "Self", "super", "crate"] {
+            assert_eq!(ident(k), format!("{k}_"));
+        }
+        assert_eq!(ident("μ"), "_x");
+        assert_eq!(ident("x-y"), "x_y");
+        assert_eq!(ident("2nd"), "_2nd");
+    }
 }
