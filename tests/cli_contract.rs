@@ -772,18 +772,9 @@ fn exports_of_awkwardly_named_columns_compile_parse_and_agree_with_predict() {
     let sy = ok(&["export", "--model", s(&model), "--format", "sympy"]);
     assert!(sy.starts_with("y_out = "), "{sy}");
     assert!(!sy.contains("x-y") && !sy.contains("x - y"), "{sy}");
-    let python = std::env::var("MBGC_PYTHON").unwrap_or_else(|_| "python3".into());
-    let has_sympy = std::process::Command::new(&python)
-        .args(["-c", "import sympy"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has_sympy {
-        assert!(
-            std::env::var("MBGC_REQUIRE_SYMPY").is_err(),
-            "sympy required"
-        );
+    let Some(python) = common::sympy_python() else {
         return;
-    }
+    };
     let (_, e) = sy.lines().next().unwrap().split_once(" = ").unwrap();
     let mut script = format!(
         "import sympy\nfrom sympy import Symbol\ne = sympy.sympify({e:?})\n\

@@ -193,19 +193,9 @@ fn fit_predict_export_agree() {
     // sympy: sympify reads it and gives the same values (when sympy is installed; CI installs it
     // and sets MBGC_REQUIRE_SYMPY=1 so that the check cannot be skipped there).
     let sy = ok(&["export", "--model", s(&model_path), "--format", "sympy"]);
-    let python = std::env::var("MBGC_PYTHON").unwrap_or_else(|_| "python3".into());
-    let has_sympy = Command::new(&python)
-        .args(["-c", "import sympy"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has_sympy {
-        assert!(
-            std::env::var("MBGC_REQUIRE_SYMPY").is_err(),
-            "MBGC_REQUIRE_SYMPY is set but {python} cannot import sympy"
-        );
-        eprintln!("sympy not installed: sympy export check skipped");
+    let Some(python) = common::sympy_python() else {
         return;
-    }
+    };
     let mut script = String::from("import sympy\nfrom sympy import Symbol\nexprs = {}\n");
     for line in sy.lines() {
         let (name, e) = line.split_once(" = ").unwrap();

@@ -35,3 +35,22 @@ pub fn fails(args: &[&str]) -> String {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// The Python to check sympy exports with, or None when it cannot import sympy. CI installs sympy
+/// and sets MBGC_REQUIRE_SYMPY=1, so there a missing sympy fails instead of skipping the check.
+pub fn sympy_python() -> Option<String> {
+    let python = std::env::var("MBGC_PYTHON").unwrap_or_else(|_| "python3".into());
+    let has_sympy = Command::new(&python)
+        .args(["-c", "import sympy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if has_sympy {
+        return Some(python);
+    }
+    assert!(
+        std::env::var("MBGC_REQUIRE_SYMPY").is_err(),
+        "MBGC_REQUIRE_SYMPY is set but {python} cannot import sympy"
+    );
+    eprintln!("sympy not installed: sympy export check skipped");
+    None
+}
