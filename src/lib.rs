@@ -15,6 +15,7 @@ pub mod gp;
 pub mod liggghts;
 pub mod material;
 pub mod metamodel;
+pub mod model_table;
 pub mod numeric;
 pub mod outputs;
 pub mod plot;

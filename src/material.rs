@@ -13,12 +13,16 @@
 //! rho_p = [2000, 3000]
 //! [constraints]
 //! expr = ["e_pw <= e_pp"]
+//! [model]                    # optional: the effects the material needs
+//! class = "hertz,mindlin,epsd2,sjkr"
 //! ```
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
+use crate::dem::contact::ModelClass;
 use crate::error::{from_toml, read_to_string, Entries, Error, Result};
+use crate::model_table::{refuse_inactive_parameters, ModelTable};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Measured {
@@ -66,6 +70,8 @@ pub struct Material {
     pub fixed: Vec<(String, f64)>,
     pub bounds: Vec<(String, [f64; 2])>,
     pub constraints: Vec<Constraint>,
+    /// The `[model] class` the material declares it needs; `None`: whatever the metamodel's.
+    pub model_class: Option<ModelClass>,
 }
 
 /// Parses a linear expression such as `0.5*mu_r_pp + mu_pp - 3e-1` into terms and a constant.
@@ -242,6 +248,7 @@ struct MaterialFile {
     #[serde(default)]
     bounds: Entries<Vec<f64>>,
     constraints: Option<ConstraintsFile>,
+    model: Option<ModelTable>,
 }
 
 #[derive(Deserialize)]
@@ -411,6 +418,23 @@ impl MaterialFile {
             .enumerate()
             .map(|(i, text)| constraint(text, file, &format!("constraints.expr[{i}]")))
             .collect::<Result<Vec<_>>>()?;
+        let model_class = self.model.map(|m| m.class(file)).transpose()?;
+        if let Some(c) = &model_class {
+            refuse_inactive_parameters(
+                c,
+                fixed.iter().map(|(n, _)| n.as_str()),
+                file,
+                "fixed",
+                "this material",
+            )?;
+            refuse_inactive_parameters(
+                c,
+                bounds.iter().map(|(n, _)| n.as_str()),
+                file,
+                "bounds",
+                "this material",
+            )?;
+        }
         Ok(Material {
             name,
             source: file.to_string(),
@@ -419,6 +443,7 @@ impl MaterialFile {
             fixed,
             bounds,
             constraints,
+            model_class,
         })
     }
 }

@@ -19,7 +19,9 @@ use std::path::Path;
 use serde::de::IgnoredAny;
 use serde::Deserialize;
 
+use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{from_toml, read_to_string, Entries, Error, Result};
+use crate::model_table::{refuse_inactive_parameters, ModelTable};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scale {
@@ -74,6 +76,8 @@ impl Parameter {
 pub struct Space {
     pub name: Option<String>,
     pub parameters: Vec<Parameter>,
+    /// The `[model] class` of the file; `None`: seed 004's default class.
+    pub model_class: Option<ModelClass>,
     /// Where the space came from (file path), used in error messages.
     pub source: String,
 }
@@ -89,6 +93,7 @@ struct SpaceFile {
     #[allow(dead_code)]
     description: Option<IgnoredAny>,
     parameters: Option<Entries<ParameterFile>>,
+    model: Option<ModelTable>,
 }
 
 #[derive(Deserialize)]
@@ -133,11 +138,40 @@ impl Space {
             .into_iter()
             .map(|(name, p)| p.validate(source, name))
             .collect::<Result<Vec<_>>>()?;
+        let model_class = file.model.map(|m| m.class(source)).transpose()?;
+        let class = model_class.unwrap_or_default();
+        refuse_inactive_parameters(
+            &class,
+            parameters.iter().map(|p| p.name.as_str()),
+            source,
+            "parameters",
+            "this space",
+        )?;
+        // A structural constant of an effect (one that selects a model) is fixed, not sampled.
+        for p in parameters.iter().filter(|p| !p.is_fixed()) {
+            let structural = class
+                .parameters(&Pair::BOTH)
+                .into_iter()
+                .any(|(n, spec, _)| n == p.name && !spec.variable);
+            if structural {
+                return Err(Error::input(
+                    source,
+                    format!("parameters.{}", p.name),
+                    "a structural constant of its effect: a metamodel may not vary it; expected                      `fixed = VALUE`",
+                ));
+            }
+        }
         Ok(Space {
             name: file.name,
             parameters,
+            model_class,
             source: source.to_string(),
         })
+    }
+
+    /// The model class of the space (seed 004's when the file names none).
+    pub fn class(&self) -> ModelClass {
+        self.model_class.unwrap_or_default()
     }
 
     /// Number of free (sampled) parameters: the dimension of the unit cube.

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::material::{Constraint, Material};
+use crate::dem::contact::Pair;
 use crate::metamodel::Metamodel;
 
 /// A measured response the fit must match.
@@ -33,9 +34,61 @@ pub struct Problem<'m> {
 /// Penalty weight of a constraint violation (in parameter units, squared).
 const PENALTY: f64 = 1e6;
 
+/// Refuses a material that needs an effect the metamodel was not trained with (by its `[model]
+/// class` or by a fixed or bounded parameter of that effect), naming the effect.
+fn check_class(model: &Metamodel, material: &Material) -> Result<()> {
+    let file = material.source.as_str();
+    let theirs = model.class()?;
+    if let Some(mine) = material.model_class {
+        let lacking = mine.missing_from(&theirs);
+        let extra = theirs.missing_from(&mine);
+        if !lacking.is_empty() {
+            return Err(Error::input(
+                file,
+                "model.class",
+                format!(
+                    "{mine} needs {}, which the metamodel (trained on {theirs}) lacks: fit one on \
+                     a campaign run with --model-class {mine}",
+                    lacking.join(", ")
+                ),
+            ));
+        }
+        if !extra.is_empty() {
+            return Err(Error::input(
+                file,
+                "model.class",
+                format!(
+                    "{mine}, but the metamodel has {theirs} (also {}): calibrating would give \
+                     values to effects the material says it lacks; expected the metamodel's \
+                     class or a metamodel of {mine}",
+                    extra.join(", ")
+                ),
+            ));
+        }
+    }
+    let names = material
+        .fixed
+        .iter()
+        .map(|(n, _)| ("fixed", n))
+        .chain(material.bounds.iter().map(|(n, _)| ("bounds", n)));
+    for (table, name) in names {
+        theirs
+            .refuse_inactive(name, &Pair::BOTH, "the metamodel")
+            .map_err(|e| {
+                Error::input(
+                    file,
+                    format!("{table}.{name}"),
+                    format!("{e} (the metamodel was trained on {theirs})"),
+                )
+            })?;
+    }
+    Ok(())
+}
+
 impl<'m> Problem<'m> {
     pub fn new(model: &'m Metamodel, material: &Material) -> Result<Problem<'m>> {
         let file = material.source.as_str();
+        check_class(model, material)?;
         let names = model.input_names();
         let mut targets = Vec::new();
         for m in &material.measured {

@@ -41,6 +41,8 @@ pub struct Session {
     pub source: String,
     /// The model file, as given.
     pub model: String,
+    /// The model class the metamodel was trained on.
+    pub model_class: String,
     /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
     pub notes: Vec<String>,
     /// The material's fixed parameters, in file order.
@@ -123,6 +125,7 @@ pub fn run(material: &Material, model_path: &Path, opts: &SessionOptions) -> Res
         material: material.name.clone(),
         source: material.source.clone(),
         model: model_path.display().to_string(),
+        model_class: model.model_class.clone(),
         notes: problem.notes.clone(),
         fixed: material.fixed.clone(),
         measured: problem
@@ -199,6 +202,8 @@ impl Session {
         for (m, p) in self.measured.iter().zip(&self.best().predictions) {
             let _ = writeln!(t, "{} = {p:?}", m.name);
         }
+        // `mbgc validate` reruns the DEM with the effects the metamodel was trained on.
+        let _ = write!(t, "\n[model]\nclass = {:?}\n", self.model_class);
         t
     }
 
@@ -254,6 +259,7 @@ impl Session {
         serde_json::json!({
             "material": self.material,
             "model": self.model,
+            "model_class": self.model_class,
             "notes": self.notes,
             "solutions": solutions,
             "posterior": posterior,

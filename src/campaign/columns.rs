@@ -1,7 +1,9 @@
-//! The columns of a campaign table: `run_id,row,status,seed`, the inputs, the responses, then
+//! The columns of a campaign table: `run_id,row,status,seed,model_class`, the inputs, the responses, then
 //! the diagnostics. The plan names them before anything runs; the table writes and reads them.
 
-pub const FIXED_COLUMNS: [&str; 4] = ["run_id", "row", "status", "seed"];
+pub const FIXED_COLUMNS: [&str; 5] = ["run_id", "row", "status", "seed", "model_class"];
+/// Where the model class is among [`FIXED_COLUMNS`].
+pub const MODEL_CLASS_COLUMN: usize = 4;
 pub const DIAGNOSTIC_COLUMNS: [&str; 6] = [
     "settled",
     "steps",

@@ -2,18 +2,22 @@
 //! restart names and seeds a row the same way.
 
 use super::registry::ExperimentSettings;
+use crate::dem::contact::ModelClass;
 use crate::dem::experiments::ParamSet;
 use crate::numeric::{splitmix64, Fnv1a};
 
 /// The id of a run: 64-bit FNV-1a over the experiment name, each input's name and the bits of its
 /// value (so `0.0` and `-0.0` differ, and a value re-read from a CSV matches only if it is the same
-/// number), the row seed, and the settings that can change results (`box_scale`, only when given),
-/// printed as 16 lowercase hex digits.
+/// number), the row seed, and the settings that can change results (`box_scale`, only when given;
+/// the model class, only when it is not seed 004's default, so that the ids of tables written
+/// before model classes existed, all of the default class, stay valid), printed as 16 lowercase
+/// hex digits.
 pub fn run_id(
     experiment: &str,
     inputs: &ParamSet,
     seed: u64,
     settings: &ExperimentSettings,
+    class: Option<&ModelClass>,
 ) -> String {
     let mut h = Fnv1a::default();
     h.str(experiment);
@@ -25,6 +29,10 @@ pub fn run_id(
     if let Some(k) = settings.box_scale {
         h.str("box_scale");
         h.u64(k.to_bits());
+    }
+    if let Some(c) = class.filter(|c| **c != ModelClass::default()) {
+        h.str("model_class");
+        h.str(&c.label());
     }
     format!("{:016x}", h.0)
 }
@@ -47,37 +55,32 @@ mod tests {
     #[test]
     fn run_id_is_stable_and_sensitive_to_every_part() {
         let s = ExperimentSettings::default();
-        let id = run_id("wall-impact", &inputs(2.0), 7, &s);
+        let id = run_id("wall-impact", &inputs(2.0), 7, &s, None);
         assert_eq!(id.len(), 16);
         assert!(id.chars().all(|c| c.is_ascii_hexdigit()));
         // Golden value: a run id must never change between versions, or resumes would rerun.
-        assert_eq!(id, run_id("wall-impact", &inputs(2.0), 7, &s));
+        assert_eq!(id, run_id("wall-impact", &inputs(2.0), 7, &s, None));
         assert_eq!(id, "d6be556de2e938d2");
         let others = [
-            run_id("shear-box", &inputs(2.0), 7, &s),
-            run_id("wall-impact", &inputs(2.0 + f64::EPSILON * 2.0), 7, &s),
-            run_id("wall-impact", &inputs(2.0), 8, &s),
-            run_id(
-                "wall-impact",
-                &ParamSet::from_pairs(&[("b", 2.0), ("a", 1.5)]),
-                7,
-                &s,
-            ),
-            run_id(
-                "wall-impact",
-                &inputs(2.0),
-                7,
-                &ExperimentSettings {
+            run_id("shear-box", &inputs(2.0), 7, &s, None),
+            run_id("wall-impact", &inputs(2.0 + f64::EPSILON * 2.0), 7, &s, None),
+            run_id("wall-impact", &inputs(2.0), 8, &s, None),
+            run_id("wall-impact", &ParamSet::from_pairs(&[("b", 2.0), ("a", 1.5)]), 7, &s, None),
+            run_id("wall-impact", &inputs(2.0), 7, &ExperimentSettings {
                     box_scale: Some(2.0),
-                },
-            ),
+                }, None),
         ];
         for o in others {
             assert_ne!(o, id);
         }
+        // The default class, given or not, keeps the id; another class changes it.
+        let default = ModelClass::default();
+        assert_eq!(run_id("wall-impact", &inputs(2.0), 7, &s, Some(&default)), id);
+        let cohesive = ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap();
+        assert_ne!(run_id("wall-impact", &inputs(2.0), 7, &s, Some(&cohesive)), id);
         assert_ne!(
-            run_id("x", &inputs(0.0), 1, &s),
-            run_id("x", &inputs(-0.0), 1, &s)
+            run_id("x", &inputs(0.0), 1, &s, None),
+            run_id("x", &inputs(-0.0), 1, &s, None)
         );
     }
 

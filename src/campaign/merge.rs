@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use csv::StringRecord;
 
+use super::columns::MODEL_CLASS_COLUMN;
 use super::lock::TableLock;
 use super::status::Meta;
 use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
@@ -53,6 +54,7 @@ fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
             ("--seed", m.seed != m0.seed),
             ("--set", m.set != m0.set),
             ("--box-scale", m.box_scale != m0.box_scale),
+            ("--model-class", m.model_class != m0.model_class),
             ("design rows", m.design_rows != m0.design_rows),
         ];
         if let Some((what, _)) = differs.iter().find(|(_, d)| *d) {
@@ -87,6 +89,8 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
     // run id -> (row, file, line, record)
     let mut by_id: HashMap<String, (u64, String, u64, StringRecord)> = HashMap::new();
     let mut by_row: HashMap<u64, (String, String, u64)> = HashMap::new();
+    // The first model class seen, with where: a table holds one class.
+    let mut class: Option<(String, String, u64)> = None;
     let mut summary = MergeSummary {
         rows: 0,
         duplicates: 0,
@@ -99,7 +103,7 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
             return Err(Error::input(
                 &file,
                 "header",
-                "expected a campaign table (run_id,row,status,seed,...,error)",
+                "expected a campaign table (run_id,row,status,seed,model_class,...,error)",
             ));
         }
         match &header {
@@ -137,6 +141,21 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
                 )
             })?;
             let id = r[0].to_string();
+            let c = &r[MODEL_CLASS_COLUMN];
+            match &class {
+                None => class = Some((c.to_string(), file.clone(), line)),
+                Some((c0, f0, l0)) if c0 != c => {
+                    return Err(Error::input(
+                        &file,
+                        format!("line {line}, column model_class"),
+                        format!(
+                            "{c} here but {c0} in {f0} line {l0}: runs of different model \
+                             classes are different campaigns; merge each class on its own"
+                        ),
+                    ));
+                }
+                Some(_) => {}
+            }
             if let Some((other, f0, l0)) = by_row.get(&row) {
                 if *other != id {
                     return Err(Error::input(

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use super::columns;
 use super::identity::{row_seed, run_id};
 use super::registry::ExperimentSettings;
+use crate::dem::contact::ModelClass;
 use crate::dem::experiments::{Experiment, ParamSet};
 use crate::error::{Error, Result};
 use crate::sampling::design::read_numeric_csv;
@@ -87,6 +88,8 @@ pub struct PlannedRun {
 #[derive(Debug, Clone)]
 pub struct Plan {
     pub experiment: String,
+    /// The experiment's model class (`None` for one without a contact law).
+    pub model_class: Option<ModelClass>,
     pub design: PathBuf,
     /// Campaign seed (`--seed`).
     pub seed: u64,
@@ -148,6 +151,19 @@ impl Plan {
             .into_iter()
             .chain(experiment.optional_parameters())
             .collect();
+        // A parameter of an effect the class does not switch on would do nothing.
+        if let Some(class) = experiment.class() {
+            for h in &header {
+                class
+                    .refuse_inactive(h, experiment.pairs(), experiment.name())
+                    .map_err(|e| Error::input(&file, format!("column {h}"), e.to_string()))?;
+            }
+            for (name, v) in set {
+                class
+                    .refuse_inactive(name, experiment.pairs(), experiment.name())
+                    .map_err(|e| Error::invalid(format!("--set {name}={v}: {e}")))?;
+            }
+        }
         for (i, (name, v)) in set.iter().enumerate() {
             // A typo would otherwise become an extra column that changes nothing.
             if !known.contains(&name.as_str()) {
@@ -209,7 +225,13 @@ impl Plan {
                 )
             })?;
             let seed = row_seed(seed, row as u64);
-            let run_id = run_id(experiment.name(), &params, seed, settings);
+            let run_id = run_id(
+                experiment.name(),
+                &params,
+                seed,
+                settings,
+                experiment.class(),
+            );
             // Different rows have different seeds, so equal ids would be a hash collision.
             if !ids.insert(run_id.clone()) {
                 return Err(Error::invalid(format!(
@@ -227,6 +249,7 @@ impl Plan {
         }
         Ok(Plan {
             experiment: experiment.name().to_string(),
+            model_class: experiment.class().copied(),
             design: design.to_path_buf(),
             seed,
             set: set.to_vec(),
@@ -239,6 +262,12 @@ impl Plan {
             responses,
             rows,
         })
+    }
+
+    /// The `model_class` field of every line: the class's names joined by `+`, or `-` for an
+    /// experiment without a contact law.
+    pub fn model_class_label(&self) -> String {
+        self.model_class.map_or_else(|| "-".into(), |c| c.label())
     }
 
     /// The table header: fixed columns, inputs, responses, diagnostics.
@@ -318,8 +347,18 @@ mod tests {
             [("y", 3.0), ("extra", 6.0), ("x", 4.0), ("sleep_ms", 0.0)]
         );
         assert_eq!(
-            p.columns()[..8],
-            ["run_id", "row", "status", "seed", "y", "extra", "x", "sleep_ms"]
+            p.columns()[..9],
+            [
+                "run_id",
+                "row",
+                "status",
+                "seed",
+                "model_class",
+                "y",
+                "extra",
+                "x",
+                "sleep_ms"
+            ]
         );
 
         let e = plan("x,y\n1,2\n1,-2\n", &[]).unwrap_err().to_string();

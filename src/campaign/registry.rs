@@ -3,16 +3,19 @@
 use crate::dem::experiments::hopper::Hopper;
 use crate::dem::experiments::shear_box::ShearBox;
 use crate::dem::experiments::wall_impact::WallImpact;
+use crate::dem::contact::ModelClass;
 use crate::dem::experiments::Experiment;
 use crate::error::{Error, Result};
 use std::sync::Mutex;
 
 /// Campaign-wide settings that experiments may read when they are built. Experiments that have
-/// no use for a setting ignore it (wall-impact ignores all of them).
+/// no use for a setting ignore it (wall-impact ignores the box scale).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ExperimentSettings {
     /// `--box-scale k`: size of the experiment's box relative to its default (shear box, hopper).
     pub box_scale: Option<f64>,
+    /// `--model-class`: the effects of the contact law (default: seed 004's class).
+    pub model_class: Option<ModelClass>,
 }
 
 impl ExperimentSettings {
@@ -31,11 +34,20 @@ pub type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
 
 /// Every experiment the command line knows. Registering one is one line here.
 const EXPERIMENTS: &[(&str, Constructor)] = &[
-    ("wall-impact", |_| Ok(Box::new(WallImpact::default()))),
-    ("hopper", |_| Ok(Box::new(Hopper))),
+    ("wall-impact", |s| {
+        Ok(Box::new(WallImpact {
+            class: s.model_class.unwrap_or_default(),
+        }))
+    }),
+    ("hopper", |s| {
+        Ok(Box::new(Hopper {
+            class: s.model_class.unwrap_or_default(),
+        }))
+    }),
     ("shear-box", |s| {
         Ok(Box::new(ShearBox {
             box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),
+            class: s.model_class.unwrap_or_default(),
             ..ShearBox::default()
         }))
     }),
@@ -99,7 +111,15 @@ pub fn experiment_by_name(
 ) -> Result<Box<dyn Experiment>> {
     settings.validate()?;
     match all().into_iter().find(|(n, _)| *n == name) {
-        Some((_, make)) => make(settings),
+        Some((_, make)) => {
+            let e = make(settings)?;
+            if let (Some(c), None) = (settings.model_class, e.class()) {
+                return Err(Error::invalid(format!(
+                    "--model-class {c}: {name} has no contact law, so the class would do nothing"
+                )));
+            }
+            Ok(e)
+        }
         None => Err(Error::invalid(format!(
             "--experiment {name}: unknown experiment (known: {})",
             experiment_names().join(", ")
@@ -141,7 +161,10 @@ mod tests {
     #[test]
     fn bad_box_scale_is_refused_naming_the_option() {
         for k in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-            let s = ExperimentSettings { box_scale: Some(k) };
+            let s = ExperimentSettings {
+                box_scale: Some(k),
+                ..Default::default()
+            };
             let e = experiment_by_name("wall-impact", &s)
                 .err()
                 .unwrap()
@@ -150,6 +173,7 @@ mod tests {
         }
         let s = ExperimentSettings {
             box_scale: Some(1.5),
+            ..Default::default()
         };
         assert!(experiment_by_name("wall-impact", &s).is_ok());
     }

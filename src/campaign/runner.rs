@@ -17,6 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::Meta;
+use super::columns::MODEL_CLASS_COLUMN;
 use super::table::{self, csv_line, read_table, DONE, FAILED, FIXED_COLUMNS};
 use crate::dem::experiments::{Experiment, Outcome, RunOptions};
 use crate::error::{write_atomic, Error, Result};
@@ -244,6 +245,21 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                     ),
                 ));
             };
+            let class = plan.model_class_label();
+            if rec[MODEL_CLASS_COLUMN] != *class {
+                return Err(Error::input(
+                    &file,
+                    format!("line {line}, column model_class"),
+                    format!(
+                        "run with the model class {}, but this command asks for {}: a campaign \
+                         holds one class; pass --model-class {} to resume it, or choose \
+                         another --out",
+                        &rec[MODEL_CLASS_COLUMN],
+                        class,
+                        rec[MODEL_CLASS_COLUMN].replace('+', ",")
+                    ),
+                ));
+            }
             if planned.run_id != rec[0] {
                 return Err(Error::input(
                     &file,
@@ -355,7 +371,7 @@ fn execute(
     };
     (
         result.is_err(),
-        table::run_line(run, &plan.responses, &result),
+        table::run_line(run, &plan.model_class_label(), &plan.responses, &result),
     )
 }
 

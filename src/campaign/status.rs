@@ -30,6 +30,14 @@ pub struct Meta {
     /// `--set` constants (their column order is the table header's).
     pub set: BTreeMap<String, f64>,
     pub box_scale: Option<f64>,
+    /// The model class (`+`-joined names; `-` without a contact law). Sidecars written before
+    /// model classes existed lack it: their runs are all of the default class.
+    #[serde(default = "default_class_label")]
+    pub model_class: String,
+}
+
+fn default_class_label() -> String {
+    crate::dem::contact::ModelClass::default().label()
 }
 
 /// `<out>.meta.json`, beside the table.
@@ -50,6 +58,7 @@ impl Meta {
             seed: plan.seed,
             set: plan.set.iter().cloned().collect(),
             box_scale: plan.settings.box_scale,
+            model_class: plan.model_class_label(),
         }
     }
 

@@ -41,6 +41,7 @@ fn number(v: f64) -> String {
 /// reason in `error`.
 pub fn run_line(
     run: &PlannedRun,
+    model_class: &str,
     responses: &[String],
     result: &std::result::Result<Outcome, String>,
 ) -> Result<Vec<u8>> {
@@ -52,6 +53,7 @@ pub fn run_line(
             Err(_) => FAILED.into(),
         },
         run.seed.to_string(),
+        model_class.to_string(),
     ];
     f.extend(run.params.iter().map(|(_, v)| number(v)));
     match result {
@@ -191,9 +193,9 @@ mod tests {
                 warnings: vec!["w1".into(), "w, 2".into()],
             },
         };
-        let done = run_line(&run(), &responses(), &Ok(ok)).unwrap();
+        let done = run_line(&run(), "hertz+mindlin+epsd2", &responses(), &Ok(ok)).unwrap();
         let failed =
-            run_line(&run(), &responses(), &Err("bad, \"very\"\nbad".to_string())).unwrap();
+            run_line(&run(), "hertz+mindlin+epsd2", &responses(), &Err("bad, \"very\"\nbad".to_string())).unwrap();
         (header, done, failed)
     }
 
@@ -202,7 +204,7 @@ mod tests {
         let (header, done, failed) = lines();
         assert_eq!(
             String::from_utf8(header).unwrap(),
-            "run_id,row,status,seed,a,b,r1,r2,settled,steps,particles,wall_time_s,warnings,error\n"
+            "run_id,row,status,seed,model_class,a,b,r1,r2,settled,steps,particles,wall_time_s,warnings,error\n"
         );
         assert_eq!(
             String::from_utf8(done).unwrap(),

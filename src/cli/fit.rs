@@ -64,6 +64,10 @@ pub struct FitArgs {
     /// Do not draw figures.
     #[arg(long)]
     pub no_figures: bool,
+    /// Model class of the data when the table has no `model_class` column (campaign tables
+    /// have one, and it must agree) [default: hertz,mindlin,epsd2]; recorded in the model.
+    #[arg(long, value_name = "EFFECTS", value_parser = crate::cli::simulate::parse_model_class)]
+    pub model_class: Option<crate::dem::contact::ModelClass>,
     /// Standard output holds one JSON object (equations and metrics); text goes to standard
     /// error.
     #[arg(long)]
@@ -138,6 +142,7 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         space: a.space.clone(),
         config,
         plots: figures,
+        model_class: a.model_class,
     };
     let bar = ProgressBar::new(a.generations as u64);
     bar.set_style(
@@ -183,12 +188,18 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
             r.node_evals as f64 / r.seconds.max(1e-9)
         );
     }
-    say!(out, "wrote {}", a.out.display());
+    say!(
+        out,
+        "wrote {} (model class {})",
+        a.out.display(),
+        model.model_class
+    );
     for f in &report.figures {
         say!(out, "wrote {}", f.display());
     }
     out.object(&serde_json::json!({
         "out": a.out,
+        "model_class": model.model_class,
         "figures": report.figures,
         "responses": model.responses.iter().map(|r| serde_json::json!({
             "name": r.name,

@@ -8,6 +8,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::dem::contact::ModelClass;
+
 use crate::campaign::{
     experiment_by_name, parse_set, run_campaign, CampaignOptions, ExperimentSettings, Plan, Shard,
 };
@@ -42,12 +44,22 @@ pub struct SimulateArgs {
     /// Size factor of the experiment's box (shear box, hopper); other experiments ignore it.
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     pub box_scale: Option<f64>,
+    /// Effects of the contact law, comma-separated, e.g. hertz,mindlin,epsd2,sjkr [default:
+    /// hertz,mindlin,epsd2]; their parameters must be design columns or --set values, and a
+    /// parameter of an effect not named is refused. Recorded in the table and in each run id.
+    #[arg(long, value_name = "EFFECTS", value_parser = parse_model_class)]
+    pub model_class: Option<ModelClass>,
     /// Run again the rows whose earlier run failed (their failed lines are replaced).
     #[arg(long)]
     pub retry_failed: bool,
     /// Standard output holds one JSON object (the run counts); text goes to standard error.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--model-class` as clap reads it (the message names the option and the known effects).
+pub fn parse_model_class(s: &str) -> Result<ModelClass, String> {
+    ModelClass::parse(s).map_err(|e| e.to_string())
 }
 
 /// The `--experiment` help, listing the experiments the registry knows.
@@ -63,6 +75,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     refuse_overwriting_inputs("--out", &a.out, &[("--design", &a.design)])?;
     let settings = ExperimentSettings {
         box_scale: a.box_scale,
+        model_class: a.model_class,
     };
     let experiment = experiment_by_name(&a.experiment, &settings)?;
     let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
@@ -106,10 +119,11 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     let ran = s.done + s.failed;
     say!(
         out,
-        "{}: {} on {} ({} rows{}): {} already in the table, ran {ran} ({} done, {} failed) in \
+        "{}: {} ({}) on {} ({} rows{}): {} already in the table, ran {ran} ({} done, {} failed) in \
          {:.2} s{}",
         a.out.display(),
         plan.experiment,
+        plan.model_class_label(),
         a.design.display(),
         plan.rows.len(),
         shard
@@ -139,6 +153,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     out.object(&serde_json::json!({
         "out": a.out,
         "experiment": plan.experiment,
+        "model_class": plan.model_class.map(|c| c.to_string()),
         "design": a.design,
         "design_rows": plan.rows.len(),
         "shard": shard.map(|k| k.to_string()),

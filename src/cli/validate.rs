@@ -11,6 +11,7 @@ use clap::Args;
 use crate::campaign::registry::{experiment_by_name, ExperimentSettings};
 use crate::dem::experiments::{ParamSet, RunOptions};
 use crate::error::{read_to_string, Error};
+use crate::dem::contact::ModelClass;
 use crate::material::Material;
 
 #[derive(Debug, Args)]
@@ -25,6 +26,10 @@ pub struct ValidateArgs {
     /// Box scale of the experiment (use the campaign's).
     #[arg(long)]
     pub box_scale: Option<f64>,
+    /// Effects of the contact law, comma-separated [default: the `[model] class` of --params or
+    /// --material, else hertz,mindlin,epsd2].
+    #[arg(long, value_name = "EFFECTS", value_parser = crate::cli::simulate::parse_model_class)]
+    pub model_class: Option<ModelClass>,
     /// Parameters the experiment needs that the model did not have, e.g. `--set nu_p=0.3`.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
@@ -73,7 +78,10 @@ fn check_picture(p: &std::path::Path) -> anyhow::Result<()> {
         })
 }
 
-fn read_params(path: &std::path::Path) -> anyhow::Result<(ParamSet, Vec<(String, f64)>)> {
+/// The parameters, the predicted responses and the `[model] class` of a parameter file.
+type ParamsFile = (ParamSet, Vec<(String, f64)>, Option<ModelClass>);
+
+fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
     let file = path.display().to_string();
     let doc: toml::Table = read_to_string(path)?
         .parse()
@@ -102,7 +110,56 @@ fn read_params(path: &std::path::Path) -> anyhow::Result<(ParamSet, Vec<(String,
     if params.is_empty() {
         anyhow::bail!(Error::input(&file, "parameters", "a [parameters] table"));
     }
-    Ok((ParamSet::from_pairs(&params), table("predicted")?))
+    for key in doc.keys() {
+        if !["parameters", "predicted", "model", "material"].contains(&key.as_str()) {
+            anyhow::bail!(Error::input(
+                &file,
+                key,
+                "unknown; expected [parameters], [predicted], [model] or material"
+            ));
+        }
+    }
+    let class = match doc.get("model") {
+        None => None,
+        Some(m) => {
+            let t: crate::model_table::ModelTable = m
+                .clone()
+                .try_into()
+                .map_err(|e: toml::de::Error| Error::input(&file, "model", e.message()))?;
+            Some(t.class(&file)?)
+        }
+    };
+    Ok((ParamSet::from_pairs(&params), table("predicted")?, class))
+}
+
+/// The class a validation runs: `--model-class`, the parameter file's, the material's, in that
+/// order; two that disagree are refused, since the run would not be what one of them says.
+fn resolve_class(
+    flag: Option<ModelClass>,
+    params: (Option<ModelClass>, &std::path::Path),
+    material: (Option<ModelClass>, &std::path::Path),
+) -> anyhow::Result<ModelClass> {
+    let given: Vec<(ModelClass, String)> = [
+        flag.map(|c| (c, "--model-class".to_string())),
+        params
+            .0
+            .map(|c| (c, format!("{} ([model] class)", params.1.display()))),
+        material
+            .0
+            .map(|c| (c, format!("{} ([model] class)", material.1.display()))),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if let Some((c0, w0)) = given.first() {
+        if let Some((c, w)) = given.iter().find(|(c, _)| c != c0) {
+            anyhow::bail!(
+                "model class: {w0} says {c0} but {w} says {c}; expected one class (the one the \
+                 parameters were calibrated with)"
+            );
+        }
+    }
+    Ok(given.first().map(|g| g.0).unwrap_or_default())
 }
 
 pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
@@ -116,7 +173,12 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         check_picture(p)?;
     }
     let material = Material::from_file(&a.material)?;
-    let (mut params, predicted) = read_params(&a.params)?;
+    let (mut params, predicted, params_class) = read_params(&a.params)?;
+    let class = resolve_class(
+        a.model_class,
+        (params_class, &a.params),
+        (material.model_class, &a.material),
+    )?;
     if let Some((d50, sigma)) = material.psd_parameters()? {
         if params.get("d50").is_none() {
             params.set("d50", d50);
@@ -129,8 +191,14 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         &a.experiment,
         &ExperimentSettings {
             box_scale: a.box_scale,
+            model_class: Some(class),
         },
     )?;
+    for (name, _) in params.iter() {
+        class
+            .refuse_inactive(name, exp.pairs(), exp.name())
+            .map_err(|e| Error::input(a.params.display(), format!("parameters.{name}"), e.to_string()))?;
+    }
     let known: Vec<&str> = exp
         .parameters()
         .into_iter()

@@ -2,7 +2,7 @@
 //! contact opens. The verification tests of Chung & Ooi (2011) and the wall-impact experiment are
 //! built on this.
 
-use super::contact::{ContactModel, NormalKind};
+use super::contact::ModelClass;
 use super::material::{Interaction, Material, Materials};
 use super::particles::Particles;
 use super::sim::{Scene, Simulation};
@@ -31,13 +31,10 @@ pub struct Impact {
     pub spin: V3,
     pub partner_velocity: V3,
     pub partner_spin: V3,
+    /// The contact's parameters (usually built by [`ModelClass::interaction`]).
     pub interaction: Interaction,
-    pub normal: NormalKind,
-    pub rolling: bool,
-    /// Keep the normal force from turning attractive (see `Law::limit_force`).
-    pub limit_force: bool,
-    /// Cap spring plus dashpot at the Coulomb limit (see `Law::strict_coulomb`).
-    pub strict_coulomb: bool,
+    /// The effects of the contact law.
+    pub class: ModelClass,
     /// Time steps per Hertz contact duration.
     pub steps_per_contact: f64,
 }
@@ -154,17 +151,7 @@ pub fn run_impact(imp: &Impact) -> Result<ImpactResult> {
         particles,
         walls,
         materials,
-        model: ContactModel {
-            normal: imp.normal,
-            cohesion: super::contact::CohesionKind::None,
-            rolling: if imp.rolling {
-                super::contact::RollingKind::Epsd2
-            } else {
-                super::contact::RollingKind::None
-            },
-            limit_force: imp.limit_force,
-            strict_coulomb: imp.strict_coulomb,
-        },
+        class: imp.class,
         gravity: [0.0; 3],
         dt,
         skin: 0.1 * r_min,

@@ -29,9 +29,14 @@ pub struct Interaction {
     /// Phenomenological damping constant gamma_n of the power-law damped normal models
     /// (Tsuji, Kuwabara-Kono, free exponent), in N s/m^(1+alpha).
     pub damping_gamma_n: f64,
+    /// Exponent alpha of the power-law dashpot gamma_n d^alpha.
+    pub damping_alpha: f64,
     /// Constant tangential spring stiffness k_t, N/m (the Cundall-Strack spring of seed 003);
     /// 0 (default) for Mindlin's k_t = 8 G* sqrt(R* d).
     pub tangential_stiffness: f64,
+    /// Cap spring plus dashpot at mu max(F_n, 0) instead of LIGGGHTS' cap on the spring alone
+    /// (the `strict-coulomb` effect).
+    pub strict_coulomb: bool,
 }
 
 impl Default for Interaction {
@@ -42,7 +47,9 @@ impl Default for Interaction {
             rolling_friction: 0.0,
             cohesion_energy_density: 0.0,
             damping_gamma_n: 0.0,
+            damping_alpha: 0.0,
             tangential_stiffness: 0.0,
+            strict_coulomb: false,
         }
     }
 }
@@ -67,8 +74,10 @@ pub struct PairConstants {
     pub rolling_friction: f64,
     pub cohesion_energy_density: f64,
     pub damping_gamma_n: f64,
+    pub damping_alpha: f64,
     /// Constant tangential stiffness (N/m), 0 for Mindlin's.
     pub k_t_fixed: f64,
+    pub strict_coulomb: bool,
 }
 
 impl PairConstants {
@@ -93,7 +102,9 @@ impl PairConstants {
             rolling_friction: i.rolling_friction,
             cohesion_energy_density: i.cohesion_energy_density,
             damping_gamma_n: i.damping_gamma_n,
+            damping_alpha: i.damping_alpha,
             k_t_fixed: i.tangential_stiffness,
+            strict_coulomb: i.strict_coulomb,
         }
     }
 }
@@ -158,6 +169,7 @@ impl Materials {
             f64::MAX,
         )?;
         check_range(&name, "damping gamma_n", i.damping_gamma_n, 0.0, f64::MAX)?;
+        check_range(&name, "damping exponent", i.damping_alpha, 0.0, f64::MAX)?;
         check_range(
             &name,
             "tangential stiffness",

@@ -16,6 +16,7 @@ pub mod experiments;
 pub mod impact;
 pub mod material;
 pub mod neighbor;
+pub mod param_set;
 pub mod particles;
 pub mod sim;
 mod step;
@@ -26,7 +27,7 @@ pub mod vtk;
 pub mod walls;
 
 pub use blowup::BlowUp;
-pub use contact::ContactModel;
+pub use contact::ModelClass;
 pub use material::{Interaction, Material, Materials};
 pub use particles::Particles;
 pub use sim::{Scene, Simulation};

@@ -3,7 +3,7 @@
 //! numbers. The step itself is in [`super::step`].
 
 pub use super::blowup::BlowUp;
-use super::contact::{ContactModel, History};
+use super::contact::{History, ModelClass};
 use super::material::Materials;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
@@ -21,7 +21,7 @@ pub struct Scene {
     pub particles: Particles,
     pub walls: Vec<Wall>,
     pub materials: Materials,
-    pub model: ContactModel,
+    pub class: ModelClass,
     pub gravity: V3,
     pub dt: f64,
     /// Neighbour skin, m.
@@ -36,7 +36,7 @@ pub struct Simulation {
     pub particles: Particles,
     pub walls: Vec<Wall>,
     pub materials: Materials,
-    pub model: ContactModel,
+    pub class: ModelClass,
     pub gravity: V3,
     pub dt: f64,
     pub domain: (V3, V3),
@@ -65,14 +65,14 @@ impl Simulation {
             particles,
             walls,
             mut materials,
-            model,
+            class,
             gravity,
             dt,
             skin,
             domain,
             max_dt_fraction,
         } = scene;
-        if model.limit_force {
+        if class.limit_force {
             materials.prepare_limit_force();
         }
         if !(dt.is_finite() && dt > 0.0) {
@@ -147,7 +147,7 @@ impl Simulation {
             particles,
             walls,
             materials,
-            model,
+            class,
             gravity,
             dt,
             domain,
@@ -191,7 +191,7 @@ impl Simulation {
             steps,
             check_every: Some(50),
         };
-        let model = self.model;
+        let model = self.class;
         let threads = self.threads;
         // Below some particles per thread, the barriers cost more than the split saves.
         if threads > 1 && self.particles.len() >= 64 * threads {
@@ -206,7 +206,7 @@ impl Simulation {
             steps: 1,
             check_every: None,
         };
-        let model = self.model;
+        let model = self.class;
         with_law!(model, |law| step::run_alone(self, &law, plan))
             .expect("a step without checks cannot fail");
     }
@@ -303,7 +303,7 @@ impl Simulation {
     pub fn check(&self) -> std::result::Result<(), BlowUp> {
         let p = &self.particles;
         let closed = self.walls.iter().all(|w| w.velocity == [0.0; 3])
-            && self.model.cohesion == super::contact::CohesionKind::None;
+            && self.class.cohesion == super::contact::CohesionKind::None;
         if closed {
             let (kt, kr) = self.kinetic_energy();
             // A wide margin: this is a guard against runaway integration, not a balance.
@@ -350,7 +350,7 @@ impl Simulation {
             p.f[i] = scale(g, p.m[i]);
             p.t[i] = [0.0; 3];
         }
-        let model = self.model;
+        let model = self.class;
         with_law!(model, |law| step::add_contact_forces(self, &law));
     }
 

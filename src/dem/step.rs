@@ -29,7 +29,7 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::blowup::BlowUp;
-use super::contact::{Cohesion, Contact, History, Law, NormalForce, Rolling};
+use super::contact::{Contact, ContactLaw, History};
 use super::material::Materials;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
@@ -262,9 +262,9 @@ impl Raw {
     /// the histories of these rows and of these particles' wall contacts.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    unsafe fn contacts<N: NormalForce, C: Cohesion, R: Rolling>(
+    unsafe fn contacts<L: ContactLaw>(
         &self,
-        law: &Law<N, C, R>,
+        law: &L,
         dt: f64,
         rows: Range<usize>,
         own: Range<usize>,
@@ -315,9 +315,9 @@ impl Raw {
 }
 
 /// Adds every contact force (pairs, then walls) to the current forces.
-pub(crate) fn add_contact_forces<H: Host, N: NormalForce, C: Cohesion, R: Rolling>(
+pub(crate) fn add_contact_forces<H: Host, L: ContactLaw>(
     host: &mut H,
-    law: &Law<N, C, R>,
+    law: &L,
 ) {
     let dt = host.params().dt;
     let raw = host.views();
@@ -331,9 +331,9 @@ pub(crate) fn add_contact_forces<H: Host, N: NormalForce, C: Cohesion, R: Rollin
 }
 
 /// Runs `plan` with one member: the serial path.
-pub(crate) fn run_alone<H: Host, N: NormalForce, C: Cohesion, R: Rolling>(
+pub(crate) fn run_alone<H: Host, L: ContactLaw>(
     host: &mut H,
-    law: &Law<N, C, R>,
+    law: &L,
     plan: Plan,
 ) -> Result<(), BlowUp> {
     let board = Board::new(host, law, plan, 1);
@@ -356,9 +356,9 @@ struct Slot {
 }
 
 /// The state the members of a run share.
-pub(crate) struct Board<'a, H, N, C, R> {
+pub(crate) struct Board<'a, H, L> {
     host: *mut H,
-    law: &'a Law<N, C, R>,
+    law: &'a L,
     params: Params,
     plan: Plan,
     members: usize,
@@ -380,7 +380,7 @@ pub(crate) struct Board<'a, H, N, C, R> {
 // module documentation: within a phase, members write disjoint ranges (their particles, their
 // rows, their buffer) and read only data nobody writes in that phase; only the leader touches the
 // host, while the others wait or work on their own particles; the meetings order the phases.
-unsafe impl<H: Send, N: Sync, C: Sync, R: Sync> Sync for Board<'_, H, N, C, R> {}
+unsafe impl<H: Send, L: Sync> Sync for Board<'_, H, L> {}
 
 #[cfg(test)]
 thread_local! {
@@ -390,8 +390,8 @@ thread_local! {
         const { std::cell::Cell::new(None) };
 }
 
-impl<'a, H: Host, N: NormalForce, C: Cohesion, R: Rolling> Board<'a, H, N, C, R> {
-    pub(crate) fn new(host: &'a mut H, law: &'a Law<N, C, R>, plan: Plan, members: usize) -> Self {
+impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
+    pub(crate) fn new(host: &'a mut H, law: &'a L, plan: Plan, members: usize) -> Self {
         let params = host.params();
         let raw = host.views();
         let n = raw.n;
@@ -643,8 +643,8 @@ struct WallView<'a> {
 /// (particle, wall) entry `hist_base` on.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn wall_contacts<N: NormalForce, C: Cohesion, R: Rolling>(
-    law: &Law<N, C, R>,
+fn wall_contacts<L: ContactLaw>(
+    law: &L,
     materials: &Materials,
     dt: f64,
     walls: WallView,
@@ -677,7 +677,7 @@ fn wall_contacts<N: NormalForce, C: Cohesion, R: Rolling>(
                 continue;
             };
             let overlap = ri - gap.distance;
-            let area = if C::ACTIVE {
+            let area = if L::NEEDS_AREA {
                 std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
             } else {
                 0.0
@@ -706,8 +706,8 @@ fn wall_contacts<N: NormalForce, C: Cohesion, R: Rolling>(
 /// Contacts of rows `rows`; `hist` starts at list entry `base`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
-    law: &Law<N, C, R>,
+fn pair_rows<L: ContactLaw>(
+    law: &L,
     materials: &Materials,
     dt: f64,
     rows: Range<usize>,
@@ -744,7 +744,7 @@ fn pair_rows<N: NormalForce, C: Cohesion, R: Rolling>(
             let overlap = rsum - dist;
             let r_eff = ri * rj / rsum;
             let m_eff = mi * p.m[j] / (mi + p.m[j]);
-            let area = if C::ACTIVE {
+            let area = if L::NEEDS_AREA {
                 // Area of the intersection circle of the two spheres.
                 let q = (dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) * (dist + ri + rj);
                 -std::f64::consts::PI / 4.0 * q * inv * inv

@@ -15,21 +15,19 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use super::blowup::BlowUp;
-use super::contact::{Cohesion, Law, NormalForce, Rolling};
+use super::contact::ContactLaw;
 use super::step::{Abandoned, Board, Crew, Host, Plan};
 
 /// Runs `plan` with `threads` threads; the calling thread is member 0.
-pub(crate) fn run<H, N, C, R>(
+pub(crate) fn run<H, L>(
     host: &mut H,
-    law: &Law<N, C, R>,
+    law: &L,
     plan: Plan,
     threads: usize,
 ) -> Result<(), BlowUp>
 where
     H: Host + Send,
-    N: NormalForce,
-    C: Cohesion,
-    R: Rolling,
+    L: ContactLaw,
 {
     let board = Board::new(host, law, plan, threads);
     let barrier = SpinBarrier::new(threads);
@@ -129,7 +127,7 @@ impl Crew for SpinBarrier {
 
 #[cfg(test)]
 mod tests {
-    use crate::dem::contact::ContactModel;
+    use crate::dem::contact::ModelClass;
     use crate::dem::step::FAIL_AT;
     use crate::dem::walls::box_planes;
     use crate::dem::{BlowUp, Interaction, Material, Materials, Particles, Scene, Simulation};
@@ -159,7 +157,7 @@ mod tests {
             particles: p,
             walls: box_planes([0.0; 3], [0.03; 3], 0),
             materials: m,
-            model: ContactModel::default(),
+            class: ModelClass::default(),
             gravity: [0.0, 0.0, -9.81],
             dt: 2e-5,
             skin: 5e-4,

@@ -4,7 +4,8 @@ use super::model::{
     residual_quantiles, DataSource, FrontMember, Input, Metamodel, Metrics, ResponseModel,
     Transform, FORMAT, VERSION,
 };
-use super::table::read_columns;
+use super::table::{read_columns, Columns};
+use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{Error, Result};
 use crate::gp::{self, expr, Dataset};
 use crate::numeric::fnv1a64;
@@ -25,6 +26,9 @@ pub struct FitOptions {
     pub config: gp::Config,
     /// Directory for the parity plot and residual histogram of each response.
     pub plots: Option<PathBuf>,
+    /// The model class of the data when the table does not say (`--model-class`); a campaign
+    /// table's `model_class` column must agree with it.
+    pub model_class: Option<ModelClass>,
 }
 
 pub struct FitReport {
@@ -64,6 +68,48 @@ fn transforms(opts: &FitOptions) -> Result<Vec<Transform>> {
             })
         })
         .collect()
+}
+
+/// The model class of the rows: the table's `model_class` column (one class for all rows), else
+/// `--model-class`, else the default class.
+fn table_class(file: &str, cols: &Columns, flag: Option<ModelClass>) -> Result<ModelClass> {
+    let Some(k) = cols.header.iter().position(|h| h == "model_class") else {
+        return Ok(flag.unwrap_or_default());
+    };
+    let mut found: Option<(String, ModelClass)> = None;
+    for (row, rec) in cols.records.iter().enumerate() {
+        let label = rec.get(k).map(String::as_str).unwrap_or("");
+        match &found {
+            Some((l0, _)) if l0 == label => {}
+            Some((l0, _)) => {
+                return Err(Error::input(
+                    file,
+                    format!("column model_class (data row {})", row + 1),
+                    format!(
+                        "{label} here but {l0} above: one model class per fit (a metamodel \
+                         describes one set of effects)"
+                    ),
+                ))
+            }
+            // `-`: an experiment without a contact law (a test stand-in).
+            None if label == "-" => return Ok(flag.unwrap_or_default()),
+            None => {
+                let c = ModelClass::parse(label).map_err(|e| {
+                    Error::input(file, "column model_class", e.to_string())
+                })?;
+                found = Some((label.to_string(), c));
+            }
+        }
+    }
+    let Some((_, class)) = found else {
+        return Ok(flag.unwrap_or_default());
+    };
+    if let Some(f) = flag.filter(|f| *f != class) {
+        return Err(Error::invalid(format!(
+            "--model-class {f}: the data were run with {class} (column model_class of {file})"
+        )));
+    }
+    Ok(class)
 }
 
 /// Fits one equation per target. `progress(target, state)` is called every generation.
@@ -114,6 +160,12 @@ pub fn fit_table(
     let bytes = std::fs::read(&opts.data).map_err(|e| Error::io(&opts.data, e))?;
     let names: Vec<String> = opts.inputs.iter().chain(&opts.targets).cloned().collect();
     let cols = read_columns(&opts.data, &names)?;
+    let class = table_class(&file, &cols, opts.model_class)?;
+    for name in &opts.inputs {
+        class
+            .refuse_inactive(name, &Pair::BOTH, "the data")
+            .map_err(|e| Error::invalid(format!("--inputs {name}: {e}")))?;
+    }
     let n = cols.records.len();
     let n_in = opts.inputs.len();
     let x_phys = &cols.values[..n_in];
@@ -278,6 +330,7 @@ pub fn fit_table(
         });
     }
     let model = Metamodel {
+        model_class: class.to_string(),
         format: FORMAT.into(),
         version: VERSION,
         created_by: format!("mbgc {}", env!("CARGO_PKG_VERSION")),

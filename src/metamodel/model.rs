@@ -1,6 +1,7 @@
 //! The model file: equations per response, input transforms, domain, metrics, Pareto front,
 //! settings, seed and data hash, saved and loaded as JSON.
 
+use crate::dem::contact::ModelClass;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::gp::{self, Node};
 use serde::{Deserialize, Serialize};
@@ -186,8 +187,23 @@ pub struct Metamodel {
     pub settings: gp::Config,
     pub seed: u64,
     pub data: DataSource,
+    /// The model class of the DEM runs the model was fitted on (comma-separated effects). Model
+    /// files written before model classes existed lack it: their data were all of the default
+    /// class.
+    #[serde(default = "default_class")]
+    pub model_class: String,
 }
+
+fn default_class() -> String {
+    ModelClass::default().to_string()
+}
+
 impl Metamodel {
+    /// The model class the metamodel was trained on.
+    pub fn class(&self) -> Result<ModelClass> {
+        ModelClass::parse(&self.model_class)
+    }
+
     pub fn load(path: &Path) -> Result<Metamodel> {
         let file = path.display().to_string();
         let text = read_to_string(path)?;
@@ -205,6 +221,8 @@ impl Metamodel {
                 format!("\"{FORMAT}\", got \"{}\"", m.format),
             ));
         }
+        m.class()
+            .map_err(|e| Error::input(&file, "model_class", e.to_string()))?;
         if m.version != VERSION {
             return Err(Error::input(
                 &file,

@@ -7,7 +7,7 @@
 
 use rand::RngExt;
 
-use crate::dem::contact::ContactModel;
+use crate::dem::contact::ModelClass;
 use crate::dem::material::{Interaction, Material, Materials};
 use crate::dem::particles::Particles;
 use crate::dem::sim::Scene;
@@ -182,7 +182,7 @@ pub fn scene(spec: &BenchSpec, x: &[V3], r: &[f64]) -> Result<Scene> {
         particles,
         walls: box_planes([0.0; 3], spec.box_hi, m),
         materials,
-        model: ContactModel::default(),
+        class: ModelClass::default(),
         gravity: [0.0, 0.0, -spec.gravity],
         dt: spec.dt,
         skin: spec.skin,

@@ -70,6 +70,7 @@ pub fn run_mbgc(dir: &Path, eq: &Equation, cfg: &Config) -> Result<EngineResult>
         space: None,
         config: cfg.clone(),
         plots: None,
+        model_class: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

@@ -6,7 +6,7 @@
 //! - Model classes: `F_n = k_n d^(3/2) + gamma_n d^alpha_n d'` with Hertz's
 //!   `k_n = 4/3 Y* sqrt(R*)`, `alpha_n` = 1/4 (M1, Tsuji), 1/2 (M2, Kuwabara-Kono) or free (M3).
 //!   Tangential: a constant spring `k_t` with a Coulomb cap `mu F_n` (the wall-impact
-//!   experiment's `k_t` override of Mindlin's stiffness), no tangential dashpot (`e_pw = 1`).
+//!   experiment with the `linear-spring` effect, `k_t_pw`), no tangential dashpot (no restitution).
 //!   The sampled `k_t` is in units of [`Setup::k_t_unit`] (1e7 N/m at the printed modulus,
 //!   scaled with the contact time so that both moduli see the same range of tangential period
 //!   over contact time); seed 003 does not print its unit.
@@ -37,7 +37,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::calibrate::bayes::class_probabilities;
 use crate::calibrate::tmcmc::{tmcmc, TmcmcOptions, TmcmcResult, UniformBox};
-use crate::dem::contact::NormalKind;
+use crate::dem::contact::{
+    CohesionKind, ModelClass as ContactClass, NormalKind, RollingKind, TangentialKind,
+};
 use crate::dem::experiments::wall_impact::WallImpact;
 use crate::dem::experiments::{Experiment, ParamSet, RunOptions};
 use crate::error::{csv_error, csv_number, csv_open_str, write_atomic, Error, Result};
@@ -360,16 +362,23 @@ pub fn simulate(setup: &Setup, c: &Contact, angle_deg: f64) -> Result<(f64, f64)
         ("rho_p", setup.density()),
         ("d50", 2.0 * setup.radius * 1e3),
         ("E_w", setup.youngs_modulus),
-        // No tangential dashpot: e_pw = 1 gives beta = 0 (normal damping is gamma_n's).
-        ("e_pw", 1.0),
         ("mu_pw", c.mu),
         ("impact_speed", setup.impact_speed),
         ("impact_angle", angle_deg),
-        ("gamma_n", c.gamma_n),
-        ("k_t", c.k_t),
+        ("gamma_n_pw", c.gamma_n),
+        ("alpha_n_pw", c.alpha_n),
+        ("k_t_pw", c.k_t),
     ]);
+    // No tangential dashpot: without Hertz's restitution, beta = 0 (normal damping is
+    // gamma_n's).
     let exp = WallImpact {
-        normal: NormalKind::PowerDamped { alpha: c.alpha_n },
+        class: ContactClass {
+            normal: NormalKind::PowerDamped,
+            tangential: TangentialKind::LinearSpring,
+            rolling: RollingKind::None,
+            cohesion: CohesionKind::None,
+            limit_force: false,
+        },
     };
     let o = exp.run(&p, 0, &RunOptions::default())?;
     let get = |k: &str| o.get(k).unwrap_or(f64::NAN);

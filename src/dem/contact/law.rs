@@ -1,8 +1,7 @@
 //! The contact law: the effects summed into the force and torques of one contact.
 
-use super::effects::{Cohesion, NormalForce, Rolling};
+use super::effects::{Cohesion, NormalForce, Rolling, Tangential};
 use super::kinematics::{Contact, History};
-use super::tangential;
 use crate::dem::material::PairConstants;
 use crate::dem::vec3::*;
 
@@ -17,23 +16,30 @@ pub struct ContactOutput {
     pub f_n: f64,
 }
 
+/// What the force loop needs of a law: one generic parameter instead of one per slot.
+pub trait ContactLaw: Sync {
+    /// Whether the contact area must be computed (only cohesion uses it).
+    const NEEDS_AREA: bool;
+    fn force(&self, c: &Contact, p: &PairConstants, h: &mut History, dt: f64) -> ContactOutput;
+}
+
 /// The contact law for one combination of effects.
-#[derive(Debug, Clone, Copy)]
-pub struct Law<N, C, R> {
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Law<N, T, R, C> {
     pub normal: N,
-    pub cohesion: C,
+    pub tangential: T,
     pub rolling: R,
+    pub cohesion: C,
     /// Keep the normal force (before cohesion) from turning attractive, as LIGGGHTS'
     /// `limitForce on`, with the damping re-solved so that e stays the restitution.
     pub limit_force: bool,
-    /// Cap spring plus dashpot at mu max(F_n, 0) (LAMMPS `mindlin`) instead of LIGGGHTS' cap
-    /// on the spring alone.
-    pub strict_coulomb: bool,
 }
 
-impl<N: NormalForce, C: Cohesion, R: Rolling> Law<N, C, R> {
+impl<N: NormalForce, T: Tangential, R: Rolling, C: Cohesion> ContactLaw for Law<N, T, R, C> {
+    const NEEDS_AREA: bool = C::ACTIVE;
+
     #[inline(always)]
-    pub fn force(&self, c: &Contact, p: &PairConstants, h: &mut History, dt: f64) -> ContactOutput {
+    fn force(&self, c: &Contact, p: &PairConstants, h: &mut History, dt: f64) -> ContactOutput {
         let limited;
         let p = if self.limit_force {
             limited = PairConstants {
@@ -49,7 +55,7 @@ impl<N: NormalForce, C: Cohesion, R: Rolling> Law<N, C, R> {
             f_normal = 0.0;
         }
         let f_n = f_normal - self.cohesion.cohesion(c, p);
-        let f_t = tangential::mindlin_history(c, p, f_n, &mut h.shear, dt, self.strict_coulomb);
+        let f_t = self.tangential.force(c, p, f_n, &mut h.shear, dt);
         // Torque of the tangential force: lever arm -c_i n for i, +c_j n for j (force -F_t).
         let nxf = cross(c.n, f_t);
         let mut torque_i = scale(nxf, -c.lever_i);

@@ -1,95 +1,46 @@
-//! The contact law as a sum of effects.
+//! The contact law as a sum of effects, one per slot.
 //!
 //! A contact is described once ([`Contact`]: normal, overlap, effective radius and mass, relative
-//! velocities at the contact point); each effect then adds its part:
+//! velocities at the contact point); each slot's effect then adds its part:
 //!
-//! 1. a normal force ([`normal`]): Hertz with restitution-based damping as LIGGGHTS 3.8, or the
-//!    power-law damped classes of seed 003 (Tsuji, Kuwabara-Kono, free exponent);
-//! 2. cohesion ([`cohesion`]), optional: simplified JKR (LIGGGHTS `cohesion sjkr`);
-//! 3. the tangential history spring with Coulomb cap ([`tangential`], Mindlin as LIGGGHTS);
-//! 4. rolling resistance ([`rolling`]), optional: EPSD2.
+//! 1. a normal force: Hertz with restitution-based damping as LIGGGHTS 3.8 ([`hertz`]), or the
+//!    power-law damped classes of seed 003 ([`power_damped`]: Tsuji, Kuwabara-Kono, free
+//!    exponent);
+//! 2. cohesion, optional: simplified JKR ([`sjkr`], LIGGGHTS `cohesion sjkr`);
+//! 3. the tangential history spring with Coulomb cap ([`mindlin`]: Mindlin as LIGGGHTS, strict
+//!    Coulomb, constant stiffness);
+//! 4. rolling resistance, optional: EPSD2 ([`epsd2`]) or constant directional torque ([`cdt`]).
 //!
-//! Effects are chosen by name when a scene is built ([`ContactModel::from_names`]) and the force
-//! loop is monomorphised for the chosen combination ([`with_law!`](crate::with_law)), so a contact
-//! pays for no dynamic dispatch. A new effect is a new type implementing its trait plus one arm
-//! in the dispatch; the other effects are untouched.
+//! A [`ModelClass`] names the effects switched on; each effect's file holds its kernel and its
+//! [`EffectSpec`] (name, parameters with units and ranges). [`registry`] lists them, one line
+//! each; the slot enums and the dispatch [`with_law!`](crate::with_law) are generated from it, so
+//! the force loop is monomorphised for the chosen kernels and a contact pays for no dynamic
+//! dispatch.
 
-pub mod cohesion;
+pub mod cdt;
 mod effects;
+pub mod epsd2;
+pub mod hertz;
 mod kinematics;
+#[doc(hidden)]
+pub mod kinds;
 mod law;
-mod model;
-pub mod normal;
-pub mod rolling;
-pub mod tangential;
+pub mod mindlin;
+mod model_class;
+pub mod none;
+pub mod power_damped;
+pub mod registry;
+pub mod sjkr;
+pub mod spec;
 
-pub use effects::{Cohesion, NormalForce, Rolling};
+pub use effects::{Cohesion, NormalForce, Rolling, Tangential};
 pub use kinematics::{Contact, History};
-pub use law::{ContactOutput, Law};
-pub use model::{CohesionKind, ContactModel, NormalKind, RollingKind, EFFECT_NAMES};
-
-/// Runs `$body` with `$law` bound to the monomorphised [`Law`] of a [`ContactModel`].
-#[macro_export]
-macro_rules! with_law {
-    ($model:expr, |$law:ident| $body:expr) => {{
-        use $crate::dem::contact::{
-            cohesion, normal, rolling, CohesionKind, Law, NormalKind, RollingKind,
-        };
-        let m: $crate::dem::contact::ContactModel = $model;
-        let limit_force = m.limit_force;
-        let strict_coulomb = m.strict_coulomb;
-        macro_rules! inner {
-            ($n:expr) => {
-                match (m.cohesion, m.rolling) {
-                    (CohesionKind::None, RollingKind::None) => {
-                        let $law = Law {
-                            normal: $n,
-                            cohesion: cohesion::NoCohesion,
-                            rolling: rolling::NoRolling,
-                            limit_force,
-                            strict_coulomb,
-                        };
-                        $body
-                    }
-                    (CohesionKind::None, RollingKind::Epsd2) => {
-                        let $law = Law {
-                            normal: $n,
-                            cohesion: cohesion::NoCohesion,
-                            rolling: rolling::Epsd2,
-                            limit_force,
-                            strict_coulomb,
-                        };
-                        $body
-                    }
-                    (CohesionKind::Sjkr, RollingKind::None) => {
-                        let $law = Law {
-                            normal: $n,
-                            cohesion: cohesion::Sjkr,
-                            rolling: rolling::NoRolling,
-                            limit_force,
-                            strict_coulomb,
-                        };
-                        $body
-                    }
-                    (CohesionKind::Sjkr, RollingKind::Epsd2) => {
-                        let $law = Law {
-                            normal: $n,
-                            cohesion: cohesion::Sjkr,
-                            rolling: rolling::Epsd2,
-                            limit_force,
-                            strict_coulomb,
-                        };
-                        $body
-                    }
-                }
-            };
-        }
-        match m.normal {
-            NormalKind::Hertz => inner!(normal::Hertz),
-            NormalKind::PowerDamped { alpha } => inner!(normal::PowerDamped { alpha }),
-        }
-    }};
-}
+pub use law::{ContactLaw, ContactOutput, Law};
+pub use model_class::{
+    all_effects, effect_names, CohesionKind, ModelClass, NormalKind, RollingKind, TangentialKind,
+    LIMIT_FORCE,
+};
+pub use spec::{EffectSpec, Pair, ParamSpec, Slot};
 
 #[cfg(test)]
 mod tests {
@@ -110,7 +61,7 @@ mod tests {
             rolling_friction: mu_r,
             cohesion_energy_density: ced,
             damping_gamma_n: 2.0,
-            tangential_stiffness: 0.0,
+            ..Interaction::default()
         };
         PairConstants::new(&m, &m, &i)
     }
@@ -134,11 +85,11 @@ mod tests {
     fn hertz_is_elastic_hertz_plus_restitution_damping() {
         let p = pc(1.0, 0.5, 0.0, 0.0);
         let c = contact(1e-4, -0.3, [0.0; 3], [0.0; 3]);
-        let f = normal::Hertz.normal(&c, &p);
+        let f = hertz::Hertz.normal(&c, &p);
         assert!(
             (f - 4.0 / 3.0 * p.y_eff * (0.01f64).sqrt() * (1e-4f64).powf(1.5)).abs() < 1e-12 * f
         );
-        let damped = normal::Hertz.normal(&c, &pc(0.5, 0.5, 0.0, 0.0));
+        let damped = hertz::Hertz.normal(&c, &pc(0.5, 0.5, 0.0, 0.0));
         assert!(damped > f, "damping resists approach");
     }
 
@@ -147,7 +98,11 @@ mod tests {
         let p = pc(0.5, 0.5, 0.0, 0.0);
         let elastic = |d: f64| 4.0 / 3.0 * p.y_eff * (0.01 * d).sqrt() * d;
         let damp = |d: f64, a: f64| {
-            normal::PowerDamped { alpha: a }.normal(&contact(d, -1.0, [0.0; 3], [0.0; 3]), &p)
+            let p = PairConstants {
+                damping_alpha: a,
+                ..p
+            };
+            power_damped::PowerDamped.normal(&contact(d, -1.0, [0.0; 3], [0.0; 3]), &p)
                 - elastic(d)
         };
         for a in [0.25, 0.5, 0.8] {
@@ -161,12 +116,12 @@ mod tests {
         let p = pc(1.0, 0.3, 0.0, 0.0);
         let c = contact(1e-4, 0.0, [0.01, 0.0, 0.0], [0.0; 3]);
         let mut xi = [0.0; 3];
-        let f = tangential::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
+        let f = mindlin::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
         let k_t = 8.0 * p.g_eff * c.sqrt_rd;
         assert!((f[0] + k_t * 1e-7).abs() < 1e-12 * k_t, "stick: -k_t xi");
         for strict in [false, true] {
             let mut xi = [1.0, 0.0, 0.0];
-            let f = tangential::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, strict);
+            let f = mindlin::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, strict);
             assert!(
                 (norm(f) - 30.0).abs() < 1e-9 && f[0] < 0.0,
                 "slide: mu F_n against the slip"
@@ -180,10 +135,10 @@ mod tests {
         p.k_t_fixed = 5e4;
         let c = contact(1e-4, 0.0, [0.01, 0.0, 0.0], [0.0; 3]);
         let mut xi = [0.0; 3];
-        let f = tangential::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
+        let f = mindlin::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
         assert!((f[0] + 5e4 * 1e-7).abs() < 1e-15, "stick: -k_t xi, {f:?}");
         let mut xi = [1.0, 0.0, 0.0];
-        let f = tangential::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
+        let f = mindlin::mindlin_history(&c, &p, 100.0, &mut xi, 1e-5, false);
         assert!((norm(f) - 30.0).abs() < 1e-9, "slide: mu F_n");
         assert!(
             (xi[0] - 30.0 / 5e4).abs() < 1e-15,
@@ -196,11 +151,11 @@ mod tests {
         let p = pc(0.5, 0.5, 0.2, 0.0);
         let c = contact(1e-4, 0.0, [0.0; 3], [0.0, 1.0, 0.0]);
         let mut m = [0.0; 3];
-        let t = rolling::Epsd2.torque(&c, &p, 100.0, &mut m, 1e-6);
+        let t = epsd2::Epsd2.torque(&c, &p, 100.0, &mut m, 1e-6);
         let k_r = 8.0 * p.g_eff * c.sqrt_rd * 0.01 * 0.01;
         assert!((t[1] - k_r * 1e-6).abs() < 1e-12 * k_r);
         for _ in 0..1_000_000 {
-            rolling::Epsd2.torque(&c, &p, 100.0, &mut m, 1e-3);
+            epsd2::Epsd2.torque(&c, &p, 100.0, &mut m, 1e-3);
         }
         assert!(
             (norm(m) - 0.2 * 0.01 * 100.0).abs() < 1e-12,
@@ -209,14 +164,14 @@ mod tests {
         // Twisting about the normal is not rolling.
         let c = contact(1e-4, 0.0, [0.0; 3], [0.0, 0.0, 5.0]);
         let mut m = [0.0; 3];
-        assert_eq!(rolling::Epsd2.torque(&c, &p, 100.0, &mut m, 1e-3), [0.0; 3]);
+        assert_eq!(epsd2::Epsd2.torque(&c, &p, 100.0, &mut m, 1e-3), [0.0; 3]);
     }
 
     #[test]
     fn sjkr_pulls_with_energy_density_times_area() {
         let p = pc(0.5, 0.5, 0.0, 3e4);
         let c = contact(1e-4, 0.0, [0.0; 3], [0.0; 3]);
-        assert_eq!(cohesion::Sjkr.cohesion(&c, &p), 3e4 * 1e-5);
-        assert_eq!(cohesion::NoCohesion.cohesion(&c, &p), 0.0);
+        assert_eq!(sjkr::Sjkr.cohesion(&c, &p), 3e4 * 1e-5);
+        assert_eq!(none::NoCohesion.cohesion(&c, &p), 0.0);
     }
 }

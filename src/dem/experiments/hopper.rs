@@ -55,7 +55,7 @@
 //! discharge (2-3 s, a third of it the slow trickle while the crater relaxes).
 //!
 //! Time step: 0.2 of the Rayleigh time of the smallest particle (E_p, nu_p, rho_p). Contact
-//! model: `ContactModel::default()` (Hertz-Mindlin with EPSD2 rolling friction). Seed 000
+//! model: the campaign's model class (by default Hertz-Mindlin with EPSD2 rolling friction). Seed 000
 //! found the Young's modulus to change neither the flow rate nor the angles over 0.02-200 GPa;
 //! a soft E_p (1e7 Pa) keeps a run affordable. Measured here (d50 = 3 mm, default fill): E_p =
 //! E_w = 1e7 -> 1e8 Pa moved the flow rate from 0.0275 to 0.0271 kg/s and the top angle from 33
@@ -70,9 +70,12 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use rand::RngExt;
 
-use super::{materials_from, Diagnostics, Experiment, Outcome, ParamSet, RunOptions, RHO_RANGE};
+use super::{
+    materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
+    RHO_RANGE,
+};
 use crate::dem::analysis::sphere_box_volume;
-use crate::dem::contact::ContactModel;
+use crate::dem::contact::{ModelClass, Pair};
 use crate::dem::material::Materials;
 use crate::dem::particles::Particles;
 use crate::dem::sim::{Scene, Simulation};
@@ -349,11 +352,18 @@ fn finite_mean(v: &[f64]) -> f64 {
     }
 }
 
-/// The flat-bottom hopper discharge experiment. Parameters: E_p, E_w, nu_p, e_pp, e_pw, mu_pp,
-/// mu_pw, mu_r_pp, mu_r_pw, rho_p, d50 (mm), sigma_ln (optional, 0 or absent: monosized);
-/// settings `fill_mass` (kg at scale 1, default [`DEFAULT_FILL_MASS`]) and `scale` (default 1).
+/// The flat-bottom hopper discharge experiment. Parameters: [`OWN_PARAMETERS`] (d50 in mm), the
+/// model class's (seed 004's class: e_pp, e_pw, mu_pp, mu_pw, mu_r_pp, mu_r_pw), sigma_ln
+/// (optional, 0 or absent: monosized); settings `fill_mass` (kg at scale 1, default
+/// [`DEFAULT_FILL_MASS`]) and `scale` (default 1).
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Hopper;
+pub struct Hopper {
+    /// The effects of the contact law.
+    pub class: ModelClass,
+}
+
+/// The parameters the hopper needs whatever the model class.
+pub const OWN_PARAMETERS: [&str; 5] = ["E_p", "E_w", "nu_p", "rho_p", "d50"];
 
 /// Everything a run measured, beyond the [`Outcome`].
 #[derive(Debug, Clone)]
@@ -403,7 +413,7 @@ const CHECK_PACKING: f64 = 0.5;
 
 impl Hopper {
     fn setup(&self, p: &ParamSet) -> Result<Setup> {
-        let (materials, grain, wall) = materials_from(p)?;
+        let (materials, grain, wall) = materials_from(p, &self.class)?;
         let rho = p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
         let d50_mm = p.require("d50", 1e-3, 1e3)?;
         let sigma = p.optional("sigma_ln", 0.0, 0.0, 1.5)?;
@@ -643,7 +653,7 @@ impl Hopper {
             particles,
             walls,
             materials: s.materials.clone(),
-            model: ContactModel::default(),
+            class: self.class,
             gravity: [0.0, 0.0, -GRAVITY],
             dt: s.dt,
             skin: 0.25 * s.d_min,
@@ -868,13 +878,15 @@ impl Experiment for Hopper {
     }
 
     fn parameters(&self) -> Vec<&'static str> {
-        super::SEED004_PARAMETERS.to_vec()
+        with_class_parameters(&OWN_PARAMETERS, &self.class, &Pair::BOTH)
     }
 
     fn optional_parameters(&self) -> Vec<&'static str> {
-        let mut v = vec!["fill_mass", "scale", "sigma_ln"];
-        v.extend(super::MATERIAL_OPTIONAL);
-        v
+        vec!["fill_mass", "scale", "sigma_ln"]
+    }
+
+    fn class(&self) -> Option<&ModelClass> {
+        Some(&self.class)
     }
 
     fn responses(&self) -> Vec<&'static str> {

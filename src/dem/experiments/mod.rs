@@ -12,91 +12,26 @@ pub mod wall_impact;
 
 use std::path::PathBuf;
 
-use super::material::{Interaction, Material, Materials};
-use crate::error::{Error, Result};
+pub use super::param_set::ParamSet;
+use super::contact::{ModelClass, Pair};
+use super::material::{Material, Materials};
+use crate::error::Result;
 
-/// Named parameter values, in insertion order.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct ParamSet {
-    values: Vec<(String, f64)>,
-}
-
-impl ParamSet {
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    pub fn from_pairs<S: AsRef<str>>(pairs: &[(S, f64)]) -> Self {
-        let mut p = ParamSet::new();
-        for (k, v) in pairs {
-            p.set(k.as_ref(), *v);
-        }
-        p
-    }
-
-    /// Sets (or replaces) a value.
-    pub fn set(&mut self, name: &str, value: f64) -> &mut Self {
-        match self.values.iter_mut().find(|(k, _)| k == name) {
-            Some(e) => e.1 = value,
-            None => self.values.push((name.to_string(), value)),
-        }
-        self
-    }
-
-    pub fn get(&self, name: &str) -> Option<f64> {
-        self.values.iter().find(|(k, _)| k == name).map(|(_, v)| *v)
-    }
-
-    pub fn iter(&self) -> impl Iterator<Item = (&str, f64)> {
-        self.values.iter().map(|(k, v)| (k.as_str(), *v))
-    }
-
-    /// The value of a parameter that must lie in `[lo, hi]`; the error names the parameter.
-    pub fn require(&self, name: &str, lo: f64, hi: f64) -> Result<f64> {
-        let v = self.get(name).ok_or_else(|| {
-            Error::invalid(format!(
-                "parameter {name}: missing (expected a value in [{lo}, {hi}])"
-            ))
-        })?;
-        if !(v.is_finite() && v >= lo && v <= hi) {
-            return Err(Error::invalid(format!(
-                "parameter {name} = {v}: expected a finite value in [{lo}, {hi}]"
-            )));
-        }
-        Ok(v)
-    }
-
-    /// An optional value with a default, checked like [`ParamSet::require`].
-    pub fn optional(&self, name: &str, default: f64, lo: f64, hi: f64) -> Result<f64> {
-        match self.get(name) {
-            None => Ok(default),
-            Some(_) => self.require(name, lo, hi),
-        }
-    }
-}
-
-/// The parameters of seed 004's space (`examples/space_seed004.toml`) that the bulk experiments need.
-pub const SEED004_PARAMETERS: [&str; 12] = [
-    "E_p", "E_w", "nu_p", "e_pp", "e_pw", "mu_pp", "mu_pw", "mu_r_pp", "mu_r_pw", "rho_p", "d50",
-    "sigma_ln",
-];
-
-/// Physically allowed ranges of the seed-004 parameters (wider than the metamodel's space: an
-/// experiment refuses only what cannot be simulated).
+/// Physically allowed ranges of the material parameters (wider than the metamodel's space: an
+/// experiment refuses only what cannot be simulated). The effects' parameters carry their own
+/// ranges ([`crate::dem::contact::ParamSpec`]).
 pub const E_RANGE: (f64, f64) = (1e3, 1e13);
 pub const NU_RANGE: (f64, f64) = (-0.99, 0.5);
-pub const E_REST_RANGE: (f64, f64) = (0.05, 1.0);
-pub const MU_RANGE: (f64, f64) = (0.0, 10.0);
 pub const RHO_RANGE: (f64, f64) = (1.0, 1e5);
 
-/// Particle and wall materials and their interactions from E_p, E_w, nu_p (walls share the
-/// particles' Poisson ratio, as in seed 004), e_pp, e_pw, mu_pp, mu_pw, mu_r_pp, mu_r_pw, and
-/// optionally `ced_pp`/`ced_pw` (cohesion energy density, J/m^3). Returns (materials, particle
-/// material, wall material).
-/// The optional parameters [`materials_from`] reads.
-pub const MATERIAL_OPTIONAL: [&str; 2] = ["ced_pp", "ced_pw"];
+/// The parameters of the particles and walls that every bulk experiment needs whatever the
+/// model class: E_p, E_w, nu_p (walls share the particles' Poisson ratio, as in seed 004).
+pub const MATERIAL_PARAMETERS: [&str; 3] = ["E_p", "E_w", "nu_p"];
 
-pub fn materials_from(p: &ParamSet) -> Result<(Materials, u16, u16)> {
+/// Particle and wall materials from [`MATERIAL_PARAMETERS`], and their interactions from the
+/// parameters of the model class's effects (`e_pp`, `mu_pw`, `ced_pp`, ...). Returns (materials,
+/// particle material, wall material).
+pub fn materials_from(p: &ParamSet, class: &ModelClass) -> Result<(Materials, u16, u16)> {
     let nu = p.require("nu_p", NU_RANGE.0, NU_RANGE.1)?;
     let mut m = Materials::new();
     let grain = m.add(Material {
@@ -109,26 +44,28 @@ pub fn materials_from(p: &ParamSet) -> Result<(Materials, u16, u16)> {
         youngs_modulus: p.require("E_w", E_RANGE.0, E_RANGE.1)?,
         poisson: nu,
     })?;
-    let pp = Interaction {
-        restitution: p.require("e_pp", E_REST_RANGE.0, E_REST_RANGE.1)?,
-        friction: p.require("mu_pp", MU_RANGE.0, MU_RANGE.1)?,
-        rolling_friction: p.require("mu_r_pp", MU_RANGE.0, MU_RANGE.1)?,
-        cohesion_energy_density: p.optional("ced_pp", 0.0, 0.0, 1e9)?,
-        damping_gamma_n: 0.0,
-        tangential_stiffness: 0.0,
-    };
-    let pw = Interaction {
-        restitution: p.require("e_pw", E_REST_RANGE.0, E_REST_RANGE.1)?,
-        friction: p.require("mu_pw", MU_RANGE.0, MU_RANGE.1)?,
-        rolling_friction: p.require("mu_r_pw", MU_RANGE.0, MU_RANGE.1)?,
-        cohesion_energy_density: p.optional("ced_pw", 0.0, 0.0, 1e9)?,
-        damping_gamma_n: 0.0,
-        tangential_stiffness: 0.0,
-    };
+    let pp = class.interaction(p, Pair::ParticleParticle)?;
+    let pw = class.interaction(p, Pair::ParticleWall)?;
     m.set_interaction(grain, grain, pp)?;
     m.set_interaction(grain, wall, pw.clone())?;
     m.set_interaction(wall, wall, pw)?;
     Ok((m, grain, wall))
+}
+
+/// An experiment's parameters: its own (`own`, geometry and particles), then the model class's
+/// for the kinds of contact it has.
+pub fn with_class_parameters(
+    own: &[&'static str],
+    class: &ModelClass,
+    pairs: &[Pair],
+) -> Vec<&'static str> {
+    let mut v = own.to_vec();
+    for n in class.parameter_names(pairs) {
+        if !v.contains(&n) {
+            v.push(n);
+        }
+    }
+    v
 }
 
 /// What a run reports besides its responses.
@@ -178,6 +115,16 @@ pub trait Experiment: Send + Sync {
     /// parameter nor an optional one is refused by campaigns: it would do nothing.
     fn optional_parameters(&self) -> Vec<&'static str> {
         Vec::new()
+    }
+    /// The model class the experiment was built with; `None` for one that has no contact law
+    /// (a test stand-in). Its effects' parameters are among [`Experiment::parameters`].
+    fn class(&self) -> Option<&ModelClass> {
+        None
+    }
+    /// The kinds of contact the experiment has: the model class's parameters are needed for
+    /// these only.
+    fn pairs(&self) -> &'static [Pair] {
+        &Pair::BOTH
     }
     /// Response names, in output order.
     fn responses(&self) -> Vec<&'static str>;

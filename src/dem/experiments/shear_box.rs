@@ -20,9 +20,12 @@ use std::time::Instant;
 
 use rand::RngExt;
 
-use super::{materials_from, Diagnostics, Experiment, Outcome, ParamSet, RunOptions, RHO_RANGE};
+use super::{
+    materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
+    RHO_RANGE,
+};
 use crate::dem::analysis::sphere_box_volume;
-use crate::dem::contact::ContactModel;
+use crate::dem::contact::{ModelClass, Pair};
 use crate::dem::particles::Particles;
 use crate::dem::sim::{Scene, Simulation};
 use crate::dem::timestep::rayleigh_time;
@@ -42,7 +45,12 @@ pub struct ShearBox {
     pub dt_fraction: f64,
     /// Largest number of particles accepted (the run is refused above).
     pub max_particles: usize,
+    /// The effects of the contact law.
+    pub class: ModelClass,
 }
+
+/// The parameters the shear box needs whatever the model class (d50 in mm).
+pub const OWN_PARAMETERS: [&str; 5] = ["E_p", "E_w", "nu_p", "rho_p", "d50"];
 
 impl Default for ShearBox {
     fn default() -> Self {
@@ -50,6 +58,7 @@ impl Default for ShearBox {
             box_scale: 10.0,
             dt_fraction: 0.25,
             max_particles: 200_000,
+            class: ModelClass::default(),
         }
     }
 }
@@ -297,13 +306,15 @@ impl Experiment for ShearBox {
     }
 
     fn parameters(&self) -> Vec<&'static str> {
-        super::SEED004_PARAMETERS.to_vec()
+        with_class_parameters(&OWN_PARAMETERS, &self.class, &Pair::BOTH)
     }
 
     fn optional_parameters(&self) -> Vec<&'static str> {
-        let mut v = vec!["sigma_ln"];
-        v.extend(super::MATERIAL_OPTIONAL);
-        v
+        vec!["sigma_ln"]
+    }
+
+    fn class(&self) -> Option<&ModelClass> {
+        Some(&self.class)
     }
 
     fn responses(&self) -> Vec<&'static str> {
@@ -317,7 +328,7 @@ impl Experiment for ShearBox {
     }
 
     fn check(&self, p: &ParamSet) -> Result<()> {
-        materials_from(p)?;
+        materials_from(p, &self.class)?;
         p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
         self.layout(p, 0).map(|_| ())
     }
@@ -336,7 +347,7 @@ impl ShearBox {
         opts: &RunOptions,
     ) -> Result<(Outcome, RunRecord)> {
         let clock = Instant::now();
-        let (materials, grain, wall_mat) = materials_from(p)?;
+        let (materials, grain, wall_mat) = materials_from(p, &self.class)?;
         let rho = p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
         let lay = self.layout(p, seed)?;
         let [l, w, h] = lay.size;
@@ -436,7 +447,7 @@ impl ShearBox {
             particles,
             walls,
             materials,
-            model: ContactModel::default(),
+            class: self.class,
             gravity: [0.0, 0.0, -G],
             dt,
             skin: 0.2 * lay.d_min,

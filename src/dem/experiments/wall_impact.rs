@@ -6,32 +6,33 @@
 use std::time::Instant;
 
 use super::{
-    Diagnostics, Experiment, Outcome, ParamSet, RunOptions, E_RANGE, E_REST_RANGE, MU_RANGE,
+    with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions, E_RANGE,
     NU_RANGE, RHO_RANGE,
 };
-use crate::dem::contact::NormalKind;
+use crate::dem::contact::{ModelClass, Pair};
 use crate::dem::impact::{run_impact, Body, Impact};
-use crate::dem::Interaction;
 use crate::error::{Error, Result};
 
-/// Parameters: E_p, nu_p, rho_p, d50 (sphere diameter, mm), E_w, e_pw, mu_pw, impact_speed (m/s),
-/// impact_angle (degrees from the wall normal, 0-89), spin (rad/s, default 0), and for the
-/// power-damped normal classes `gamma_n` (then `e_pw` is not used for normal damping), and `k_t`
-/// (N/m, default 0 = Mindlin): a constant tangential spring stiffness instead of Mindlin's
-/// 8 G* sqrt(R* d) (seed 003's Cundall-Strack spring). The wall has modulus `E_w` and the
-/// particle's Poisson ratio.
-#[derive(Debug, Clone, Copy)]
+/// Parameters: E_p, nu_p, rho_p, d50 (sphere diameter, mm), E_w, impact_speed (m/s),
+/// impact_angle (degrees from the wall normal, 0-89), spin (rad/s, default 0), and the
+/// particle-wall parameters of the model class's effects (`e_pw` for Hertz, `gamma_n_pw` for the
+/// power-law dashpots, `mu_pw`, `k_t_pw` for the linear spring, `mu_r_pw` with rolling
+/// resistance). The wall has modulus `E_w` and the particle's Poisson ratio.
+#[derive(Debug, Clone, Copy, Default)]
 pub struct WallImpact {
-    pub normal: NormalKind,
+    pub class: ModelClass,
 }
 
-impl Default for WallImpact {
-    fn default() -> Self {
-        WallImpact {
-            normal: NormalKind::Hertz,
-        }
-    }
-}
+/// The parameters the wall impact needs whatever the model class.
+pub const OWN_PARAMETERS: [&str; 7] = [
+    "E_p",
+    "nu_p",
+    "rho_p",
+    "d50",
+    "E_w",
+    "impact_speed",
+    "impact_angle",
+];
 
 impl WallImpact {
     fn impact(&self, p: &ParamSet) -> Result<Impact> {
@@ -53,17 +54,8 @@ impl WallImpact {
             spin: [0.0, p.optional("spin", 0.0, -1e6, 1e6)?, 0.0],
             partner_velocity: [0.0; 3],
             partner_spin: [0.0; 3],
-            interaction: Interaction {
-                restitution: p.require("e_pw", E_REST_RANGE.0, E_REST_RANGE.1)?,
-                friction: p.require("mu_pw", MU_RANGE.0, MU_RANGE.1)?,
-                damping_gamma_n: p.optional("gamma_n", 0.0, 0.0, 1e12)?,
-                tangential_stiffness: p.optional("k_t", 0.0, 0.0, 1e15)?,
-                ..Default::default()
-            },
-            normal: self.normal,
-            rolling: false,
-            limit_force: false,
-            strict_coulomb: false,
+            interaction: self.class.interaction(p, Pair::ParticleWall)?,
+            class: self.class,
             steps_per_contact: 400.0,
         })
     }
@@ -119,21 +111,19 @@ impl Experiment for WallImpact {
     }
 
     fn parameters(&self) -> Vec<&'static str> {
-        vec![
-            "E_p",
-            "nu_p",
-            "rho_p",
-            "d50",
-            "E_w",
-            "e_pw",
-            "mu_pw",
-            "impact_speed",
-            "impact_angle",
-        ]
+        with_class_parameters(&OWN_PARAMETERS, &self.class, self.pairs())
     }
 
     fn optional_parameters(&self) -> Vec<&'static str> {
-        vec!["k_t", "gamma_n", "spin"]
+        vec!["spin"]
+    }
+
+    fn class(&self) -> Option<&ModelClass> {
+        Some(&self.class)
+    }
+
+    fn pairs(&self) -> &'static [Pair] {
+        &[Pair::ParticleWall]
     }
 
     fn responses(&self) -> Vec<&'static str> {
@@ -177,6 +167,13 @@ impl Experiment for WallImpact {
 mod tests {
     use super::*;
 
+    /// Hertz-Mindlin without rolling resistance: a sphere that does not roll on the wall.
+    fn exp() -> WallImpact {
+        WallImpact {
+            class: ModelClass::parse("hertz,mindlin").unwrap(),
+        }
+    }
+
     fn params(angle: f64) -> ParamSet {
         ParamSet::from_pairs(&[
             ("E_p", 380e9),
@@ -194,7 +191,7 @@ mod tests {
     #[test]
     fn reproduces_the_chung_ooi_sliding_branch() {
         for angle in [45.0, 60.0, 75.0] {
-            let o = WallImpact::default()
+            let o = exp()
                 .run(&params(angle), 1, &RunOptions::default())
                 .unwrap();
             let th = f64::to_radians(angle);
@@ -210,7 +207,7 @@ mod tests {
         // A wall of the particle's own modulus halves Y*: contact time x 2^(2/5) (Hertz).
         let mut p = params(0.0);
         p.set("E_w", 380e9);
-        let steel = WallImpact::default().impact(&p).unwrap();
+        let steel = exp().impact(&p).unwrap();
         let rigid = Impact {
             wall_youngs_modulus: None,
             ..steel.clone()
@@ -220,15 +217,18 @@ mod tests {
         assert!((ratio - 2f64.powf(0.4)).abs() < 0.01, "{ratio}");
         // A spring too soft to act within the impact leaves v_t alone; the sliding branch does
         // not depend on the spring.
+        let spring = WallImpact {
+            class: ModelClass::parse("hertz,linear-spring").unwrap(),
+        };
         let mut p = params(20.0);
-        p.set("k_t", 1e3);
-        let o = WallImpact::default()
+        p.set("k_t_pw", 1e3);
+        let o = spring
             .run(&p, 1, &RunOptions::default())
             .unwrap();
         assert!((o.get("ctr").unwrap() - 1.0).abs() < 1e-3);
         let mut p = params(75.0);
-        p.set("k_t", 1e7);
-        let o = WallImpact::default()
+        p.set("k_t_pw", 1e7);
+        let o = spring
             .run(&p, 1, &RunOptions::default())
             .unwrap();
         let want = 1.0 - 0.092 * 1.98 / 75f64.to_radians().tan();
@@ -239,22 +239,25 @@ mod tests {
     fn impossible_parameters_are_refused_naming_them() {
         let mut p = params(30.0);
         p.set("rho_p", -5.0);
-        let e = WallImpact::default().check(&p).unwrap_err().to_string();
+        let e = exp().check(&p).unwrap_err().to_string();
         assert!(e.contains("rho_p"), "{e}");
         let mut p = params(30.0);
         p.set("impact_angle", 95.0);
-        assert!(WallImpact::default()
+        assert!(exp()
             .check(&p)
             .unwrap_err()
             .to_string()
             .contains("impact_angle"));
         let mut p = params(30.0);
-        p.set("k_t", -1.0);
-        assert!(WallImpact::default()
-            .check(&p)
-            .unwrap_err()
-            .to_string()
-            .contains("k_t"));
+        p.set("k_t_pw", -1.0);
+        let spring = WallImpact {
+            class: ModelClass::parse("hertz,linear-spring").unwrap(),
+        };
+        let e = spring.check(&p).unwrap_err().to_string();
+        assert!(e.contains("k_t_pw"), "{e}");
+        // A missing effect parameter is named with its effect.
+        let e = WallImpact::default().check(&params(30.0)).unwrap_err().to_string();
+        assert!(e.contains("mu_r_pw") && e.contains("epsd2"), "{e}");
     }
 
     #[test]
@@ -263,7 +266,7 @@ mod tests {
         for speed in [100.0, 300.0, 1000.0] {
             let mut p = params(30.0);
             p.set("E_p", 5e6).set("E_w", 5e6).set("impact_speed", speed);
-            let e = WallImpact::default()
+            let e = exp()
                 .run(&p, 1, &RunOptions::default())
                 .unwrap_err()
                 .to_string();
@@ -275,7 +278,7 @@ mod tests {
         // The same sphere at a sensible speed is a result, and within the checks.
         let mut p = params(30.0);
         p.set("E_p", 5e6).set("E_w", 5e6).set("impact_speed", 0.5);
-        let o = WallImpact::default()
+        let o = exp()
             .run(&p, 1, &RunOptions::default())
             .unwrap();
         assert!((0.0..=1.0).contains(&o.get("cnr").unwrap()));

@@ -1,10 +1,76 @@
-//! Tangential force: the history spring with Coulomb cap of LIGGGHTS 3.8 `tangential history`.
+//! Tangential force: the history spring with Coulomb cap of LIGGGHTS 3.8 `tangential history`
+//! (`mindlin`), its strict-Coulomb variant, and the constant-stiffness spring of seed 003
+//! (`linear-spring`). The three share one kernel; the variant is a per-pair constant, a branch
+//! the processor predicts perfectly.
 
+use super::effects::Tangential;
+use super::hertz::SQRT_5_6;
 use super::kinematics::Contact;
+use super::spec::{EffectSpec, ParamSpec, Slot};
 use crate::dem::material::PairConstants;
 use crate::dem::vec3::*;
 
-const SQRT_5_6: f64 = 0.912_870_929_175_276_8;
+pub const FRICTION: ParamSpec = ParamSpec {
+    names: ["mu_pp", "mu_pw"],
+    unit: "-",
+    range: (0.0, 10.0),
+    default: None,
+    variable: true,
+    what: "Coulomb sliding friction coefficient",
+};
+
+pub const STIFFNESS: ParamSpec = ParamSpec {
+    names: ["k_t_pp", "k_t_pw"],
+    unit: "N/m",
+    range: (1e-12, 1e15),
+    default: None,
+    variable: true,
+    what: "constant tangential spring stiffness",
+};
+
+pub const SPEC: EffectSpec = EffectSpec {
+    name: "mindlin",
+    slot: Slot::Tangential,
+    what: "Mindlin's history spring k_t = 8 G* sqrt(R* d) with the spring capped at mu |F_n| \
+           (LIGGGHTS 3.8 `tangential history`)",
+    params: &[FRICTION],
+    install: |v, i| i.friction = v[0],
+    liggghts: Some("tangential history"),
+};
+
+pub const STRICT_COULOMB: EffectSpec = EffectSpec {
+    name: "strict-coulomb",
+    slot: Slot::Tangential,
+    what: "Mindlin's spring with spring plus dashpot capped at mu max(F_n, 0)",
+    params: &[FRICTION],
+    install: |v, i| {
+        i.friction = v[0];
+        i.strict_coulomb = true;
+    },
+    liggghts: None,
+};
+
+pub const LINEAR_SPRING: EffectSpec = EffectSpec {
+    name: "linear-spring",
+    slot: Slot::Tangential,
+    what: "a constant-stiffness history spring k_t with Coulomb cap (Cundall-Strack, seed 003)",
+    params: &[FRICTION, STIFFNESS],
+    install: |v, i| {
+        i.friction = v[0];
+        i.tangential_stiffness = v[1];
+    },
+    liggghts: None,
+};
+
+#[derive(Debug, Clone, Copy, Default)]
+pub struct HistorySpring;
+
+impl Tangential for HistorySpring {
+    #[inline(always)]
+    fn force(&self, c: &Contact, p: &PairConstants, f_n: f64, xi: &mut V3, dt: f64) -> V3 {
+        mindlin_history(c, p, f_n, xi, dt, p.strict_coulomb)
+    }
+}
 
 /// Advances the spring `xi` by the tangential relative velocity, keeps it in the tangent plane,
 /// and returns the tangential force on i; k_t = 8 G* sqrt(R* d) (Mindlin) or the pair's constant

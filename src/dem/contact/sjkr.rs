@@ -1,0 +1,35 @@
+//! Simplified JKR cohesion (LIGGGHTS 3.8 `cohesion sjkr`): an attraction equal to the cohesion
+//! energy density times the area of the contact circle, acting only while the bodies overlap.
+
+use super::effects::Cohesion;
+use super::kinematics::Contact;
+use super::spec::{EffectSpec, ParamSpec, Slot};
+use crate::dem::material::PairConstants;
+
+pub const ENERGY_DENSITY: ParamSpec = ParamSpec {
+    names: ["ced_pp", "ced_pw"],
+    unit: "J/m^3",
+    range: (0.0, 1e9),
+    default: None,
+    variable: true,
+    what: "cohesion energy density (attraction = ced x contact area)",
+};
+
+pub const SPEC: EffectSpec = EffectSpec {
+    name: "sjkr",
+    slot: Slot::Cohesion,
+    what: "simplified JKR: attraction ced x area of the contact circle while overlapping",
+    params: &[ENERGY_DENSITY],
+    install: |v, i| i.cohesion_energy_density = v[0],
+    liggghts: Some("cohesion sjkr"),
+};
+
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Sjkr;
+
+impl Cohesion for Sjkr {
+    #[inline(always)]
+    fn cohesion(&self, c: &Contact, p: &PairConstants) -> f64 {
+        p.cohesion_energy_density * c.area
+    }
+}

@@ -1,0 +1,109 @@
+//! What the user-facing side knows of an effect: its name, the slot of the contact law it fills,
+//! its parameters (names, unit, allowed range, default, whether a metamodel may vary it) and how
+//! their values reach the per-pair constants of the kernel.
+
+use crate::dem::material::Interaction;
+
+/// The parts of the contact law; a model class holds one effect per slot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Slot {
+    Normal,
+    Tangential,
+    Rolling,
+    Cohesion,
+}
+
+impl Slot {
+    pub const ALL: [Slot; 4] = [Slot::Normal, Slot::Tangential, Slot::Rolling, Slot::Cohesion];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Slot::Normal => "normal force",
+            Slot::Tangential => "tangential force",
+            Slot::Rolling => "rolling resistance",
+            Slot::Cohesion => "cohesion",
+        }
+    }
+}
+
+/// The two kinds of contact of a bulk experiment. Every effect applies to both; its parameters
+/// are given for each (`mu_pp` and `mu_pw`), so an effect can be strong between particles and
+/// weak against the walls, or absent there with a zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pair {
+    ParticleParticle,
+    ParticleWall,
+}
+
+impl Pair {
+    pub const BOTH: [Pair; 2] = [Pair::ParticleParticle, Pair::ParticleWall];
+
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Pair::ParticleParticle => "particle-particle",
+            Pair::ParticleWall => "particle-wall",
+        }
+    }
+}
+
+/// One parameter of an effect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamSpec {
+    /// Its names for particle-particle and particle-wall contacts.
+    pub names: [&'static str; 2],
+    pub unit: &'static str,
+    /// Values a run accepts (wider than any metamodel's space: only what cannot be simulated
+    /// or means nothing is refused).
+    pub range: (f64, f64),
+    /// Used when the parameter is not given; `None`: a missing value is an error.
+    pub default: Option<f64>,
+    /// Whether a metamodel may take it as an input; a structural constant (an exponent that
+    /// selects a model) is fixed in a space instead.
+    pub variable: bool,
+    pub what: &'static str,
+}
+
+impl ParamSpec {
+    pub fn name(&self, pair: Pair) -> &'static str {
+        self.names[pair.index()]
+    }
+}
+
+/// An effect of the contact law, as a model class names it.
+#[derive(Debug, Clone, Copy)]
+pub struct EffectSpec {
+    /// The name used in `--model-class` and `[model]` (`none` for a slot left empty).
+    pub name: &'static str,
+    pub slot: Slot,
+    pub what: &'static str,
+    pub params: &'static [ParamSpec],
+    /// Writes the parameter values, in `params` order, into a pair's interaction.
+    pub install: fn(&[f64], &mut Interaction),
+    /// The LIGGGHTS 3.8 `pair_style granular` words of the effect, if LIGGGHTS has it.
+    pub liggghts: Option<&'static str>,
+}
+
+impl EffectSpec {
+    pub fn is_none(&self) -> bool {
+        self.name == NONE
+    }
+}
+
+/// The name of an empty slot.
+pub const NONE: &str = "none";
+
+/// The spec of an empty slot.
+pub const fn none(slot: Slot) -> EffectSpec {
+    EffectSpec {
+        name: NONE,
+        slot,
+        what: "switched off",
+        params: &[],
+        install: |_, _| {},
+        liggghts: Some("off"),
+    }
+}
