@@ -47,6 +47,7 @@ fn main() {
             ..Config::default()
         },
         plots: None,
+        model_class: None,
     };
     let model = fit_table(&opts, |_, _| {}).expect("fit").model;
     let material = Material::from_toml_str(

@@ -50,6 +50,7 @@ fn model() -> &'static Metamodel {
                 ..Config::default()
             },
             plots: None,
+            model_class: None,
         };
         let m = fit_table(&opts, |_, _| {}).unwrap().model;
         for r in &m.responses {
@@ -213,6 +214,7 @@ fn bayesian_posterior_and_evidence_of_a_linear_model() {
             ..Config::default()
         },
         plots: None,
+        model_class: None,
     };
     let m = fit_table(&opts, |_, _| {}).unwrap().model;
     assert_eq!(m.responses[0].equation, "a");

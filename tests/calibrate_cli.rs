@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{mbgc, ok, s};
+use common::{fails, mbgc, ok, s};
 use std::path::Path;
 
 /// A model of y = 2 a + b^2 (a, b in [0, 1]) and z = a * c fitted by `mbgc fit` on `inputs`.
@@ -163,7 +163,8 @@ fn validate_reruns_the_dem_experiment() {
     std::fs::write(
         &params,
         "[parameters]\nE_p = 2e11\nnu_p = 0.3\nrho_p = 7800\nd50 = 10\nE_w = 2e11\ne_pw = 0.8\n\
-         mu_pw = 0.1\nimpact_speed = 1.0\nimpact_angle = 0\n[predicted]\ncnr = 0.79\n",
+         mu_pw = 0.1\nimpact_speed = 1.0\nimpact_angle = 0\n[predicted]\ncnr = 0.79\n\
+         [model]\nclass = \"hertz,mindlin\"\n",
     )
     .unwrap();
     let text = ok(&[
@@ -181,6 +182,35 @@ fn validate_reruns_the_dem_experiment() {
         .unwrap();
     let dem: f64 = line.split_whitespace().nth(3).unwrap().parse().unwrap();
     assert!((dem - 0.8).abs() < 0.01, "DEM restitution {dem}: {text}");
+    // The class of the file is what runs: another on the command line is refused, and so is a
+    // parameter of an effect the class lacks.
+    let e = fails(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+        "--model-class",
+        "hertz,mindlin,epsd2",
+    ]);
+    assert!(e.contains("--model-class") && e.contains("p.toml"), "{e}");
+    let text = std::fs::read_to_string(&params).unwrap();
+    std::fs::write(&params, text.replace("mu_pw = 0.1", "mu_pw = 0.1\nced_pw = 1e4")).unwrap();
+    let e = fails(&[
+        "validate",
+        "--material",
+        s(&mat),
+        "--params",
+        s(&params),
+        "--experiment",
+        "wall-impact",
+    ]);
+    assert!(
+        e.contains("parameters.ced_pw") && e.contains("sjkr") && e.contains("p.toml"),
+        "{e}"
+    );
     // A parameter the experiment needs but the file lacks is named.
     std::fs::write(&params, "[parameters]\nE_p = 2e11\n").unwrap();
     let o = mbgc(&[

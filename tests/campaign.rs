@@ -96,7 +96,10 @@ fn without_wall_time(path: &Path) -> Vec<Vec<(String, String)>> {
 }
 
 /// Wall-impact constants (the ones the designs below do not vary).
-const WALL_SET: [&str; 10] = [
+/// Hertz-Mindlin without rolling resistance (a sphere against a wall), and its constants.
+const WALL_SET: [&str; 12] = [
+    "--model-class",
+    "hertz,mindlin",
     "--set",
     "E_p=380e9",
     "--set",
@@ -185,7 +188,7 @@ fn wall_impact_runs_every_row_of_a_design_and_resumes_to_a_no_op() {
     let (header, rows) = read(&out);
     assert_eq!(
         header.join(","),
-        "run_id,row,status,seed,impact_angle,mu_pw,rho_p,d50,E_p,nu_p,E_w,e_pw,impact_speed,\
+        "run_id,row,status,seed,model_class,impact_angle,mu_pw,rho_p,d50,E_p,nu_p,E_w,e_pw,impact_speed,\
          cnr,ctr,settled,steps,particles,wall_time_s,warnings,error"
     );
     assert_eq!(rows.len(), 12);
@@ -677,6 +680,8 @@ fn bad_inputs_are_refused_naming_the_file_and_field_before_anything_runs() {
         "e_pw=0.98",
         "--set",
         "impact_speed=3.9",
+        "--model-class",
+        "hertz,mindlin",
     ]);
     assert!(e.contains("out.csv: header:"), "{e}");
     assert_eq!(std::fs::read(&out).unwrap(), before);
@@ -1002,4 +1007,95 @@ fn a_set_constant_the_experiment_does_not_read_is_refused() {
     assert!(!out.exists());
     // Optional parameters are accepted.
     simulate_sleep(&design, &out, &["--set", "sleep_ms=1"]);
+}
+
+/// The model class is part of a campaign: recorded on every line, in the run ids when it is not
+/// the default, and a resume with another class is refused; a parameter of an effect the class
+/// lacks is refused naming the effect, a missing one naming the parameter.
+#[test]
+fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let design = wall_design(d);
+    let out = d.join("table.csv");
+    simulate_wall(&design, &out, &[]);
+    let (header, rows) = read(&out);
+    assert_eq!(header[4], "model_class");
+    assert!(rows.iter().all(|r| r["model_class"] == "hertz+mindlin"));
+    let before = std::fs::read(&out).unwrap();
+    let base: Vec<&str> = vec![
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "wall-impact",
+        "--out",
+        s(&out),
+        "--set",
+        "E_p=380e9",
+        "--set",
+        "nu_p=0.23",
+        "--set",
+        "E_w=1e13",
+        "--set",
+        "e_pw=0.98",
+        "--set",
+        "impact_speed=3.9",
+    ];
+    let mut args = base.clone();
+    args.extend(["--model-class", "hertz,mindlin,epsd2", "--set", "mu_r_pw=0.1"]);
+    let e = fails(&args);
+    assert!(
+        e.contains("column model_class") && e.contains("--model-class hertz,mindlin"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), before, "nothing written");
+    // The default class needs mu_r_pw (EPSD2), and names it.
+    let fresh = d.join("fresh.csv");
+    let mut args = base.clone();
+    args[6] = s(&fresh);
+    let e = fails(&args);
+    assert!(e.contains("mu_r_pw") && e.contains("epsd2"), "{e}");
+    // A cohesion parameter without cohesion does nothing: refused, naming the effect.
+    let mut args = base.clone();
+    args[6] = s(&fresh);
+    args.extend(["--model-class", "hertz,mindlin", "--set", "ced_pw=1e4"]);
+    let e = fails(&args);
+    assert!(
+        e.contains("ced_pw") && e.contains("sjkr") && e.contains("hertz,mindlin,sjkr"),
+        "{e}"
+    );
+    // A particle-particle parameter in an experiment without particle-particle contacts.
+    let mut args = base.clone();
+    args[6] = s(&fresh);
+    args.extend(["--model-class", "hertz,mindlin", "--set", "mu_pp=0.4"]);
+    let e = fails(&args);
+    assert!(e.contains("mu_pp") && e.contains("particle-particle"), "{e}");
+    assert!(!fresh.exists());
+    // With cohesion switched on, the same value runs, under other run ids.
+    let mut args = base.clone();
+    args[6] = s(&fresh);
+    args.extend(["--model-class", "hertz,mindlin,sjkr", "--set", "ced_pw=1e4"]);
+    ok(&args);
+    let (_, cohesive) = read(&fresh);
+    assert!(cohesive.iter().all(|r| r["model_class"] == "hertz+mindlin+sjkr"));
+    assert_ne!(cohesive[0]["run_id"], rows[0]["run_id"]);
+    // Tables of different classes with the same columns do not merge.
+    let strict = d.join("strict.csv");
+    let mut args = base.clone();
+    args[6] = s(&strict);
+    args.extend(["--model-class", "hertz,strict-coulomb"]);
+    ok(&args);
+    let e = fails(&[
+        "campaign",
+        "merge",
+        s(&out),
+        s(&strict),
+        "--out",
+        s(&d.join("m.csv")),
+    ]);
+    assert!(
+        e.contains("column model_class") && e.contains("hertz+strict-coulomb"),
+        "{e}"
+    );
 }

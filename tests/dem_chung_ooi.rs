@@ -1,7 +1,7 @@
 //! The eight verification tests of Chung & Ooi (2011) (`reference/chung_ooi_benchmarks.md`), with
 //! the contact law of LIGGGHTS 3.8.
 
-use mbgc::dem::contact::NormalKind;
+use mbgc::dem::contact::{ModelClass, TangentialKind};
 use mbgc::dem::impact::{hertz_theory, run_impact, Body, Impact, ImpactResult};
 use mbgc::dem::Interaction;
 
@@ -40,10 +40,7 @@ fn impact(b: Body, partner: Option<Body>, v: [f64; 3], e: f64, mu: f64) -> Impac
             friction: mu,
             ..Default::default()
         },
-        normal: NormalKind::Hertz,
-        rolling: false,
-        limit_force: false,
-        strict_coulomb: false,
+        class: ModelClass::parse("hertz,mindlin").unwrap(),
         steps_per_contact: 1000.0,
     }
 }
@@ -130,7 +127,7 @@ fn test3_restitution() {
         for m in [AL_OXIDE, CAST_IRON] {
             for e in [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95] {
                 let mut imp = impact(body(m, 0.0025), None, [0.0, 0.0, -3.9], e, 0.0);
-                imp.limit_force = limit_force;
+                imp.class.limit_force = limit_force;
                 let r = run_impact(&imp).unwrap();
                 let out = r.velocity[2] / 3.9;
                 println!(
@@ -233,8 +230,8 @@ fn test5_spin_levels_off_at_high_tangential_speed() {
 fn spinning(m: (f64, f64, f64), partner: Option<Body>, w0: f64) -> ImpactResult {
     let (mu, e, vn, radius) = (0.4, 0.5, 0.2, 0.1);
     let mut imp = impact(body(m, radius), partner.clone(), [0.0, 0.0, -vn], e, mu);
-    imp.limit_force = true;
-    imp.strict_coulomb = true;
+    imp.class.limit_force = true;
+    strict(&mut imp);
     if partner.is_some() {
         // The big sphere lies on +x: approach along +x, spin about z.
         imp.velocity = [vn, 0.0, 0.0];
@@ -293,8 +290,8 @@ fn test7_two_spinning_spheres() {
             imp.partner_velocity = [-0.2, 0.0, 0.0];
             imp.spin = [0.0, 0.0, w0];
             imp.partner_spin = [0.0, 0.0, w0];
-            imp.limit_force = true;
-            imp.strict_coulomb = true;
+            imp.class.limit_force = true;
+            strict(&mut imp);
             let r = run_impact(&imp).unwrap();
             let dv = r.velocity[1].abs();
             let dw = w0 - r.spin[2];
@@ -351,4 +348,11 @@ fn test8_sphere_onto_a_large_heavy_sphere() {
             assert!(rel(rw, 0.1 * w0 - 0.3) < 0.03, "w0 {w0}: R w {rw}");
         }
     }
+}
+
+/// Strict Coulomb: the class's tangential effect, and its flag in the interaction that the impact
+/// is given directly.
+fn strict(imp: &mut Impact) {
+    imp.class.tangential = TangentialKind::StrictCoulomb;
+    imp.interaction.strict_coulomb = true;
 }

@@ -2,7 +2,7 @@
 //! on a plane, a rolling sphere stopped by EPSD2, and the guards against bad time steps and
 //! blow-ups.
 
-use mbgc::dem::contact::ContactModel;
+use mbgc::dem::contact::ModelClass;
 use mbgc::dem::walls::box_planes;
 use mbgc::dem::{Interaction, Material, Materials, Particles, Scene, Shape, Simulation, Wall};
 use rand::RngExt;
@@ -34,7 +34,7 @@ fn scene(
     particles: Particles,
     walls: Vec<Wall>,
     materials: Materials,
-    model: ContactModel,
+    class: ModelClass,
     gravity: [f64; 3],
     dt: f64,
     domain: ([f64; 3], [f64; 3]),
@@ -43,7 +43,7 @@ fn scene(
         particles,
         walls,
         materials,
-        model,
+        class,
         gravity,
         dt,
         skin: 1e-3,
@@ -80,7 +80,7 @@ fn energy_is_conserved_without_damping() {
     let lo = [0.0; 3];
     let hi = [0.08; 3];
     let walls = box_planes(lo, hi, 0);
-    let model = ContactModel::from_names(&["hertz"]).unwrap();
+    let model = ModelClass::from_names(&["hertz", "mindlin"]).unwrap();
     let mut sim = Simulation::new(scene(
         p,
         walls,
@@ -155,7 +155,7 @@ fn sphere_comes_to_rest_on_a_plane_with_the_hertz_overlap() {
         p,
         vec![plane],
         m,
-        ContactModel::default(),
+        ModelClass::default(),
         [0.0, 0.0, -9.81],
         2e-5,
         ([-1.0; 3], [1.0; 3]),
@@ -210,7 +210,7 @@ fn rolling_sphere_stops_where_epsd2_says() {
         p,
         vec![plane],
         m,
-        ContactModel::from_names(&["hertz", "epsd2"]).unwrap(),
+        ModelClass::from_names(&["hertz", "mindlin", "epsd2"]).unwrap(),
         [0.0, 0.0, -9.81],
         5e-5,
         ([-1.0; 3], [2.0; 3]),
@@ -251,7 +251,7 @@ fn a_time_step_above_the_rayleigh_limit_is_refused() {
         p,
         vec![],
         materials(0.5, 0.5, 0.0, 1e7),
-        ContactModel::default(),
+        ModelClass::default(),
         [0.0; 3],
         1e-3,
         ([-1.0; 3], [1.0; 3]),
@@ -270,7 +270,7 @@ fn a_run_that_blows_up_is_flagged_not_returned() {
         p,
         vec![],
         materials(0.9, 0.5, 0.0, 1e9),
-        ContactModel::default(),
+        ModelClass::default(),
         [0.0; 3],
         2e-4,
         ([-0.1; 3], [0.1; 3]),
@@ -284,22 +284,31 @@ fn a_run_that_blows_up_is_flagged_not_returned() {
 
 #[test]
 fn effects_are_chosen_by_name() {
-    let m = ContactModel::from_names(&["tsuji", "epsd2", "sjkr"]).unwrap();
+    use mbgc::dem::contact::{CohesionKind, NormalKind, RollingKind, TangentialKind};
+    let m = ModelClass::parse("tsuji,mindlin,epsd2,sjkr").unwrap();
+    assert_eq!(m.normal, NormalKind::Tsuji);
+    assert_eq!(m.tangential, TangentialKind::Mindlin);
+    assert_eq!(m.rolling, RollingKind::Epsd2);
+    assert_eq!(m.cohesion, CohesionKind::Sjkr);
+    assert_eq!(m.to_string(), "tsuji,mindlin,epsd2,sjkr");
+    assert_eq!(ModelClass::parse(&m.label()).unwrap(), m);
     assert_eq!(
-        m.normal,
-        mbgc::dem::contact::NormalKind::PowerDamped { alpha: 0.25 }
+        ModelClass::parse("hertz, mindlin ,epsd2").unwrap(),
+        ModelClass::default()
     );
-    let e = ContactModel::from_names(&["hertz", "jkr-full"])
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("jkr-full") && e.contains("expected one of"),
-        "{e}"
-    );
-    let e = ContactModel::from_names(&["hertz", "tsuji"])
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("second normal force"), "{e}");
+    for (bad, want) in [
+        ("hertz,mindlin,jkr-full", "unknown effect `jkr-full`"),
+        ("hertz,tsuji,mindlin", "both a normal force"),
+        ("mindlin,epsd2", "no normal force"),
+        ("hertz,epsd2", "no tangential force"),
+        ("hertz,mindlin,epsd2,cdt", "both a rolling resistance"),
+        ("hertz,,mindlin", "empty name"),
+        ("tsuji,mindlin,limit-force", "limit-force"),
+        ("hertz,mindlin,none", "unknown effect `none`"),
+    ] {
+        let e = ModelClass::parse(bad).unwrap_err().to_string();
+        assert!(e.contains(want), "{bad}: {e}");
+    }
 }
 
 /// The thread team computes the same forces as the serial loop; only the order of the force sums

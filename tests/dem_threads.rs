@@ -3,7 +3,7 @@
 //! motion and skin used up by a wall), neighbour-list rebuilds (particles reordered), a wall
 //! removed and particles removed mid-run.
 
-use mbgc::dem::contact::ContactModel;
+use mbgc::dem::contact::ModelClass;
 use mbgc::dem::walls::box_planes;
 use mbgc::dem::{Interaction, Material, Materials, Particles, Scene, Simulation};
 use rand::RngExt;
@@ -49,7 +49,7 @@ fn scene() -> Scene {
         particles: p,
         walls,
         materials: m,
-        model: ContactModel::from_names(&["hertz", "epsd2", "sjkr"]).unwrap(),
+        class: ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap(),
         gravity: [0.0, 0.0, -9.81],
         dt: 2e-5,
         skin: 5e-4,

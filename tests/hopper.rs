@@ -66,7 +66,7 @@ fn report(label: &str, r: &HopperRun) -> String {
 
 #[test]
 fn impossible_parameter_sets_are_refused_before_anything_runs() {
-    let h = Hopper;
+    let h = Hopper::default();
     let cases: [(&str, f64, &str); 6] = [
         ("rho_p", -2500.0, "rho_p"),
         // 4 mm beads: the 15 mm orifice is less than 4 particles wide.
@@ -111,7 +111,9 @@ fn a_small_discharge_keeps_every_particle_stops_and_measures() {
         picture: Some(dir.path().join("hopper.svg")),
         ..Default::default()
     };
-    let r = Hopper.run_detailed(&tiny(0.5), 3, &opts).unwrap();
+    let r = Hopper::default()
+        .run_detailed(&tiny(0.5), 3, &opts)
+        .unwrap();
     println!("{}", report("tiny mu_pp 0.5", &r));
     let o = &r.outcome;
     let n = o.diagnostics.particles;
@@ -165,7 +167,9 @@ fn higher_friction_leaves_a_steeper_crater() {
     let run = |mu_pp| {
         let mut p = tiny(mu_pp);
         p.set("fill_mass", 0.03);
-        Hopper.run_detailed(&p, 5, &RunOptions::default()).unwrap()
+        Hopper::default()
+            .run_detailed(&p, 5, &RunOptions::default())
+            .unwrap()
     };
     let (low, high) = (run(0.1), run(0.8));
     println!("{}\n{}", report("mu 0.1", &low), report("mu 0.8", &high));
@@ -186,7 +190,11 @@ fn the_seed_decides_everything() {
     p.set("d50", 2.5)
         .set("sigma_ln", 0.1)
         .set("fill_mass", 0.004);
-    let run = |seed| Hopper.run(&p, seed, &RunOptions::default()).unwrap();
+    let run = |seed| {
+        Hopper::default()
+            .run(&p, seed, &RunOptions::default())
+            .unwrap()
+    };
     // Bit patterns: NaN (e.g. no pile from 200 particles) must equal itself.
     let bits = |o: &mbgc::dem::experiments::Outcome| -> Vec<u64> {
         o.responses.iter().map(|(_, v)| v.to_bits()).collect()
@@ -200,7 +208,7 @@ fn the_seed_decides_everything() {
 #[test]
 #[ignore = "~2-3 min: cargo test --release --test hopper -- --ignored --nocapture"]
 fn flow_rate_follows_beverloo() {
-    let r = Hopper
+    let r = Hopper::default()
         .run_detailed(&params(2.0, 0.5), 1, &RunOptions::default())
         .unwrap();
     println!("{}", report("Beverloo, d50 2 mm, mu_pp 0.5", &r));
@@ -233,7 +241,7 @@ fn explore() {
         .ok()
         .and_then(|t| t.parse().ok())
         .unwrap_or(1);
-    let r = Hopper.run_detailed(&p, seed, &opts).unwrap();
+    let r = Hopper::default().run_detailed(&p, seed, &opts).unwrap();
     println!("{}", report(&format!("{spec} seed {seed}"), &r));
     if let Ok(path) = std::env::var("SERIES") {
         write_series_csv(path.as_ref(), &r.series).unwrap();

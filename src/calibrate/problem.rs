@@ -1,9 +1,9 @@
 //! The calibration problem: a metamodel, the material's measurements, what is fixed, the search
 //! box of the free parameters and the constraints between them.
 
+use crate::dem::contact::Pair;
 use crate::error::{Error, Result};
 use crate::material::{Constraint, Material};
-use crate::dem::contact::Pair;
 use crate::metamodel::Metamodel;
 
 /// A measured response the fit must match.

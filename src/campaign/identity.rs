@@ -63,21 +63,46 @@ mod tests {
         assert_eq!(id, "d6be556de2e938d2");
         let others = [
             run_id("shear-box", &inputs(2.0), 7, &s, None),
-            run_id("wall-impact", &inputs(2.0 + f64::EPSILON * 2.0), 7, &s, None),
+            run_id(
+                "wall-impact",
+                &inputs(2.0 + f64::EPSILON * 2.0),
+                7,
+                &s,
+                None,
+            ),
             run_id("wall-impact", &inputs(2.0), 8, &s, None),
-            run_id("wall-impact", &ParamSet::from_pairs(&[("b", 2.0), ("a", 1.5)]), 7, &s, None),
-            run_id("wall-impact", &inputs(2.0), 7, &ExperimentSettings {
+            run_id(
+                "wall-impact",
+                &ParamSet::from_pairs(&[("b", 2.0), ("a", 1.5)]),
+                7,
+                &s,
+                None,
+            ),
+            run_id(
+                "wall-impact",
+                &inputs(2.0),
+                7,
+                &ExperimentSettings {
                     box_scale: Some(2.0),
-                }, None),
+                    ..Default::default()
+                },
+                None,
+            ),
         ];
         for o in others {
             assert_ne!(o, id);
         }
         // The default class, given or not, keeps the id; another class changes it.
         let default = ModelClass::default();
-        assert_eq!(run_id("wall-impact", &inputs(2.0), 7, &s, Some(&default)), id);
+        assert_eq!(
+            run_id("wall-impact", &inputs(2.0), 7, &s, Some(&default)),
+            id
+        );
         let cohesive = ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap();
-        assert_ne!(run_id("wall-impact", &inputs(2.0), 7, &s, Some(&cohesive)), id);
+        assert_ne!(
+            run_id("wall-impact", &inputs(2.0), 7, &s, Some(&cohesive)),
+            id
+        );
         assert_ne!(
             run_id("x", &inputs(0.0), 1, &s, None),
             run_id("x", &inputs(-0.0), 1, &s, None)

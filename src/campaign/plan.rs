@@ -195,11 +195,32 @@ impl Plan {
         let needed = experiment.parameters();
         for p in &needed {
             if !header.iter().any(|h| h == p) && !set.iter().any(|(n, _)| n == p) {
+                // Name the effect that needs it: the user may rather switch the effect off.
+                let owner = experiment.class().and_then(|c| {
+                    c.parameters(experiment.pairs())
+                        .into_iter()
+                        .find(|(n, _, _)| n == p)
+                        .and_then(|(_, spec, _)| {
+                            c.effects()
+                                .into_iter()
+                                .find(|e| e.params.iter().any(|q| q == spec))
+                                .map(|e| {
+                                    format!(
+                                        " ({} '{}' of the model class {c}: {}, {})",
+                                        e.slot.label(),
+                                        e.name,
+                                        spec.what,
+                                        spec.unit
+                                    )
+                                })
+                        })
+                });
                 return Err(Error::input(
                     &file,
                     format!("column {p}"),
                     format!(
-                        "missing; {} needs {}: add a column {p} or pass --set {p}=VALUE",
+                        "missing{}; {} needs {}: add a column {p} or pass --set {p}=VALUE",
+                        owner.unwrap_or_default(),
                         experiment.name(),
                         needed.join(", ")
                     ),

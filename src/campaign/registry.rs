@@ -1,9 +1,9 @@
 //! Experiments by command-line name.
 
+use crate::dem::contact::ModelClass;
 use crate::dem::experiments::hopper::Hopper;
 use crate::dem::experiments::shear_box::ShearBox;
 use crate::dem::experiments::wall_impact::WallImpact;
-use crate::dem::contact::ModelClass;
 use crate::dem::experiments::Experiment;
 use crate::error::{Error, Result};
 use std::sync::Mutex;

@@ -14,10 +14,10 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::columns::MODEL_CLASS_COLUMN;
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::Meta;
-use super::columns::MODEL_CLASS_COLUMN;
 use super::table::{self, csv_line, read_table, DONE, FAILED, FIXED_COLUMNS};
 use crate::dem::experiments::{Experiment, Outcome, RunOptions};
 use crate::error::{write_atomic, Error, Result};
@@ -214,6 +214,33 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                  remove the file",
             ));
         }
+        // Before the header: another class usually means other columns too, and the class is
+        // what the user has to change.
+        let class = plan.model_class_label();
+        let other_class = t
+            .records
+            .iter()
+            .find(|(_, rec)| {
+                // `-`: an experiment without a contact law; the header tells that apart.
+                rec.get(MODEL_CLASS_COLUMN)
+                    .is_some_and(|c| c != class && c != "-" && class != "-")
+            });
+        if let (Some((line, rec)), Some("model_class")) = (
+            other_class,
+            t.header.get(MODEL_CLASS_COLUMN).map(String::as_str),
+        ) {
+            let theirs = &rec[MODEL_CLASS_COLUMN];
+            return Err(Error::input(
+                &file,
+                format!("line {line}, column model_class"),
+                format!(
+                    "run with the model class {theirs}, but this command asks for {class}: a \
+                     campaign holds one class; pass --model-class {} to resume it, or choose \
+                     another --out",
+                    theirs.replace('+', ",")
+                ),
+            ));
+        }
         if !t.header.is_empty() && t.header != columns {
             return Err(header_mismatch(&file, &columns, &t.header));
         }
@@ -245,21 +272,6 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                     ),
                 ));
             };
-            let class = plan.model_class_label();
-            if rec[MODEL_CLASS_COLUMN] != *class {
-                return Err(Error::input(
-                    &file,
-                    format!("line {line}, column model_class"),
-                    format!(
-                        "run with the model class {}, but this command asks for {}: a campaign \
-                         holds one class; pass --model-class {} to resume it, or choose \
-                         another --out",
-                        &rec[MODEL_CLASS_COLUMN],
-                        class,
-                        rec[MODEL_CLASS_COLUMN].replace('+', ",")
-                    ),
-                ));
-            }
             if planned.run_id != rec[0] {
                 return Err(Error::input(
                     &file,

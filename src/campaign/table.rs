@@ -1,6 +1,6 @@
 //! The campaign table: one CSV line per finished run.
 //!
-//! Columns: `run_id,row,status,seed`, the inputs (design columns in design order, then `--set`
+//! Columns: `run_id,row,status,seed,model_class`, the inputs (design columns in design order, then `--set`
 //! names), the experiment's responses, then `settled,steps,particles,wall_time_s,warnings,error`.
 //! Lines are appended whole, so the only damage an interruption can do is an incomplete last
 //! line, which [`read_table`] detects.
@@ -194,8 +194,13 @@ mod tests {
             },
         };
         let done = run_line(&run(), "hertz+mindlin+epsd2", &responses(), &Ok(ok)).unwrap();
-        let failed =
-            run_line(&run(), "hertz+mindlin+epsd2", &responses(), &Err("bad, \"very\"\nbad".to_string())).unwrap();
+        let failed = run_line(
+            &run(),
+            "hertz+mindlin+epsd2",
+            &responses(),
+            &Err("bad, \"very\"\nbad".to_string()),
+        )
+        .unwrap();
         (header, done, failed)
     }
 
@@ -208,11 +213,11 @@ mod tests {
         );
         assert_eq!(
             String::from_utf8(done).unwrap(),
-            "00000000000000ab,3,done,42,0.1,-2.0,1.5,NaN,true,10,1,0.250000,\"w1; w, 2\",\n"
+            "00000000000000ab,3,done,42,hertz+mindlin+epsd2,0.1,-2.0,1.5,NaN,true,10,1,0.250000,\"w1; w, 2\",\n"
         );
         assert_eq!(
             String::from_utf8(failed).unwrap(),
-            "00000000000000ab,3,failed,42,0.1,-2.0,,,,,,,,\"bad, \"\"very\"\"\nbad\"\n"
+            "00000000000000ab,3,failed,42,hertz+mindlin+epsd2,0.1,-2.0,,,,,,,,\"bad, \"\"very\"\"\nbad\"\n"
         );
     }
 
@@ -232,11 +237,11 @@ mod tests {
         file.extend(&failed);
         let t = table_of(&file);
         assert_eq!((t.records.len(), t.partial_len), (2, 0));
-        assert_eq!(&t.records[1].1[13], "bad, \"very\"\nbad");
+        assert_eq!(&t.records[1].1[14], "bad, \"very\"\nbad");
         // Cut the failed line (whose quoted field holds a newline) at every byte.
         for cut in whole..file.len() {
             let t = table_of(&file[..cut]);
-            assert_eq!(t.header.len(), 14);
+            assert_eq!(t.header.len(), 15);
             assert_eq!(t.records.len(), 1, "cut at {cut}");
             assert_eq!(t.complete_len as usize, whole, "cut at {cut}");
             assert_eq!(t.partial_len as usize, cut - whole);

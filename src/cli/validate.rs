@@ -9,9 +9,9 @@ use anyhow::Context;
 use clap::Args;
 
 use crate::campaign::registry::{experiment_by_name, ExperimentSettings};
+use crate::dem::contact::ModelClass;
 use crate::dem::experiments::{ParamSet, RunOptions};
 use crate::error::{read_to_string, Error};
-use crate::dem::contact::ModelClass;
 use crate::material::Material;
 
 #[derive(Debug, Args)]
@@ -197,7 +197,13 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
     for (name, _) in params.iter() {
         class
             .refuse_inactive(name, exp.pairs(), exp.name())
-            .map_err(|e| Error::input(a.params.display(), format!("parameters.{name}"), e.to_string()))?;
+            .map_err(|e| {
+                Error::input(
+                    a.params.display(),
+                    format!("parameters.{name}"),
+                    e.to_string(),
+                )
+            })?;
     }
     let known: Vec<&str> = exp
         .parameters()

@@ -315,10 +315,7 @@ impl Raw {
 }
 
 /// Adds every contact force (pairs, then walls) to the current forces.
-pub(crate) fn add_contact_forces<H: Host, L: ContactLaw>(
-    host: &mut H,
-    law: &L,
-) {
+pub(crate) fn add_contact_forces<H: Host, L: ContactLaw>(host: &mut H, law: &L) {
     let dt = host.params().dt;
     let raw = host.views();
     let n = raw.n;

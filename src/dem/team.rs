@@ -19,12 +19,7 @@ use super::contact::ContactLaw;
 use super::step::{Abandoned, Board, Crew, Host, Plan};
 
 /// Runs `plan` with `threads` threads; the calling thread is member 0.
-pub(crate) fn run<H, L>(
-    host: &mut H,
-    law: &L,
-    plan: Plan,
-    threads: usize,
-) -> Result<(), BlowUp>
+pub(crate) fn run<H, L>(host: &mut H, law: &L, plan: Plan, threads: usize) -> Result<(), BlowUp>
 where
     H: Host + Send,
     L: ContactLaw,

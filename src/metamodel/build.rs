@@ -94,9 +94,8 @@ fn table_class(file: &str, cols: &Columns, flag: Option<ModelClass>) -> Result<M
             // `-`: an experiment without a contact law (a test stand-in).
             None if label == "-" => return Ok(flag.unwrap_or_default()),
             None => {
-                let c = ModelClass::parse(label).map_err(|e| {
-                    Error::input(file, "column model_class", e.to_string())
-                })?;
+                let c = ModelClass::parse(label)
+                    .map_err(|e| Error::input(file, "column model_class", e.to_string()))?;
                 found = Some((label.to_string(), c));
             }
         }

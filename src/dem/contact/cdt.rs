@@ -29,6 +29,9 @@ impl Rolling for Cdt {
         if w2 == 0.0 {
             return [0.0; 3];
         }
-        scale(c.w_roll, p.rolling_friction * c.r_eff * f_n.abs() / w2.sqrt())
+        scale(
+            c.w_roll,
+            p.rolling_friction * c.r_eff * f_n.abs() / w2.sqrt(),
+        )
     }
 }

@@ -21,9 +21,9 @@ pub mod cdt;
 mod effects;
 pub mod epsd2;
 pub mod hertz;
-mod kinematics;
 #[doc(hidden)]
 pub mod kinds;
+mod kinematics;
 mod law;
 pub mod mindlin;
 mod model_class;
@@ -102,8 +102,7 @@ mod tests {
                 damping_alpha: a,
                 ..p
             };
-            power_damped::PowerDamped.normal(&contact(d, -1.0, [0.0; 3], [0.0; 3]), &p)
-                - elastic(d)
+            power_damped::PowerDamped.normal(&contact(d, -1.0, [0.0; 3], [0.0; 3]), &p) - elastic(d)
         };
         for a in [0.25, 0.5, 0.8] {
             let ratio = damp(4e-4, a) / damp(1e-4, a);

@@ -5,8 +5,8 @@ use std::fmt;
 
 use super::kinds::{cohesion, normal, rolling, tangential};
 use super::spec::{EffectSpec, Pair, ParamSpec, Slot};
-use crate::dem::param_set::ParamSet;
 use crate::dem::material::Interaction;
+use crate::dem::param_set::ParamSet;
 use crate::error::{Error, Result};
 
 pub use cohesion::Kind as CohesionKind;
@@ -207,7 +207,10 @@ impl ModelClass {
     }
 
     pub fn parameter_names(&self, pairs: &[Pair]) -> Vec<&'static str> {
-        self.parameters(pairs).into_iter().map(|(n, _, _)| n).collect()
+        self.parameters(pairs)
+            .into_iter()
+            .map(|(n, _, _)| n)
+            .collect()
     }
 
     /// Refuses a parameter that belongs to an effect of another class, or to a kind of contact

@@ -14,7 +14,12 @@ pub enum Slot {
 }
 
 impl Slot {
-    pub const ALL: [Slot; 4] = [Slot::Normal, Slot::Tangential, Slot::Rolling, Slot::Cohesion];
+    pub const ALL: [Slot; 4] = [
+        Slot::Normal,
+        Slot::Tangential,
+        Slot::Rolling,
+        Slot::Cohesion,
+    ];
 
     pub fn label(self) -> &'static str {
         match self {

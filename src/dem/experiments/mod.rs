@@ -12,9 +12,9 @@ pub mod wall_impact;
 
 use std::path::PathBuf;
 
-pub use super::param_set::ParamSet;
 use super::contact::{ModelClass, Pair};
 use super::material::{Material, Materials};
+pub use super::param_set::ParamSet;
 use crate::error::Result;
 
 /// Physically allowed ranges of the material parameters (wider than the metamodel's space: an

@@ -222,15 +222,11 @@ mod tests {
         };
         let mut p = params(20.0);
         p.set("k_t_pw", 1e3);
-        let o = spring
-            .run(&p, 1, &RunOptions::default())
-            .unwrap();
+        let o = spring.run(&p, 1, &RunOptions::default()).unwrap();
         assert!((o.get("ctr").unwrap() - 1.0).abs() < 1e-3);
         let mut p = params(75.0);
         p.set("k_t_pw", 1e7);
-        let o = spring
-            .run(&p, 1, &RunOptions::default())
-            .unwrap();
+        let o = spring.run(&p, 1, &RunOptions::default()).unwrap();
         let want = 1.0 - 0.092 * 1.98 / 75f64.to_radians().tan();
         assert!((o.get("ctr").unwrap() - want).abs() < 0.01 * want);
     }
@@ -256,7 +252,10 @@ mod tests {
         let e = spring.check(&p).unwrap_err().to_string();
         assert!(e.contains("k_t_pw"), "{e}");
         // A missing effect parameter is named with its effect.
-        let e = WallImpact::default().check(&params(30.0)).unwrap_err().to_string();
+        let e = WallImpact::default()
+            .check(&params(30.0))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("mu_r_pw") && e.contains("epsd2"), "{e}");
     }
 
@@ -278,9 +277,7 @@ mod tests {
         // The same sphere at a sensible speed is a result, and within the checks.
         let mut p = params(30.0);
         p.set("E_p", 5e6).set("E_w", 5e6).set("impact_speed", 0.5);
-        let o = exp()
-            .run(&p, 1, &RunOptions::default())
-            .unwrap();
+        let o = exp().run(&p, 1, &RunOptions::default()).unwrap();
         assert!((0.0..=1.0).contains(&o.get("cnr").unwrap()));
     }
 }
