@@ -313,19 +313,22 @@ fn quasi_static_pull_off_force_is_the_maximum_of_cohesion_minus_hertz() {
 // A resting cohesive bed with EPSD2.
 
 /// A bed of `n` spheres (d 1.9-2.1 mm) in a closed box `hi` (lower corner at the origin),
-/// starting from a loose jittered lattice (seed 1), poured by gravity.
+/// starting from a loose jittered lattice, poured by gravity.
 struct Bed {
     n: usize,
     hi: V3,
     ced: f64,
     dt: f64,
     model: &'static [&'static str],
+    seed: u64,
 }
 
 impl Bed {
     fn start(&self) -> (Vec<V3>, Vec<f64>) {
-        mbgc::studies::dem_scene::jittered_lattice(self.n, [0.0; 3], self.hi, 1.9e-3, 2.1e-3, 1)
-            .unwrap()
+        mbgc::studies::dem_scene::jittered_lattice(
+            self.n, [0.0; 3], self.hi, 1.9e-3, 2.1e-3, self.seed,
+        )
+        .unwrap()
     }
 
     fn simulation(&self) -> Simulation {
@@ -396,9 +399,214 @@ fn explore_bed() {
         ced,
         dt: 1e-5,
         model: model.leak(),
+        seed: var("MBGC_BED_SEED", "1").parse().unwrap(),
     };
     let every = (steps / 50).max(1);
     for (t, r, k) in bed.series(steps, every) {
         println!("{t:.4} {r:.4e} {k:.4e}");
     }
+}
+
+impl Bed {
+    /// The same bed as a LIGGGHTS 3.8 case: `steps` steps before the dump, then 1000 more.
+    fn liggghts_case(&self, steps: u64) -> mbgc::liggghts::LiggghtsCase {
+        let (positions, radii) = self.start();
+        mbgc::liggghts::LiggghtsCase {
+            positions,
+            radii,
+            density: RHO,
+            youngs_modulus: E,
+            poisson: NU,
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: 0.3,
+            wall_youngs_modulus: E,
+            wall_restitution: 0.5,
+            wall_friction: 0.5,
+            wall_rolling_friction: 0.3,
+            cohesion_energy_density: self.ced,
+            wall_cohesion_energy_density: self.ced,
+            box_lo: [0.0; 3],
+            box_hi: self.hi,
+            gravity: G,
+            dt: self.dt,
+            skin: 0.5 * R,
+            settle_steps: steps,
+            timed_steps: 1000,
+        }
+    }
+
+    /// LIGGGHTS' series from its thermo output (every 1000 steps: step atoms ke c_rke), in the
+    /// units of [`Bed::series`]; None when LIGGGHTS stopped with an error (the message printed).
+    fn liggghts_series(&self, steps: u64) -> Option<Vec<(f64, f64, f64)>> {
+        // MBGC_BED_DIR keeps the deck and log, for running variants of the deck by hand.
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = match std::env::var("MBGC_BED_DIR") {
+            Ok(d) => std::path::PathBuf::from(d).join(format!("ced{}", self.ced)),
+            Err(_) => tmp.path().to_path_buf(),
+        };
+        let case = self.liggghts_case(steps);
+        if let Err(e) = mbgc::liggghts::closed_box::run(&dir, &case) {
+            eprintln!("LIGGGHTS failed: {e}");
+        }
+        let log = std::fs::read_to_string(dir.join(mbgc::liggghts::closed_box::LOG_FILE))
+            .unwrap_or_default();
+        let unit = self.n as f64 * mass() * G * 2.0 * R;
+        let mut out = Vec::new();
+        for line in log.lines() {
+            let w: Vec<f64> = line
+                .split_whitespace()
+                .map_while(|w| w.parse().ok())
+                .collect();
+            if w.len() == 4 && w[0] > 0.0 && w[0] as u64 <= steps {
+                out.push((w[0] * self.dt, w[3] / unit, w[2] / unit));
+            }
+        }
+        out.dedup_by(|a, b| a.0 == b.0);
+        Some(out)
+    }
+}
+
+/// Prints mbgc's and LIGGGHTS 3.8's kinetic energies of the resting bed, per particle in units of
+/// m g d, at each cohesion level of `MBGC_BED_CEDS` (default 0,1e5,3e5,1e6), for
+/// `MBGC_BED_STEPS` steps (default 200000, 2 s). Run with
+/// `cargo test --release --test cohesion bed_vs_liggghts -- --ignored --nocapture`.
+#[test]
+#[ignore = "needs LIGGGHTS 3.8 (liggghts on PATH or MBGC_LIGGGHTS) and a few minutes"]
+fn bed_vs_liggghts() {
+    if mbgc::liggghts::find_binary().is_none() {
+        eprintln!("no LIGGGHTS binary: skipped");
+        return;
+    }
+    let var = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.to_string());
+    let steps: u64 = var("MBGC_BED_STEPS", "200000").parse().unwrap();
+    for ced in var("MBGC_BED_CEDS", "0,1e5,3e5,1e6").split(',') {
+        let bed = Bed {
+            n: 300,
+            hi: [0.012, 0.012, 0.06],
+            ced: ced.parse().unwrap(),
+            dt: 1e-5,
+            model: &["hertz", "epsd2", "sjkr"],
+            seed: 1,
+        };
+        let ours = bed.series(steps, 1000);
+        let theirs = bed.liggghts_series(steps).unwrap_or_default();
+        println!("ced {ced}: t  mbgc E_rot E_trans  LIGGGHTS E_rot E_trans  (per particle, m g d)");
+        for k in (9..ours.len().max(theirs.len())).step_by(10) {
+            let o = ours
+                .get(k)
+                .copied()
+                .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+            let l = theirs
+                .get(k)
+                .copied()
+                .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+            let t = if o.0.is_nan() { l.0 } else { o.0 };
+            println!("{t:.3} {:.3e} {:.3e}  {:.3e} {:.3e}", o.1, o.2, l.1, l.2);
+        }
+    }
+}
+
+/// Two cohesive spheres at their equilibrium overlap (no gravity, ced 3e5, dt 1e-6), both set
+/// spinning and j also moving across the normal, so that the pair rolls and turns round itself.
+/// With `roll_only`, only i spins, about an axis across the normal: pure relative rolling.
+fn spinning_pair(roll_only: bool) -> Simulation {
+    let ced = 3e5;
+    let d_eq = bisect(
+        |d| hertz(0.5 * R, d) - ced * lens_area(R, R, d),
+        1e-12,
+        1.5 * R,
+    );
+    let mut sim = two_spheres(d_eq, cohesive(ced, 0.5), 1e-6);
+    for k in 0..2 {
+        let (v, w) = match (roll_only, sim.particles.id[k]) {
+            (true, 0) => ([0.0; 3], [0.0, 0.0, 40.0]),
+            (true, _) => ([0.0; 3], [0.0; 3]),
+            (false, 0) => ([0.0; 3], [10.0, -30.0, 40.0]),
+            (false, _) => ([0.0, 0.02, 0.03], [0.0, 20.0, -10.0]),
+        };
+        sim.particles.v[k] = v;
+        sim.particles.w[k] = w;
+    }
+    sim
+}
+
+/// LIGGGHTS 3.8 caps EPSD2 with the Hertz force and leaves the stored torque in the lab frame;
+/// on this pair its rotational energy then doubles every 0.02 s (x 5700 in 0.4 s, the deck in
+/// the report). Whatever the cap, the spin must never exceed the energy the pair started with.
+#[test]
+fn a_spinning_cohesive_pair_never_gains_energy() {
+    let mut sim = spinning_pair(false);
+    let (t0, r0) = sim.kinetic_energy();
+    let mut largest: f64 = 0.0;
+    for _ in 0..40 {
+        sim.run(10_000).unwrap();
+        let (t, r) = sim.kinetic_energy();
+        largest = largest.max(t + r);
+    }
+    eprintln!(
+        "spinning pair: start {:.4e} J, largest {largest:.4e} J",
+        t0 + r0
+    );
+    assert!(largest <= 1.05 * (t0 + r0), "{largest} > {}", t0 + r0);
+}
+
+/// A cohesive contact at rest carries no net normal force: the Hertz force balances the
+/// adhesion. Rolling resistance must still act (it does in JKR: the contact circle has a finite
+/// radius at zero load). With the cap at mu_r R* |F_hertz - F_coh| the spinning sphere rolls
+/// on its partner for ever; with the cap at the Hertz force the relative rolling angle is that of
+/// an elastic spring, ~cap / k_r.
+#[test]
+#[ignore = "needs epsd2_fix.patch (EPSD2 capped by the load before cohesion): un-ignore on merge"]
+fn a_cohesive_contact_at_rest_resists_rolling() {
+    let mut sim = spinning_pair(true);
+    let dt = sim.dt;
+    let mut angle = [0.0f64; 3];
+    let mut largest: f64 = 0.0;
+    for _ in 0..50_000 {
+        sim.run(1).unwrap();
+        let (a, b) = (sim.particles.x[0], sim.particles.x[1]);
+        let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let n = [d[0] / len, d[1] / len, d[2] / len];
+        let (wa, wb) = (sim.particles.w[0], sim.particles.w[1]);
+        let w = [wa[0] - wb[0], wa[1] - wb[1], wa[2] - wb[2]];
+        let wn = w[0] * n[0] + w[1] * n[1] + w[2] * n[2];
+        for k in 0..3 {
+            angle[k] += (w[k] - wn * n[k]) * dt;
+        }
+        largest = largest.max((angle[0].powi(2) + angle[1].powi(2) + angle[2].powi(2)).sqrt());
+    }
+    eprintln!("relative rolling angle: largest {largest:.3e} rad in 0.05 s");
+    // Free rolling would turn 40 rad/s x 0.05 s = 2 rad.
+    assert!(
+        largest < 0.05,
+        "rolled {largest} rad: no rolling resistance"
+    );
+}
+
+/// A small cohesive bed (40 spheres, d 2 mm, E 5e6, ced 1e5, mu_r 0.3) poured in a closed box:
+/// after settling, the rotational energy stays a small fraction of m g d per particle and does
+/// not grow. (LIGGGHTS 3.8 reaches 20 m g d per particle in the 300-sphere bed by t = 1 s.)
+#[test]
+fn a_resting_cohesive_bed_keeps_its_rotational_energy_bounded() {
+    let bed = Bed {
+        n: 40,
+        hi: [0.008, 0.008, 0.02],
+        ced: 1e5,
+        dt: 1e-5,
+        model: &["hertz", "epsd2", "sjkr"],
+        seed: 1,
+    };
+    let series = bed.series(40_000, 1000);
+    let settled: Vec<f64> = series.iter().filter(|s| s.0 > 0.15).map(|s| s.1).collect();
+    let third = settled.len() / 3;
+    let early = settled[..third].iter().copied().fold(0.0, f64::max);
+    let late = settled[2 * third..].iter().copied().fold(0.0, f64::max);
+    eprintln!("bed E_rot per particle / (m g d): early max {early:.3e}, late max {late:.3e}");
+    assert!(
+        late < 1e-2,
+        "rotational energy {late} m g d per particle at rest"
+    );
+    assert!(late <= 2.0 * early + 1e-6, "growing: {early} -> {late}");
 }
