@@ -51,6 +51,10 @@ pub struct LiggghtsCase {
     pub wall_friction: f64,
     /// Particle-wall rolling friction coefficient (EPSD2).
     pub wall_rolling_friction: f64,
+    /// Particle-particle cohesion energy density, J/m^3 (`cohesion sjkr`); 0 for none.
+    pub cohesion_energy_density: f64,
+    /// Particle-wall cohesion energy density, J/m^3 (`cohesion sjkr` on the walls); 0 for none.
+    pub wall_cohesion_energy_density: f64,
     pub box_lo: [f64; 3],
     pub box_hi: [f64; 3],
     /// Magnitude of gravity, m/s^2, acting in -z.
@@ -112,6 +116,11 @@ impl LiggghtsCase {
             ("rolling_friction", self.rolling_friction),
             ("wall_friction", self.wall_friction),
             ("wall_rolling_friction", self.wall_rolling_friction),
+            ("cohesion_energy_density", self.cohesion_energy_density),
+            (
+                "wall_cohesion_energy_density",
+                self.wall_cohesion_energy_density,
+            ),
         ] {
             if !(v >= 0.0 && v.is_finite()) {
                 return bad(field, v, "a finite number >= 0");
@@ -206,9 +215,20 @@ pub fn data_file(case: &LiggghtsCase) -> String {
     s
 }
 
+/// The contact model keywords of `pair_style gran` or `fix wall/gran`, with `cohesion sjkr` only
+/// when that contact is cohesive, so that decks without cohesion stay as they were.
+fn model_keywords(cohesive: bool) -> &'static str {
+    if cohesive {
+        "model hertz tangential history cohesion sjkr rolling_friction epsd2"
+    } else {
+        "model hertz tangential history rolling_friction epsd2"
+    }
+}
+
 /// The LIGGGHTS input script: settle, dump the settled state, then the timed run.
 pub fn input_script(case: &LiggghtsCase) -> String {
-    const MODEL: &str = "model hertz tangential history rolling_friction epsd2";
+    let pair_model = model_keywords(case.cohesion_energy_density > 0.0);
+    let wall_model = model_keywords(case.wall_cohesion_energy_density > 0.0);
     let (lo, hi) = (case.box_lo, case.box_hi);
     // 2x2 matrices over (particle, wall); the wall-wall entry is never used.
     let pair = |pp: f64, pw: f64| format!("2 {} {} {} {}", num(pp), num(pw), num(pw), num(pw));
@@ -231,8 +251,9 @@ pub fn input_script(case: &LiggghtsCase) -> String {
          fix m3 all property/global coefficientRestitution peratomtypepair {rest}\n\
          fix m4 all property/global coefficientFriction peratomtypepair {fric}\n\
          fix m5 all property/global coefficientRollingFriction peratomtypepair {roll}\n\
+         {cohesion}\
          \n\
-         pair_style      gran {MODEL}\n\
+         pair_style      gran {pair_model}\n\
          pair_coeff      * *\n\
          timestep        {dt}\n\
          fix gravity all gravity {g} vector 0.0 0.0 -1.0",
@@ -243,6 +264,19 @@ pub fn input_script(case: &LiggghtsCase) -> String {
         rest = pair(case.restitution, case.wall_restitution),
         fric = pair(case.friction, case.wall_friction),
         roll = pair(case.rolling_friction, case.wall_rolling_friction),
+        // The wall-wall entry of the matrix must be given but is never used.
+        cohesion = if case.cohesion_energy_density > 0.0 || case.wall_cohesion_energy_density > 0.0
+        {
+            format!(
+                "fix m6 all property/global cohesionEnergyDensity peratomtypepair {}\n",
+                pair(
+                    case.cohesion_energy_density,
+                    case.wall_cohesion_energy_density
+                )
+            )
+        } else {
+            String::new()
+        },
         dt = num(case.dt),
         g = num(case.gravity),
     );
@@ -250,7 +284,7 @@ pub fn input_script(case: &LiggghtsCase) -> String {
         for (side, v) in [("lo", lo[k]), ("hi", hi[k])] {
             let _ = writeln!(
                 s,
-                "fix wall_{axis}{side} all wall/gran {MODEL} primitive type 2 {axis}plane {}",
+                "fix wall_{axis}{side} all wall/gran {wall_model} primitive type 2 {axis}plane {}",
                 num(v)
             );
         }
@@ -346,6 +380,8 @@ mod tests {
             wall_restitution: 0.5,
             wall_friction: 0.5,
             wall_rolling_friction: 0.3,
+            cohesion_energy_density: 0.0,
+            wall_cohesion_energy_density: 0.0,
             box_lo: [0.0; 3],
             box_hi: [0.12, 0.12, 0.36],
             gravity: 9.81,
@@ -379,6 +415,33 @@ mod tests {
         assert!(script.contains("coefficientRestitution peratomtypepair 2 5e-1 5e-1 5e-1 5e-1"));
         assert!(script.contains("run             40000\nwrite_dump"));
         assert!(script.trim_end().ends_with("run             20000"));
+    }
+
+    #[test]
+    fn cohesion_is_written_only_when_asked_for() {
+        let plain = input_script(&small_case());
+        assert!(!plain.contains("cohesion"));
+        assert!(plain.contains("peratomtypepair 2 3e-1 3e-1 3e-1 3e-1\n\npair_style"));
+        let mut case = small_case();
+        case.cohesion_energy_density = 3e5;
+        let script = input_script(&case);
+        assert!(script.contains(
+            "fix m6 all property/global cohesionEnergyDensity peratomtypepair 2 3e5 0e0 0e0 0e0\n\n\
+             pair_style      gran model hertz tangential history cohesion sjkr rolling_friction \
+             epsd2\n"
+        ));
+        assert_eq!(
+            script.matches("cohesion sjkr").count(),
+            1,
+            "walls not cohesive"
+        );
+        case.wall_cohesion_energy_density = 1e5;
+        let script = input_script(&case);
+        assert!(script.contains("cohesionEnergyDensity peratomtypepair 2 3e5 1e5 1e5 1e5\n"));
+        assert_eq!(script.matches("cohesion sjkr").count(), 7);
+        case.wall_cohesion_energy_density = -1.0;
+        let msg = case.validate().unwrap_err().to_string();
+        assert!(msg.contains("wall_cohesion_energy_density"), "{msg}");
     }
 
     #[test]

@@ -219,6 +219,8 @@ pub fn liggghts_case(
         wall_restitution: spec.restitution,
         wall_friction: spec.friction,
         wall_rolling_friction: spec.rolling_friction,
+        cohesion_energy_density: 0.0,
+        wall_cohesion_energy_density: 0.0,
         box_lo: [0.0; 3],
         box_hi: spec.box_hi,
         gravity: spec.gravity,

@@ -55,12 +55,27 @@ impl<N: NormalForce, T: Tangential, R: Rolling, C: Cohesion> ContactLaw for Law<
             f_normal = 0.0;
         }
         let f_n = f_normal - self.cohesion.cohesion(c, p);
-        let f_t = self.tangential.force(c, p, f_n, &mut h.shear, dt);
+        // The Coulomb and rolling caps scale with the load that presses the contact: the normal
+        // force before cohesion, i.e. the net load plus the adhesive load (Thornton & Yin 1991's
+        // mu (P + 2 P_c) for JKR; LIGGGHTS 3.8's sjkr without `tangential_reduce` does the same).
+        // The net force vanishes in a cohesive contact at rest, which would leave it without
+        // friction and rolling resistance. Without cohesion both are the same force.
+        let f_t = self.tangential.force(c, p, f_normal, &mut h.shear, dt);
         // Torque of the tangential force: lever arm -c_i n for i, +c_j n for j (force -F_t).
         let nxf = cross(c.n, f_t);
         let mut torque_i = scale(nxf, -c.lever_i);
         let mut torque_j = scale(nxf, -c.lever_j);
-        let m = self.rolling.torque(c, p, f_n, &mut h.rolling, dt);
+        if C::ACTIVE {
+            // Keep the stored rolling torque in the tangent plane, as the tangential spring is.
+            // When the normal turns (a cohesive pair rolling round itself) a torque left in the
+            // lab frame gains a twisting part that nothing opposes; with cohesion the caps no
+            // longer trim it and it spins pairs up without bound (LIGGGHTS 3.8 does; see
+            // tests/cohesion.rs). Without cohesion mbgc keeps LIGGGHTS' update bit for bit, the
+            // one its shear box is validated against.
+            let twist = dot(h.rolling, c.n);
+            sub_assign(&mut h.rolling, scale(c.n, twist));
+        }
+        let m = self.rolling.torque(c, p, f_normal, &mut h.rolling, dt);
         sub_assign(&mut torque_i, m);
         add_assign(&mut torque_j, m);
         ContactOutput {
