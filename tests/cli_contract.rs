@@ -247,7 +247,7 @@ fn impact_files(dir: &Path, measured: &str) -> (PathBuf, PathBuf) {
     std::fs::write(
         &params,
         "[parameters]\nE_p = 2e11\nnu_p = 0.3\nrho_p = 7800\nd50 = 10\nE_w = 2e11\ne_pw = 0.8\n\
-         mu_pw = 0.1\nimpact_speed = 1.0\nimpact_angle = 0\n",
+         mu_pw = 0.1\nimpact_speed = 1.0\nimpact_angle = 0\n[model]\nclass = \"hertz,mindlin\"\n",
     )
     .unwrap();
     (mat, params)
@@ -487,6 +487,8 @@ fn every_reporting_command_prints_one_json_object_with_json() {
         "mu_pw=0.1",
         "--set",
         "impact_speed=1",
+        "--model-class",
+        "hertz,mindlin",
     ];
     let mut args = vec![
         "simulate",

@@ -36,7 +36,8 @@ crate::__effect_registry!(__define_kinds {});
 #[macro_export]
 macro_rules! with_law {
     ($class:expr, |$law:ident| $body:expr) => {{
-        let class: $crate::dem::contact::ModelClass = $class;
+        // A `ModelClass` (not named here: this file must not import the file that uses it).
+        let class = $class;
         $crate::__effect_registry!(__law_dispatch { { class, |$law| $body } [] })
     }};
 }
@@ -47,7 +48,7 @@ macro_rules! with_law {
 #[macro_export]
 macro_rules! __law_dispatch {
     (@next { $m:ident, |$law:ident| $body:expr } [$($t:ty),*] {}) => {{
-        let $law = $crate::dem::contact::Law::<$($t),*> {
+        let $law = $crate::dem::contact::law::Law::<$($t),*> {
             limit_force: $m.limit_force,
             ..::core::default::Default::default()
         };

@@ -24,7 +24,8 @@ pub mod hertz;
 #[doc(hidden)]
 pub mod kinds;
 mod kinematics;
-mod law;
+#[doc(hidden)]
+pub mod law;
 pub mod mindlin;
 mod model_class;
 pub mod none;
