@@ -197,7 +197,11 @@ fn validate_reruns_the_dem_experiment() {
     ]);
     assert!(e.contains("--model-class") && e.contains("p.toml"), "{e}");
     let text = std::fs::read_to_string(&params).unwrap();
-    std::fs::write(&params, text.replace("mu_pw = 0.1", "mu_pw = 0.1\nced_pw = 1e4")).unwrap();
+    std::fs::write(
+        &params,
+        text.replace("mu_pw = 0.1", "mu_pw = 0.1\nced_pw = 1e4"),
+    )
+    .unwrap();
     let e = fails(&[
         "validate",
         "--material",

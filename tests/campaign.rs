@@ -1043,7 +1043,12 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
         "impact_speed=3.9",
     ];
     let mut args = base.clone();
-    args.extend(["--model-class", "hertz,mindlin,epsd2", "--set", "mu_r_pw=0.1"]);
+    args.extend([
+        "--model-class",
+        "hertz,mindlin,epsd2",
+        "--set",
+        "mu_r_pw=0.1",
+    ]);
     let e = fails(&args);
     assert!(
         e.contains("column model_class") && e.contains("--model-class hertz,mindlin"),
@@ -1070,7 +1075,10 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
     args[6] = s(&fresh);
     args.extend(["--model-class", "hertz,mindlin", "--set", "mu_pp=0.4"]);
     let e = fails(&args);
-    assert!(e.contains("mu_pp") && e.contains("particle-particle"), "{e}");
+    assert!(
+        e.contains("mu_pp") && e.contains("particle-particle"),
+        "{e}"
+    );
     assert!(!fresh.exists());
     // With cohesion switched on, the same value runs, under other run ids.
     let mut args = base.clone();
@@ -1078,7 +1086,9 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
     args.extend(["--model-class", "hertz,mindlin,sjkr", "--set", "ced_pw=1e4"]);
     ok(&args);
     let (_, cohesive) = read(&fresh);
-    assert!(cohesive.iter().all(|r| r["model_class"] == "hertz+mindlin+sjkr"));
+    assert!(cohesive
+        .iter()
+        .all(|r| r["model_class"] == "hertz+mindlin+sjkr"));
     assert_ne!(cohesive[0]["run_id"], rows[0]["run_id"]);
     // Tables of different classes with the same columns do not merge.
     let strict = d.join("strict.csv");

@@ -217,14 +217,11 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
         // Before the header: another class usually means other columns too, and the class is
         // what the user has to change.
         let class = plan.model_class_label();
-        let other_class = t
-            .records
-            .iter()
-            .find(|(_, rec)| {
-                // `-`: an experiment without a contact law; the header tells that apart.
-                rec.get(MODEL_CLASS_COLUMN)
-                    .is_some_and(|c| c != class && c != "-" && class != "-")
-            });
+        let other_class = t.records.iter().find(|(_, rec)| {
+            // `-`: an experiment without a contact law; the header tells that apart.
+            rec.get(MODEL_CLASS_COLUMN)
+                .is_some_and(|c| c != class && c != "-" && class != "-")
+        });
         if let (Some((line, rec)), Some("model_class")) = (
             other_class,
             t.header.get(MODEL_CLASS_COLUMN).map(String::as_str),

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod bench;
 pub mod calibrate;
 pub mod campaign;
+pub mod effects;
 pub mod export;
 pub mod fit;
 pub mod metrics;
@@ -36,6 +37,8 @@ pub enum Command {
     Psd(psd::PsdArgs),
     /// Run a calibration experiment for every row of a design (resumable, shardable).
     Simulate(simulate::SimulateArgs),
+    /// The physical effects a model class can switch on, with their parameters.
+    Effects(effects::EffectsArgs),
     /// Campaign tables: merge shards, report progress.
     Campaign(campaign::CampaignArgs),
     /// Fit one equation per response by genetic-programming symbolic regression.
@@ -58,6 +61,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Metrics(a) => metrics::run(&a),
         Command::Psd(a) => psd::run(&a),
         Command::Simulate(a) => simulate::run(&a),
+        Command::Effects(a) => effects::run(&a),
         Command::Campaign(a) => campaign::run(&a),
         Command::Fit(a) => fit::run(&a),
         Command::Predict(a) => predict::run(&a),

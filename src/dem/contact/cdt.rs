@@ -13,7 +13,7 @@ use crate::dem::vec3::*;
 pub const SPEC: EffectSpec = EffectSpec {
     name: "cdt",
     slot: Slot::Rolling,
-    what: "constant torque mu_r R* |F_n| against the relative rolling rotation",
+    what: "constant torque mu_r R* F_n against the relative rolling rotation",
     params: &[ROLLING_FRICTION],
     install: |v, i| i.rolling_friction = v[0],
     liggghts: Some("rolling_friction cdt"),

@@ -15,13 +15,13 @@ pub const ROLLING_FRICTION: ParamSpec = ParamSpec {
     range: (0.0, 10.0),
     default: None,
     variable: true,
-    what: "rolling friction coefficient (torque cap mu_r R* |F_n|)",
+    what: "rolling friction coefficient (torque cap mu_r R* F_n)",
 };
 
 pub const SPEC: EffectSpec = EffectSpec {
     name: "epsd2",
     slot: Slot::Rolling,
-    what: "elastic-plastic spring on the rolling rotation, k_r = k_t R*^2, capped at mu_r R* |F_n|",
+    what: "elastic-plastic spring on the rolling rotation, k_r = k_t R*^2, capped at mu_r R* F_n",
     params: &[ROLLING_FRICTION],
     install: |v, i| i.rolling_friction = v[0],
     liggghts: Some("rolling_friction epsd2"),

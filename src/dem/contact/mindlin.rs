@@ -31,7 +31,7 @@ pub const STIFFNESS: ParamSpec = ParamSpec {
 pub const SPEC: EffectSpec = EffectSpec {
     name: "mindlin",
     slot: Slot::Tangential,
-    what: "Mindlin's history spring k_t = 8 G* sqrt(R* d) with the spring capped at mu |F_n| \
+    what: "Mindlin's history spring k_t = 8 G* sqrt(R* d) with the spring capped at mu F_n \
            (LIGGGHTS 3.8 `tangential history`)",
     params: &[FRICTION],
     install: |v, i| i.friction = v[0],
