@@ -499,6 +499,40 @@ expr = ["e_pw <= e_pp", "mu_pp + 0.5*mu_r_pp >= 0.2"]
 "#;
 
     #[test]
+    fn the_model_table_names_a_class_and_refuses_parameters_of_other_effects() {
+        let m = Material::from_toml_str(GOOD, "g.toml").unwrap();
+        assert_eq!(m.model_class, None, "no [model]: whatever the metamodel's");
+        let sticky = format!("{GOOD}[model]\nclass = \"hertz,mindlin,epsd2,sjkr\"\n");
+        let m = Material::from_toml_str(&sticky, "g.toml").unwrap();
+        assert_eq!(
+            m.model_class,
+            Some(ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap())
+        );
+        let fixed = sticky.replace("mu_pw = 0.363", "mu_pw = 0.363\nced_pw = 1e4");
+        assert!(Material::from_toml_str(&fixed, "g.toml").is_ok());
+        let rolling_free = GOOD.replace("rho_p = [2000, 3000]", "mu_r_pp = [0, 1]")
+            + "[model]\nclass = \"hertz,mindlin\"\n";
+        let e = Material::from_toml_str(&rolling_free, "g.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("g.toml") && e.contains("bounds.mu_r_pp") && e.contains("epsd2"),
+            "{e}"
+        );
+        for (bad, field) in [
+            ("class = \"hertz,jkr\"", "model.class"),
+            ("klass = \"hertz\"", "klass"),
+            ("", "model.class"),
+        ] {
+            let text = format!("{GOOD}[model]\n{bad}\n");
+            let e = Material::from_toml_str(&text, "g.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("g.toml") && e.contains(field), "{bad}: {e}");
+        }
+    }
+
+    #[test]
     fn reads_a_material() {
         let m = Material::from_toml_str(GOOD, "g.toml").unwrap();
         assert_eq!(m.name, "Gravel 8/16");

@@ -329,6 +329,27 @@ e_pp = { min = 0.05, max = 0.95, fixed = 0.6 }
 "#;
 
     #[test]
+    fn the_model_class_decides_which_effect_parameters_a_space_may_hold() {
+        let s = Space::from_toml_str(GOOD, "good.toml").unwrap();
+        assert_eq!(s.class(), ModelClass::default());
+        let cohesive = format!("{GOOD}ced_pp = {{ unit = \"J/m3\", min = 0, max = 3e4 }}\n");
+        let e = Space::from_toml_str(&cohesive, "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("s.toml") && e.contains("parameters.ced_pp") && e.contains("sjkr"),
+            "{e}"
+        );
+        let with_model = format!("{cohesive}[model]\nclass = \"hertz,mindlin,epsd2,sjkr\"\n");
+        let s = Space::from_toml_str(&with_model, "s.toml").unwrap();
+        assert_eq!(s.class().to_string(), "hertz,mindlin,epsd2,sjkr");
+        let e = Space::from_toml_str(&format!("{GOOD}[model]\nclass = \"hertz\"\n"), "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("model.class") && e.contains("tangential"), "{e}");
+    }
+
+    #[test]
     fn parses_and_maps_round_trip() {
         let s = Space::from_toml_str(GOOD, "good.toml").unwrap();
         assert_eq!(s.dim(), 2);

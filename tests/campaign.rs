@@ -1108,4 +1108,64 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
         e.contains("column model_class") && e.contains("hertz+strict-coulomb"),
         "{e}"
     );
+
+    // The metamodel records the class of its data; calibrate refuses a material needing more.
+    let model = d.join("m.json");
+    let fit = |extra: &[&str]| {
+        let mut args = vec![
+            "fit",
+            "--data",
+            s(&out),
+            "--inputs",
+            "impact_angle,mu_pw",
+            "--targets",
+            "ctr",
+            "--out",
+            s(&model),
+            "--population",
+            "200",
+            "--generations",
+            "3",
+            "--no-figures",
+        ];
+        args.extend(extra);
+        args.iter().map(|a| a.to_string()).collect::<Vec<_>>()
+    };
+    ok(&arg_refs(&fit(&[])));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(m["model_class"], "hertz,mindlin");
+    let e = fails(&arg_refs(&fit(&["--model-class", "hertz,mindlin,epsd2"])));
+    assert!(
+        e.contains("--model-class") && e.contains("hertz,mindlin"),
+        "{e}"
+    );
+    let material = |extra: &str| {
+        write(
+            d,
+            "steel.toml",
+            &format!("[measured]\nctr = {{ value = 0.7, sd = 0.05 }}\n{extra}"),
+        )
+    };
+    let calibrate = |mat: &Path| {
+        vec![
+            "calibrate".to_string(),
+            "--material".into(),
+            s(mat).into(),
+            "--model".into(),
+            s(&model).into(),
+            "--starts".into(),
+            "4".into(),
+        ]
+    };
+    ok(&arg_refs(&calibrate(&material(""))));
+    let e = fails(&arg_refs(&calibrate(&material(
+        "[model]\nclass = \"hertz,mindlin,epsd2\"\n",
+    ))));
+    assert!(
+        e.contains("model.class") && e.contains("needs epsd2"),
+        "{e}"
+    );
+    let e = fails(&arg_refs(&calibrate(&material("[fixed]\nced_pw = 1e4\n"))));
+    assert!(e.contains("fixed.ced_pw") && e.contains("sjkr"), "{e}");
 }

@@ -72,12 +72,22 @@ impl Input {
     }
 }
 
+/// A number that serde_json wrote as `null` (it writes NaN so) reads back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct Metrics {
     pub rows: usize,
+    // NaN (R^2 of a single test row) is written as JSON null, and must read back.
+    #[serde(deserialize_with = "nan_if_null")]
     pub r2: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub rmse: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub mae: f64,
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_abs_error: f64,
 }
 
