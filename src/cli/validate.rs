@@ -212,6 +212,9 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         .collect();
     for s in &a.set {
         let (k, v) = crate::campaign::parse_set(s)?;
+        class
+            .refuse_inactive(&k, exp.pairs(), exp.name())
+            .map_err(|e| anyhow::anyhow!("--set {s}: {e}"))?;
         if !known.contains(&k.as_str()) {
             anyhow::bail!(
                 "--set {s}: {} has no parameter {k}; expected one of {}",
