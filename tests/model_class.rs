@@ -27,8 +27,7 @@ fn plan_error(exp: &dyn Experiment, params: &ParamSet, dir: &Path) -> String {
     )
     .unwrap();
     Plan::new(exp, &design, &[], 1, &ExperimentSettings::default(), None)
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string()
 }
 
