@@ -68,6 +68,7 @@ mod tests {
             run_id("wall-impact", &ParamSet::from_pairs(&[("b", 2.0), ("a", 1.5)]), 7, &s, None),
             run_id("wall-impact", &inputs(2.0), 7, &ExperimentSettings {
                     box_scale: Some(2.0),
+                    model_class: None,
                 }, None),
         ];
         for o in others {
