@@ -7,12 +7,20 @@
 //! `delete_atoms` must not compress the atom ids: LIGGGHTS keys the contact history by partner
 //! id, and renumbering after every deletion scrambled the histories of the remaining contacts
 //! (the replayed shear angle came out 2-3 degrees low until `compress no`).
+//!
+//! The contact law is the recorded run's model class, effect by effect (`EffectSpec::liggghts`).
+//! With `sjkr` both codes cap the tangential spring and the EPSD2 torque with the normal force
+//! before cohesion (LIGGGHTS 3.8's default, `tangential_reduce off`; mbgc's choice, see
+//! `dem/contact/law.rs`). They still differ in one thing: with cohesion on, mbgc keeps the stored
+//! rolling torque in the tangent plane, LIGGGHTS does not (its cohesive beds gain rotational
+//! energy, tests/cohesion.rs).
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use super::mesh::rect_stl;
 use super::number::num;
+use crate::dem::contact::{CohesionKind, ModelClass, Slot};
 use crate::dem::experiments::shear_box::RunRecord;
 use crate::dem::experiments::ParamSet;
 use crate::error::{write_atomic, Error, Result};
@@ -25,12 +33,66 @@ pub const LOG: &str = "log.shear_box";
 pub const FILLED_DUMP: &str = "filled.dump";
 pub const FINAL_DUMP: &str = "final.dump";
 
-/// Writes the data file, the wall meshes and the input script into `dir`.
+/// The contact law in LIGGGHTS' words: the models (after `pair_style gran` and `wall/gran`) and
+/// the settings, which LIGGGHTS reads only at the end of the command (after the mesh or
+/// primitive of a wall).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GranModel {
+    pub models: String,
+    /// Empty, or starting with a space.
+    pub settings: String,
+}
+
+/// The order in which LIGGGHTS 3.8 accepts the models ("wrong keyword order" otherwise).
+const LIGGGHTS_ORDER: [Slot; 4] = [
+    Slot::Normal,
+    Slot::Tangential,
+    Slot::Cohesion,
+    Slot::Rolling,
+];
+
+/// Refuses what LIGGGHTS 3.8 cannot replay identically, naming the effect.
+pub fn gran_model(class: &ModelClass) -> Result<GranModel> {
+    let effects = class.effects();
+    for e in &effects {
+        if e.liggghts.is_none() {
+            return Err(Error::invalid(format!(
+                "model class {class}: LIGGGHTS 3.8 has no {} '{}' ({}), so the run cannot be \
+                 replayed there",
+                e.slot.label(),
+                e.name,
+                e.what
+            )));
+        }
+    }
+    if class.limit_force {
+        // LIGGGHTS' limitForce clips the force but keeps the damping of the unclipped law, so
+        // its restitution differs from mbgc's, which re-solves the damping.
+        return Err(Error::invalid(format!(
+            "model class {class}: `limit-force` re-solves the damping so that e stays the \
+             restitution; LIGGGHTS 3.8's `limitForce on` does not, so the run cannot be replayed \
+             identically"
+        )));
+    }
+    let models = LIGGGHTS_ORDER
+        .iter()
+        .flat_map(|slot| effects.iter().filter(move |e| e.slot == *slot))
+        .filter_map(|e| e.liggghts)
+        .collect::<Vec<_>>()
+        .join(" ");
+    // LIGGGHTS' defaults are mbgc's law; a setting that mbgc's law needed would go here.
+    let settings = String::new();
+    Ok(GranModel { models, settings })
+}
+
+/// Writes the data file, the wall meshes and the input script into `dir`, with the contact law
+/// of the recorded run.
 pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     let get = |k: &str| {
         p.get(k)
             .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
     };
+    let GranModel { models, settings } = gran_model(&rec.class)?;
     let [l, w, h] = rec.layout.size;
     let rho = get("rho_p")?;
     let (lo, hi) = rec.domain;
@@ -89,7 +151,6 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         get("mu_r_pp")?,
         get("mu_r_pw")?,
     );
-    let model = "model hertz tangential history rolling_friction epsd2";
     let n_chunks = rec.flow_steps.div_ceil(rec.chunk);
     let mut s = String::new();
     let _ = writeln!(
@@ -132,15 +193,27 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {} {} {} {}\n",
+        "fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {} {} {} {}",
         num(mr_pp),
         num(mr_pw),
         num(mr_pw),
         num(mr_pw)
     );
+    if rec.class.cohesion == CohesionKind::Sjkr {
+        let (ced_pp, ced_pw) = (get("ced_pp")?, get("ced_pw")?);
+        let _ = writeln!(
+            s,
+            "fix m6 all property/global cohesionEnergyDensity peratomtypepair 2 {} {} {} {}",
+            num(ced_pp),
+            num(ced_pw),
+            num(ced_pw),
+            num(ced_pw)
+        );
+    }
+    s.push('\n');
     let _ = writeln!(
         s,
-        "pair_style gran {model}\npair_coeff * *\ntimestep {}",
+        "pair_style gran {models}{settings}\npair_coeff * *\ntimestep {}",
         num(rec.dt)
     );
     let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
@@ -149,13 +222,13 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     }
     let _ = writeln!(
         s,
-        "fix box all wall/gran {model} mesh n_meshes 4 meshes floor back side_lo side_hi"
+        "fix box all wall/gran {models} mesh n_meshes 4 meshes floor back side_lo side_hi{settings}"
     );
     // LIGGGHTS takes one mesh wall fix only; the flap is a plane, which inside the box acts as
     // the flap rectangle does, and is gone before anything reaches beyond it.
     let _ = writeln!(
         s,
-        "fix flapwall all wall/gran {model} primitive type 2 xplane {}",
+        "fix flapwall all wall/gran {models} primitive type 2 xplane {}{settings}",
         num(l)
     );
     let _ = writeln!(
@@ -179,4 +252,105 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     let _ = writeln!(s, "variable i loop {n_chunks}\nlabel flow\nrun {}\ndelete_atoms region below compress no\nnext i\njump SELF flow", rec.chunk);
     let _ = writeln!(s, "write_dump all custom {FINAL_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"");
     write_atomic(&dir.join(INPUT), s.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::experiments::shear_box::Layout;
+
+    fn record(class: &str) -> RunRecord {
+        RunRecord {
+            class: ModelClass::parse(class).unwrap(),
+            layout: Layout {
+                size: [0.03, 0.03, 0.045],
+                diameters: vec![0.005, 0.004],
+                d_min: 0.004,
+                d_max: 0.005,
+            },
+            initial_positions: vec![[0.01, 0.01, 0.01], [0.02, 0.02, 0.02]],
+            dt: 1e-5,
+            skin: 8e-4,
+            fill_steps: 100,
+            relax_steps: 10,
+            flow_steps: 95,
+            chunk: 10,
+            removal_height: -0.01,
+            domain: ([-0.1; 3], [0.1; 3]),
+        }
+    }
+
+    fn params() -> ParamSet {
+        ParamSet::from_pairs(&[
+            ("E_p", 5e6),
+            ("E_w", 5e6),
+            ("nu_p", 0.3),
+            ("e_pp", 0.5),
+            ("e_pw", 0.5),
+            ("mu_pp", 0.5),
+            ("mu_pw", 0.3),
+            ("mu_r_pp", 0.3),
+            ("mu_r_pw", 0.3),
+            ("rho_p", 2600.0),
+            ("ced_pp", 3e4),
+            ("ced_pw", 1e4),
+        ])
+    }
+
+    fn script(class: &str) -> String {
+        let dir = tempfile::tempdir().unwrap();
+        write_deck(dir.path(), &params(), &record(class)).unwrap();
+        std::fs::read_to_string(dir.path().join(INPUT)).unwrap()
+    }
+
+    #[test]
+    fn the_default_class_writes_the_deck_it_always_wrote() {
+        let s = script("hertz,mindlin,epsd2");
+        let law = "model hertz tangential history rolling_friction epsd2";
+        assert!(
+            s.contains(&format!("pair_style gran {law}\npair_coeff")),
+            "{s}"
+        );
+        assert!(s.contains(&format!(
+            "wall/gran {law} mesh n_meshes 4 meshes floor back side_lo side_hi\n"
+        )));
+        assert!(s.contains("coefficientRollingFriction peratomtypepair 2 3e-1 3e-1 3e-1 3e-1\n\n"));
+        assert!(
+            !s.contains("cohesion") && !s.contains("tangential_reduce"),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn sjkr_writes_cohesion_in_liggghts_order_with_the_caps_net_of_it() {
+        let s = script("hertz,mindlin,epsd2,sjkr");
+        let law = "model hertz tangential history cohesion sjkr rolling_friction epsd2";
+        assert!(s.contains(&format!("pair_style gran {law}\n")), "{s}");
+        assert!(s.contains(&format!(
+            "wall/gran {law} mesh n_meshes 4 meshes floor back side_lo side_hi\n"
+        )));
+        assert!(!s.contains("tangential_reduce"), "{s}");
+        assert!(s.contains(
+            "fix m6 all property/global cohesionEnergyDensity peratomtypepair 2 3e4 1e4 1e4 1e4\n\n"
+        ), "{s}");
+    }
+
+    #[test]
+    fn classes_liggghts_lacks_are_refused_naming_the_effect() {
+        for (class, effect) in [
+            ("tsuji,mindlin", "tsuji"),
+            ("kuwabara-kono,mindlin,epsd2", "kuwabara-kono"),
+            ("power-damped,mindlin", "power-damped"),
+            ("hertz,strict-coulomb,epsd2", "strict-coulomb"),
+            ("hertz,linear-spring", "linear-spring"),
+            ("hertz,mindlin,limit-force", "limit-force"),
+        ] {
+            let dir = tempfile::tempdir().unwrap();
+            let e = write_deck(dir.path(), &params(), &record(class))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(effect) && e.contains("LIGGGHTS"), "{class}: {e}");
+            assert!(!dir.path().join(INPUT).exists(), "{class}: no deck written");
+        }
+    }
 }

@@ -151,6 +151,8 @@ impl ShearBox {
 /// How a run went, so that another code can replay it: the initial particles and the schedule.
 #[derive(Debug, Clone)]
 pub struct RunRecord {
+    /// The contact law the run used (a replay must write the same one).
+    pub class: ModelClass,
     pub layout: Layout,
     pub initial_positions: Vec<V3>,
     pub dt: f64,
@@ -574,6 +576,7 @@ impl ShearBox {
         let mass_left: f64 = sim.particles.m.iter().sum();
         let outflow_fraction = 1.0 - mass_left / (mass_left + left_mass);
         let record = RunRecord {
+            class: self.class,
             layout: lay.clone(),
             initial_positions,
             dt,
