@@ -566,12 +566,14 @@ Checked against LIGGGHTS-PUBLIC 3.8.0 `src/cohesion_model_sjkr.h`, `src/fix_wall
   `src/dem/step.rs`; sphere-wall: `A = pi (ri^2 - r^2)` with `r = ri - delta` (times the mesh
   `area_ratio`, 1 for these walls), which is mbgc's `pi (2 ri delta - delta^2)`. Force
   `-ced A` along the normal, only while overlapping, in both.
-- One difference: LIGGGHTS 3.8's `tangential_reduce` setting, default `off`, leaves the
-  cohesion out of the normal force that the tangential model's Coulomb cap (`mu |F_n|`) and
-  EPSD2's torque cap (`mu_r R* |F_n|`) see; mbgc passes both the normal force net of the
-  cohesion, which is LIGGGHTS' `tangential_reduce on`. The replay deck therefore says
-  `tangential_reduce on`; mbgc's `sjkr` is LIGGGHTS' `cohesion sjkr tangential_reduce on`, not
-  its default.
+- Caps: both codes cap the tangential spring (`mu F_n`) and the EPSD2 torque (`mu_r R* F_n`) with
+  the normal force before cohesion, the load that presses the contact (LIGGGHTS 3.8's default,
+  `tangential_reduce off`; mbgc's law, `src/dem/contact/law.rs`): the net force would vanish in a
+  cohesive contact at rest. The deck writes LIGGGHTS' defaults.
+- One difference: with cohesion on, mbgc keeps the stored EPSD2 torque in the tangent plane;
+  LIGGGHTS 3.8 leaves it in the lab frame, where a pair rolling round itself turns part of it into
+  an unopposed twisting torque (its resting cohesive beds gain rotational energy:
+  `tests/cohesion.rs`).
 ";
 
 fn run_cohesion(a: &Args) -> anyhow::Result<()> {
