@@ -434,6 +434,15 @@ impl MaterialFile {
                 "bounds",
                 "this material",
             )?;
+            for (k, con) in constraints.iter().enumerate() {
+                refuse_inactive_parameters(
+                    c,
+                    con.terms.iter().map(|(n, _)| n.as_str()),
+                    file,
+                    &format!("constraints.expr[{k}]"),
+                    "this material",
+                )?;
+            }
         }
         Ok(Material {
             name,

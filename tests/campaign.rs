@@ -1168,4 +1168,68 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
     );
     let e = fails(&arg_refs(&calibrate(&material("[fixed]\nced_pw = 1e4\n"))));
     assert!(e.contains("fixed.ced_pw") && e.contains("sjkr"), "{e}");
+
+    // A model whose inputs belong to an effect its class lacks is refused when loaded.
+    let text = std::fs::read_to_string(&model).unwrap();
+    let edited = d.join("edited.json");
+    std::fs::write(
+        &edited,
+        text.replace("\"name\": \"mu_pw\"", "\"name\": \"ced_pw\""),
+    )
+    .unwrap();
+    let mut args = calibrate(&material(""));
+    args[4] = s(&edited).into();
+    let e = fails(&arg_refs(&args));
+    assert!(e.contains("inputs.ced_pw") && e.contains("sjkr"), "{e}");
+
+    // A table whose class is not recorded gives a model with none, never a guessed one; a
+    // material that names a class is then refused.
+    let table_text = std::fs::read_to_string(&out).unwrap();
+    let bare = d.join("bare.csv");
+    let strip = |line: &str| {
+        let mut f: Vec<&str> = line.split(',').collect();
+        f.remove(4);
+        f.join(",")
+    };
+    std::fs::write(
+        &bare,
+        table_text.lines().map(strip).collect::<Vec<_>>().join("\n") + "\n",
+    )
+    .unwrap();
+    let mut args = fit(&[]);
+    args[2] = s(&bare).into();
+    ok(&arg_refs(&args));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert!(m["model_class"].is_null(), "{}", m["model_class"]);
+    let e = fails(&arg_refs(&calibrate(&material(
+        "[model]\nclass = \"hertz,mindlin\"\n",
+    ))));
+    assert!(e.contains("records no model class"), "{e}");
+    // ... and resuming it is refused with the column to add.
+    let e = fails(&["campaign", "status", s(&bare)]);
+    assert!(e.contains("before model classes"), "{e}");
+    // One class per fit, whatever the row that differs ("-": no contact law).
+    let mixed = d.join("mixed.csv");
+    std::fs::write(&mixed, table_text.replacen("hertz+mindlin", "-", 1)).unwrap();
+    let mut args = fit(&[]);
+    args[2] = s(&mixed).into();
+    let e = fails(&arg_refs(&args));
+    assert!(
+        e.contains("column model_class") && e.contains("one model class"),
+        "{e}"
+    );
+
+    // A design column the experiment does not read is refused; a retired name gets a hint.
+    let old = write(
+        d,
+        "old.csv",
+        "impact_angle,mu_pw,rho_p,d50,k_t\n30,0.1,4000,5,1e3\n",
+    );
+    let mut args = base.clone();
+    args[2] = s(&old);
+    args[6] = s(&fresh);
+    args.extend(["--model-class", "hertz,linear-spring"]);
+    let e = fails(&args);
+    assert!(e.contains("column k_t") && e.contains("k_t_pw"), "{e}");
 }

@@ -296,6 +296,10 @@ fn effects_are_chosen_by_name() {
         ModelClass::parse("hertz, mindlin ,epsd2").unwrap(),
         ModelClass::default()
     );
+    assert_eq!(
+        ModelClass::parse("hertz,mindlin,no-rolling,no-cohesion").unwrap(),
+        ModelClass::parse("hertz,mindlin").unwrap()
+    );
     for (bad, want) in [
         ("hertz,mindlin,jkr-full", "unknown effect `jkr-full`"),
         ("hertz,tsuji,mindlin", "both a normal force"),
@@ -305,6 +309,11 @@ fn effects_are_chosen_by_name() {
         ("hertz,,mindlin", "empty name"),
         ("tsuji,mindlin,limit-force", "limit-force"),
         ("hertz,mindlin,none", "unknown effect `none`"),
+        (
+            "hertz,mindlin,epsd2,no-rolling",
+            "both a rolling resistance",
+        ),
+        ("hertz,mindlin,limit-force,limit-force", "named twice"),
     ] {
         let e = ModelClass::parse(bad).unwrap_err().to_string();
         assert!(e.contains(want), "{bad}: {e}");

@@ -38,7 +38,20 @@ const PENALTY: f64 = 1e6;
 /// class` or by a fixed or bounded parameter of that effect), naming the effect.
 fn check_class(model: &Metamodel, material: &Material) -> Result<()> {
     let file = material.source.as_str();
-    let theirs = model.class()?;
+    let Some(theirs) = model.class()? else {
+        if let Some(mine) = material.model_class {
+            return Err(Error::input(
+                file,
+                "model.class",
+                format!(
+                    "{mine}, but the metamodel records no model class (fitted on a table \
+                     without one): nothing confirms it describes these effects; refit with \
+                     --model-class, or remove [model] from the material"
+                ),
+            ));
+        }
+        return Ok(());
+    };
     if let Some(mine) = material.model_class {
         let lacking = mine.missing_from(&theirs);
         let extra = theirs.missing_from(&mine);

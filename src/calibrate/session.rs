@@ -41,8 +41,8 @@ pub struct Session {
     pub source: String,
     /// The model file, as given.
     pub model: String,
-    /// The model class the metamodel was trained on.
-    pub model_class: String,
+    /// The model class the metamodel was trained on, if it records one.
+    pub model_class: Option<String>,
     /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
     pub notes: Vec<String>,
     /// The material's fixed parameters, in file order.
@@ -203,7 +203,9 @@ impl Session {
             let _ = writeln!(t, "{} = {p:?}", m.name);
         }
         // `mbgc validate` reruns the DEM with the effects the metamodel was trained on.
-        let _ = write!(t, "\n[model]\nclass = {:?}\n", self.model_class);
+        if let Some(c) = &self.model_class {
+            let _ = write!(t, "\n[model]\nclass = {c:?}\n");
+        }
         t
     }
 

@@ -41,3 +41,19 @@ pub fn is_campaign_header(header: &[String]) -> bool {
             .zip(DIAGNOSTIC_COLUMNS)
             .all(|(a, b)| a == b)
 }
+
+/// Whether a header is a campaign table's from before model classes (no `model_class` column).
+pub fn is_pre_class_header(header: &[String]) -> bool {
+    header.len() > 4
+        && header[..4]
+            .iter()
+            .zip(&FIXED_COLUMNS[..4])
+            .all(|(a, b)| a == b)
+        && header[4] != FIXED_COLUMNS[MODEL_CLASS_COLUMN]
+}
+
+/// What to do with a table from before model classes.
+pub const PRE_CLASS_TABLE: &str = "written by an mbgc from before model classes (no model_class \
+     column after seed); add that column holding the class its runs used (hertz+mindlin+epsd2 \
+     for shear-box and hopper, hertz+mindlin for wall-impact, whose old version had no rolling \
+     resistance), then resume, merge or fit it";

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use csv::StringRecord;
 
-use super::columns::MODEL_CLASS_COLUMN;
+use super::columns::{is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
 use super::lock::TableLock;
 use super::status::Meta;
 use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
@@ -50,27 +50,35 @@ fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
             continue;
         };
         let differs = [
-            ("experiment", m.experiment != m0.experiment),
-            ("--seed", m.seed != m0.seed),
-            ("--set", m.set != m0.set),
-            ("--box-scale", m.box_scale != m0.box_scale),
-            ("--model-class", m.model_class != m0.model_class),
-            ("design rows", m.design_rows != m0.design_rows),
+            ("experiment", m0.experiment.clone(), m.experiment.clone()),
+            ("--seed", m0.seed.to_string(), m.seed.to_string()),
+            ("--set", format!("{:?}", m0.set), format!("{:?}", m.set)),
+            (
+                "--box-scale",
+                format!("{:?}", m0.box_scale),
+                format!("{:?}", m.box_scale),
+            ),
+            (
+                "--model-class",
+                m0.model_class.clone(),
+                m.model_class.clone(),
+            ),
+            (
+                "design rows",
+                m0.design_rows.to_string(),
+                m.design_rows.to_string(),
+            ),
         ];
-        if let Some((what, _)) = differs.iter().find(|(_, d)| *d) {
+        if let Some((what, a, b)) = differs.iter().find(|(_, a, b)| a != b) {
             return Err(Error::input(
                 path.display(),
                 *what,
                 format!(
-                    "the same as {} (one campaign in shards); the sidecars differ ({} has seed {}, \
-                     set {:?}; {} has seed {}, set {:?})",
+                    "the same as {} (one campaign in shards); the sidecars differ ({} has {a}, \
+                     {} has {b})",
                     p0.display(),
                     p0.display(),
-                    m0.seed,
-                    m0.set,
                     path.display(),
-                    m.seed,
-                    m.set
                 ),
             ));
         }
@@ -99,6 +107,9 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
     for path in inputs {
         let file = path.display().to_string();
         let t = read_table(path)?;
+        if is_pre_class_header(&t.header) {
+            return Err(Error::input(&file, "header", PRE_CLASS_TABLE));
+        }
         if !table::is_campaign_header(&t.header) {
             return Err(Error::input(
                 &file,

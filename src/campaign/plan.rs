@@ -164,6 +164,38 @@ impl Plan {
                     .map_err(|e| Error::invalid(format!("--set {name}={v}: {e}")))?;
             }
         }
+        // A column the experiment does not read would look like an input and change nothing.
+        for h in &header {
+            if !known.contains(&h.as_str()) {
+                let renamed = ["_pp", "_pw"]
+                    .iter()
+                    .map(|suffix| format!("{h}{suffix}"))
+                    .filter(|n| {
+                        crate::dem::contact::all_effects()
+                            .iter()
+                            .any(|e| e.params.iter().any(|p| p.names.contains(&n.as_str())))
+                    })
+                    .collect::<Vec<_>>();
+                let hint = if renamed.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        " (effect parameters are named per kind of contact: {})",
+                        renamed.join(", ")
+                    )
+                };
+                return Err(Error::input(
+                    &file,
+                    format!("column {h}"),
+                    format!(
+                        "{} does not read {h}, so it would do nothing{hint}; expected only its \
+                         parameters ({}): remove the column",
+                        experiment.name(),
+                        known.join(", ")
+                    ),
+                ));
+            }
+        }
         for (i, (name, v)) in set.iter().enumerate() {
             // A typo would otherwise become an extra column that changes nothing.
             if !known.contains(&name.as_str()) {
@@ -359,13 +391,18 @@ mod tests {
 
     #[test]
     fn columns_are_design_then_set_and_rows_are_checked() {
-        let p = plan("y,extra,x\n1,5,2\n\n3,6,4\n", &[("sleep_ms", 0.0)]).unwrap();
-        assert_eq!(p.inputs, ["y", "extra", "x", "sleep_ms"]);
+        let e = plan("y,extra,x\n1,5,2\n", &[]).unwrap_err().to_string();
+        assert!(
+            e.contains("column extra") && e.contains("does not read extra"),
+            "{e}"
+        );
+        let p = plan("y,fail,x\n1,0,2\n\n3,0,4\n", &[("sleep_ms", 0.0)]).unwrap();
+        assert_eq!(p.inputs, ["y", "fail", "x", "sleep_ms"]);
         assert_eq!(p.rows.len(), 2);
         assert_eq!(p.rows[1].line, 3, "numbered like read_numeric_csv");
         assert_eq!(
             p.rows[1].params.iter().collect::<Vec<_>>(),
-            [("y", 3.0), ("extra", 6.0), ("x", 4.0), ("sleep_ms", 0.0)]
+            [("y", 3.0), ("fail", 0.0), ("x", 4.0), ("sleep_ms", 0.0)]
         );
         assert_eq!(
             p.columns()[..9],
@@ -376,7 +413,7 @@ mod tests {
                 "seed",
                 "model_class",
                 "y",
-                "extra",
+                "fail",
                 "x",
                 "sleep_ms"
             ]

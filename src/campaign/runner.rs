@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::columns::MODEL_CLASS_COLUMN;
+use super::columns::{is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::Meta;
@@ -237,6 +237,9 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                     theirs.replace('+', ",")
                 ),
             ));
+        }
+        if is_pre_class_header(&t.header) {
+            return Err(Error::input(&file, "header", PRE_CLASS_TABLE));
         }
         if !t.header.is_empty() && t.header != columns {
             return Err(header_mismatch(&file, &columns, &t.header));

@@ -162,11 +162,18 @@ fn same_design(
 pub fn status(out: &Path, design: Option<&Path>) -> Result<Status> {
     let file = out.display().to_string();
     let t = read_table(out)?;
+    if super::columns::is_pre_class_header(&t.header) {
+        return Err(Error::input(
+            out.display(),
+            "header",
+            super::columns::PRE_CLASS_TABLE,
+        ));
+    }
     if !table::is_campaign_header(&t.header) {
         return Err(Error::input(
             &file,
             "header",
-            "expected a campaign table (run_id,row,status,seed,...,error)",
+            "expected a campaign table (run_id,row,status,seed,model_class,...,error)",
         ));
     }
     let meta = Meta::read(out)?;

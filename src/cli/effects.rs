@@ -29,11 +29,16 @@ fn range(r: (f64, f64)) -> String {
 /// The Markdown table of every registered effect.
 pub fn table() -> String {
     let mut t = String::from(
-        "| slot | effect | parameters (particle-particle, particle-wall) | unit | allowed range | LIGGGHTS 3.8 |\n\
-         |---|---|---|---|---|---|\n",
+        "| slot | effect | parameters (particle-particle, particle-wall) | unit | allowed range | default | metamodel input | LIGGGHTS 3.8 |\n\
+         |---|---|---|---|---|---|---|---|\n",
     );
     let default = ModelClass::default();
-    let defaults: Vec<&str> = default.effects().iter().map(|e| e.name).collect();
+    let defaults = [
+        default.normal.spec().name,
+        default.tangential.spec().name,
+        default.rolling.spec().name,
+        default.cohesion.spec().name,
+    ];
     for e in all_effects() {
         let name = if defaults.contains(&e.name) {
             format!("`{}` (default)", e.name)
@@ -44,19 +49,21 @@ pub fn table() -> String {
             e.params.iter().map(f).collect::<Vec<_>>().join("; ")
         };
         t += &format!(
-            "| {} | {name}: {} | {} | {} | {} | {} |\n",
+            "| {} | {name}: {} | {} | {} | {} | {} | {} | {} |\n",
             e.slot.label(),
             e.what,
             cell(&|p| format!("`{}`, `{}`: {}", p.names[0], p.names[1], p.what)),
             cell(&|p| p.unit.to_string()),
             cell(&|p| range(p.range)),
+            cell(&|p| p.default.map_or("required".into(), number)),
+            cell(&|p| if p.variable { "yes" } else { "fixed" }.into()),
             e.liggghts.map_or("-".into(), |l| format!("`{l}`"))
         );
     }
     // F_n in the caps is the normal force before cohesion (the load pressing the contact).
     t += &format!(
         "| option | `{LIMIT_FORCE}`: keep Hertz's normal force from turning attractive, damping \
-         re-solved so e stays the restitution | | | | `limitForce on` |\n"
+         re-solved so e stays the restitution | | | | | | `limitForce on` (without the re-solved damping) |\n"
     );
     t
 }

@@ -65,7 +65,8 @@ pub struct FitArgs {
     #[arg(long)]
     pub no_figures: bool,
     /// Model class of the data when the table has no `model_class` column (campaign tables
-    /// have one, and it must agree) [default: hertz,mindlin,epsd2]; recorded in the model.
+    /// have one, and it must agree; so must a --space file's `[model]`); recorded in the model.
+    /// Without any, the model records none.
     #[arg(long, value_name = "EFFECTS", value_parser = crate::cli::simulate::parse_model_class)]
     pub model_class: Option<crate::dem::contact::ModelClass>,
     /// Standard output holds one JSON object (equations and metrics); text goes to standard
@@ -190,9 +191,14 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     }
     say!(
         out,
-        "wrote {} (model class {})",
+        "wrote {} ({})",
         a.out.display(),
-        model.model_class
+        match &model.model_class {
+            Some(c) => format!("model class {c}"),
+            None => "no model class: the table has no model_class column; pass --model-class \
+                     if it holds DEM runs"
+                .into(),
+        }
     );
     for f in &report.figures {
         say!(out, "wrote {}", f.display());

@@ -16,7 +16,8 @@ use crate::campaign::{
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Design CSV: a header of parameter names, one run per row (extra columns are carried along).
+    /// Design CSV: a header of parameter names, one run per row (a column the experiment does not
+    /// read is refused).
     #[arg(long, value_name = "CSV")]
     pub design: PathBuf,
     /// Experiment run on every row.

@@ -138,7 +138,7 @@ fn resolve_class(
     flag: Option<ModelClass>,
     params: (Option<ModelClass>, &std::path::Path),
     material: (Option<ModelClass>, &std::path::Path),
-) -> anyhow::Result<ModelClass> {
+) -> anyhow::Result<Option<ModelClass>> {
     let given: Vec<(ModelClass, String)> = [
         flag.map(|c| (c, "--model-class".to_string())),
         params
@@ -159,7 +159,7 @@ fn resolve_class(
             );
         }
     }
-    Ok(given.first().map(|g| g.0).unwrap_or_default())
+    Ok(given.first().map(|g| g.0))
 }
 
 pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
@@ -191,9 +191,11 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         &a.experiment,
         &ExperimentSettings {
             box_scale: a.box_scale,
-            model_class: Some(class),
+            model_class: class,
         },
     )?;
+    // The class the experiment was built with (the default when no source named one).
+    let class = exp.class().copied().unwrap_or_default();
     for (name, _) in params.iter() {
         class
             .refuse_inactive(name, exp.pairs(), exp.name())

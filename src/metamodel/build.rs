@@ -27,7 +27,7 @@ pub struct FitOptions {
     /// Directory for the parity plot and residual histogram of each response.
     pub plots: Option<PathBuf>,
     /// The model class of the data when the table does not say (`--model-class`); a campaign
-    /// table's `model_class` column must agree with it.
+    /// table's `model_class` column and the space's `[model]` must agree with it.
     pub model_class: Option<ModelClass>,
 }
 
@@ -70,45 +70,65 @@ fn transforms(opts: &FitOptions) -> Result<Vec<Transform>> {
         .collect()
 }
 
-/// The model class of the rows: the table's `model_class` column (one class for all rows), else
-/// `--model-class`, else the default class.
-fn table_class(file: &str, cols: &Columns, flag: Option<ModelClass>) -> Result<ModelClass> {
-    let Some(k) = cols.header.iter().position(|h| h == "model_class") else {
-        return Ok(flag.unwrap_or_default());
-    };
-    let mut found: Option<(String, ModelClass)> = None;
-    for (row, rec) in cols.records.iter().enumerate() {
-        let label = rec.get(k).map(String::as_str).unwrap_or("");
-        match &found {
-            Some((l0, _)) if l0 == label => {}
-            Some((l0, _)) => {
-                return Err(Error::input(
-                    file,
-                    format!("column model_class (data row {})", row + 1),
-                    format!(
-                        "{label} here but {l0} above: one model class per fit (a metamodel \
-                         describes one set of effects)"
-                    ),
-                ))
-            }
-            // `-`: an experiment without a contact law (a test stand-in).
-            None if label == "-" => return Ok(flag.unwrap_or_default()),
-            None => {
-                let c = ModelClass::parse(label)
-                    .map_err(|e| Error::input(file, "column model_class", e.to_string()))?;
-                found = Some((label.to_string(), c));
+/// The model class of the rows: the table's `model_class` column (one class for all rows; `-`
+/// marks an experiment without a contact law), else `--model-class`, else the space's `[model]
+/// class`; `None` when nothing says (a table that did not come from DEM runs). Sources that
+/// disagree are refused.
+fn data_class(
+    file: &str,
+    cols: &Columns,
+    flag: Option<ModelClass>,
+    space: Option<(ModelClass, String)>,
+) -> Result<Option<ModelClass>> {
+    let mut table: Option<Option<ModelClass>> = None;
+    if let Some(k) = cols.header.iter().position(|h| h == "model_class") {
+        let mut first: Option<(Option<ModelClass>, String, usize)> = None;
+        for (row, rec) in cols.records.iter().enumerate() {
+            let label = rec.get(k).map(String::as_str).unwrap_or("");
+            let c = if label == "-" {
+                None
+            } else {
+                Some(ModelClass::parse(label).map_err(|e| {
+                    Error::input(
+                        file,
+                        format!("column model_class (data row {})", row + 1),
+                        e.to_string(),
+                    )
+                })?)
+            };
+            match &first {
+                None => first = Some((c, label.to_string(), row + 1)),
+                Some((c0, l0, r0)) if *c0 != c => {
+                    return Err(Error::input(
+                        file,
+                        format!("column model_class (data row {})", row + 1),
+                        format!(
+                            "{label} here but {l0} in data row {r0}: one model class per fit (a \
+                             metamodel describes one set of effects)"
+                        ),
+                    ))
+                }
+                Some(_) => {}
             }
         }
+        table = first.map(|f| f.0);
     }
-    let Some((_, class)) = found else {
-        return Ok(flag.unwrap_or_default());
-    };
-    if let Some(f) = flag.filter(|f| *f != class) {
-        return Err(Error::invalid(format!(
-            "--model-class {f}: the data were run with {class} (column model_class of {file})"
-        )));
+    let given = [
+        table
+            .flatten()
+            .map(|c| (c, format!("column model_class of {file}"))),
+        flag.map(|c| (c, "--model-class".to_string())),
+        space.map(|(c, f)| (c, format!("[model] class of {f}"))),
+    ];
+    let given: Vec<(ModelClass, String)> = given.into_iter().flatten().collect();
+    if let Some((c0, w0)) = given.first() {
+        if let Some((c, w)) = given.iter().find(|(c, _)| c != c0) {
+            return Err(Error::invalid(format!(
+                "model class: {w0} says {c0} but {w} says {c}; expected one class"
+            )));
+        }
     }
-    Ok(class)
+    Ok(given.first().map(|g| g.0))
 }
 
 /// Fits one equation per target. `progress(target, state)` is called every generation.
@@ -159,11 +179,19 @@ pub fn fit_table(
     let bytes = std::fs::read(&opts.data).map_err(|e| Error::io(&opts.data, e))?;
     let names: Vec<String> = opts.inputs.iter().chain(&opts.targets).cloned().collect();
     let cols = read_columns(&opts.data, &names)?;
-    let class = table_class(&file, &cols, opts.model_class)?;
-    for name in &opts.inputs {
-        class
-            .refuse_inactive(name, &Pair::BOTH, "the data")
-            .map_err(|e| Error::invalid(format!("--inputs {name}: {e}")))?;
+    let space_class = match &opts.space {
+        Some(p) => Space::from_file(p)?
+            .model_class
+            .map(|c| (c, p.display().to_string())),
+        None => None,
+    };
+    let class = data_class(&file, &cols, opts.model_class, space_class)?;
+    if let Some(class) = &class {
+        for name in &opts.inputs {
+            class
+                .refuse_inactive(name, &Pair::BOTH, "the data")
+                .map_err(|e| Error::invalid(format!("--inputs {name}: {e}")))?;
+        }
     }
     let n = cols.records.len();
     let n_in = opts.inputs.len();
@@ -329,7 +357,7 @@ pub fn fit_table(
         });
     }
     let model = Metamodel {
-        model_class: class.to_string(),
+        model_class: class.map(|c| c.to_string()),
         format: FORMAT.into(),
         version: VERSION,
         created_by: format!("mbgc {}", env!("CARGO_PKG_VERSION")),

@@ -1,7 +1,7 @@
 //! The model file: equations per response, input transforms, domain, metrics, Pareto front,
 //! settings, seed and data hash, saved and loaded as JSON.
 
-use crate::dem::contact::ModelClass;
+use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::gp::{self, Node};
 use serde::{Deserialize, Serialize};
@@ -197,21 +197,20 @@ pub struct Metamodel {
     pub settings: gp::Config,
     pub seed: u64,
     pub data: DataSource,
-    /// The model class of the DEM runs the model was fitted on (comma-separated effects). Model
-    /// files written before model classes existed lack it: their data were all of the default
-    /// class.
-    #[serde(default = "default_class")]
-    pub model_class: String,
-}
-
-fn default_class() -> String {
-    ModelClass::default().to_string()
+    /// The model class of the DEM runs the model was fitted on (comma-separated effects); null
+    /// when the data did not say (a table not from DEM runs, or a model file written before
+    /// model classes existed: no class is guessed for it).
+    #[serde(default)]
+    pub model_class: Option<String>,
 }
 
 impl Metamodel {
-    /// The model class the metamodel was trained on.
-    pub fn class(&self) -> Result<ModelClass> {
-        ModelClass::parse(&self.model_class)
+    /// The model class the metamodel was trained on, if recorded.
+    pub fn class(&self) -> Result<Option<ModelClass>> {
+        self.model_class
+            .as_deref()
+            .map(ModelClass::parse)
+            .transpose()
     }
 
     pub fn load(path: &Path) -> Result<Metamodel> {
@@ -231,8 +230,18 @@ impl Metamodel {
                 format!("\"{FORMAT}\", got \"{}\"", m.format),
             ));
         }
-        m.class()
+        let class = m
+            .class()
             .map_err(|e| Error::input(&file, "model_class", e.to_string()))?;
+        // An input of an effect the class lacks would be calibrated and then refused by the DEM.
+        if let Some(c) = class {
+            for i in &m.inputs {
+                c.refuse_inactive(&i.name, &Pair::BOTH, "the model")
+                    .map_err(|e| {
+                        Error::input(&file, format!("inputs.{}", i.name), e.to_string())
+                    })?;
+            }
+        }
         if m.version != VERSION {
             return Err(Error::input(
                 &file,

@@ -33,7 +33,12 @@ pub struct Epsd2;
 impl Rolling for Epsd2 {
     #[inline(always)]
     fn torque(&self, c: &Contact, p: &PairConstants, f_n: f64, m: &mut V3, dt: f64) -> V3 {
-        let k_t = 8.0 * p.g_eff * c.sqrt_rd;
+        // The pair's tangential stiffness: Mindlin's, or the constant of `linear-spring`.
+        let k_t = if p.k_t_fixed > 0.0 {
+            p.k_t_fixed
+        } else {
+            8.0 * p.g_eff * c.sqrt_rd
+        };
         let k_r = k_t * c.r_eff * c.r_eff;
         add_assign(m, scale(c.w_roll, k_r * dt));
         let cap = p.rolling_friction * c.r_eff * f_n.abs();

@@ -43,14 +43,14 @@ impl Default for ModelClass {
     }
 }
 
-/// Every registered effect (empty slots excluded), slot by slot in registry order.
+/// Every registered effect (the empty slots `no-rolling`, `no-cohesion` included), slot by slot
+/// in registry order.
 pub fn all_effects() -> Vec<&'static EffectSpec> {
     let mut v: Vec<&'static EffectSpec> = Vec::new();
     v.extend(NormalKind::ALL.iter().map(|k| k.spec()));
     v.extend(TangentialKind::ALL.iter().map(|k| k.spec()));
     v.extend(RollingKind::ALL.iter().map(|k| k.spec()));
     v.extend(CohesionKind::ALL.iter().map(|k| k.spec()));
-    v.retain(|s| !s.is_none());
     v
 }
 
@@ -109,6 +109,9 @@ impl ModelClass {
                 return Err(bad("an empty name (two separators in a row?)".into()));
             }
             if name == LIMIT_FORCE {
+                if limit_force {
+                    return Err(bad(format!("`{LIMIT_FORCE}` is named twice")));
+                }
                 limit_force = true;
                 continue;
             }
@@ -117,20 +120,14 @@ impl ModelClass {
                 take(&mut normal, *k, k.spec().name, label(Slot::Normal))
             } else if let Some(k) = TangentialKind::ALL.iter().find(|k| k.spec().name == name) {
                 take(&mut tangential, *k, k.spec().name, label(Slot::Tangential))
-            } else if let Some(k) = RollingKind::ALL
-                .iter()
-                .find(|k| !k.spec().is_none() && k.spec().name == name)
-            {
+            } else if let Some(k) = RollingKind::ALL.iter().find(|k| k.spec().name == name) {
                 take(&mut rolling, *k, k.spec().name, label(Slot::Rolling))
-            } else if let Some(k) = CohesionKind::ALL
-                .iter()
-                .find(|k| !k.spec().is_none() && k.spec().name == name)
-            {
+            } else if let Some(k) = CohesionKind::ALL.iter().find(|k| k.spec().name == name) {
                 take(&mut cohesion, *k, k.spec().name, label(Slot::Cohesion))
             } else {
                 Err(format!(
-                    "unknown effect `{name}`; expected names from {} (leave a slot out to \
-                     switch it off)",
+                    "unknown effect `{name}`; expected names from {} (leaving a slot out \
+                     switches it off)",
                     effect_names().join(", ")
                 ))
             };
@@ -227,12 +224,12 @@ impl ModelClass {
         let Some(first) = owners.first() else {
             return Ok(());
         };
-        let active: Vec<&'static str> = self.effects().iter().map(|s| s.name).collect();
-        if owners.iter().any(|o| active.contains(&o.name)) {
-            let pair = Pair::BOTH
-                .into_iter()
-                .find(|p| first.params.iter().any(|s| s.name(*p) == name))
-                .unwrap_or(Pair::ParticleParticle);
+        // A parameter of a kind of contact the experiment lacks does nothing in any class.
+        let pair = Pair::BOTH
+            .into_iter()
+            .find(|p| first.params.iter().any(|s| s.name(*p) == name))
+            .unwrap_or(Pair::ParticleParticle);
+        if !pairs.contains(&pair) {
             return Err(Error::invalid(format!(
                 "parameter {name}: {experiment} has no {} contacts, so {name} would do nothing; \
                  remove it",
@@ -263,8 +260,8 @@ impl ModelClass {
         }
         Err(Error::invalid(format!(
             "parameter {name}: belongs to {} {which}, which the model class {self} does not \
-             use, so it would do nothing; switch the effect on with --model-class {} (or \
-             `[model] class` in the file), or remove {name}",
+             use, so it would do nothing; switch the effect on in the model class ({}), or \
+             remove {name}",
             first.slot.label(),
             with.join(",")
         )))

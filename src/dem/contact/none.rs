@@ -6,8 +6,8 @@ use super::spec::{none, EffectSpec, Slot};
 use crate::dem::material::PairConstants;
 use crate::dem::vec3::V3;
 
-pub const NO_ROLLING: EffectSpec = none(Slot::Rolling);
-pub const NO_COHESION: EffectSpec = none(Slot::Cohesion);
+pub const NO_ROLLING: EffectSpec = none(Slot::Rolling, "no-rolling");
+pub const NO_COHESION: EffectSpec = none(Slot::Cohesion, "no-cohesion");
 
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NoRolling;

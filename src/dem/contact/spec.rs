@@ -81,7 +81,8 @@ impl ParamSpec {
 /// An effect of the contact law, as a model class names it.
 #[derive(Debug, Clone, Copy)]
 pub struct EffectSpec {
-    /// The name used in `--model-class` and `[model]` (`none` for a slot left empty).
+    /// The name used in `--model-class` and `[model]` (`no-rolling`, `no-cohesion` for a slot
+    /// left empty).
     pub name: &'static str,
     pub slot: Slot,
     pub what: &'static str,
@@ -93,20 +94,19 @@ pub struct EffectSpec {
 }
 
 impl EffectSpec {
+    /// Whether the spec is an empty slot (`no-rolling`, `no-cohesion`).
     pub fn is_none(&self) -> bool {
-        self.name == NONE
+        self.params.is_empty() && self.name.starts_with("no-")
     }
 }
 
-/// The name of an empty slot.
-pub const NONE: &str = "none";
-
-/// The spec of an empty slot.
-pub const fn none(slot: Slot) -> EffectSpec {
+/// The spec of an empty slot, named `name` (`no-rolling`): naming it is the same as leaving the
+/// slot out.
+pub const fn none(slot: Slot, name: &'static str) -> EffectSpec {
     EffectSpec {
-        name: NONE,
+        name,
         slot,
-        what: "switched off",
+        what: "switched off (the same as leaving the slot out)",
         params: &[],
         install: |_, _| {},
         liggghts: Some("off"),
