@@ -157,7 +157,8 @@ impl Space {
                 return Err(Error::input(
                     source,
                     format!("parameters.{}", p.name),
-                    "a structural constant of its effect: a metamodel may not vary it; expected                      `fixed = VALUE`",
+                    "a structural constant of its effect: a metamodel may not vary it; expected \
+                     `fixed = VALUE`",
                 ));
             }
         }
