@@ -8,8 +8,8 @@ use crate::dem::experiments::Experiment;
 use crate::error::{Error, Result};
 use std::sync::Mutex;
 
-/// Campaign-wide settings that experiments may read when they are built. Experiments that have
-/// no use for a setting ignore it (wall-impact ignores the box scale).
+/// Campaign-wide settings that experiments may read when they are built. An experiment that has
+/// no use for a setting given refuses it.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ExperimentSettings {
     /// `--box-scale k`: size of the experiment's box relative to its default (shear box, hopper).
@@ -29,17 +29,29 @@ impl ExperimentSettings {
     }
 }
 
+/// Refuses `--box-scale` for an experiment that would ignore it.
+fn no_box_scale(name: &str, s: &ExperimentSettings, why: &str) -> Result<()> {
+    match s.box_scale {
+        Some(k) => Err(Error::invalid(format!(
+            "--box-scale {k}: {name} does not read it ({why}), so it would do nothing"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Builds an experiment from the campaign-wide settings.
 pub type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
 
 /// Every experiment the command line knows. Registering one is one line here.
 const EXPERIMENTS: &[(&str, Constructor)] = &[
     ("wall-impact", |s| {
+        no_box_scale("wall-impact", s, "it has no box")?;
         Ok(Box::new(WallImpact {
             class: s.model_class.unwrap_or_default(),
         }))
     }),
     ("hopper", |s| {
+        no_box_scale("hopper", s, "its size is the `scale` parameter")?;
         Ok(Box::new(Hopper {
             class: s.model_class.unwrap_or_default(),
         }))
@@ -175,6 +187,10 @@ mod tests {
             box_scale: Some(1.5),
             ..Default::default()
         };
-        assert!(experiment_by_name("wall-impact", &s).is_ok());
+        assert!(experiment_by_name("shear-box", &s).is_ok());
+        for name in ["wall-impact", "hopper"] {
+            let e = experiment_by_name(name, &s).err().unwrap().to_string();
+            assert!(e.contains("--box-scale 1.5") && e.contains(name), "{e}");
+        }
     }
 }

@@ -42,7 +42,7 @@ pub struct SimulateArgs {
     /// Directory for VTK snapshots, one subdirectory per run id (experiments that write them).
     #[arg(long, value_name = "DIR")]
     pub vtk: Option<PathBuf>,
-    /// Size factor of the experiment's box (shear box, hopper); other experiments ignore it.
+    /// Size factor of the shear box (k: the smallest side in d_max); other experiments refuse it.
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     pub box_scale: Option<f64>,
     /// Effects of the contact law, comma-separated, e.g. hertz,mindlin,epsd2,sjkr [default:
