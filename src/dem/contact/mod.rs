@@ -168,6 +168,20 @@ mod tests {
     }
 
     #[test]
+    fn cdt_torque_is_constant_and_against_the_rolling() {
+        let p = pc(0.5, 0.5, 0.2, 0.0);
+        for w in [1e-6, 1.0, 1e3] {
+            let c = contact(1e-4, 0.0, [0.0; 3], [0.0, w, 0.0]);
+            let mut m = [0.0; 3];
+            let t = cdt::Cdt.torque(&c, &p, 100.0, &mut m, 1e-3);
+            assert!((t[1] - 0.2 * 0.01 * 100.0).abs() < 1e-12, "{w}: {t:?}");
+            assert_eq!(m, [0.0; 3], "no history");
+        }
+        let c = contact(1e-4, 0.0, [0.0; 3], [0.0; 3]);
+        assert_eq!(cdt::Cdt.torque(&c, &p, 100.0, &mut [0.0; 3], 1e-3), [0.0; 3]);
+    }
+
+    #[test]
     fn sjkr_pulls_with_energy_density_times_area() {
         let p = pc(0.5, 0.5, 0.0, 3e4);
         let c = contact(1e-4, 0.0, [0.0; 3], [0.0; 3]);
