@@ -16,8 +16,8 @@ fn class(s: &str) -> ModelClass {
     ModelClass::parse(s).unwrap()
 }
 
-/// The plan's error for a one-row design of `params`.
-fn plan_error(exp: &dyn Experiment, params: &ParamSet, dir: &Path) -> String {
+/// The campaign plan of a one-row design of `params`.
+fn plan(exp: &dyn Experiment, params: &ParamSet, dir: &Path) -> mbgc::Result<Plan> {
     let names: Vec<&str> = params.iter().map(|(n, _)| n).collect();
     let values: Vec<String> = params.iter().map(|(_, v)| format!("{v:?}")).collect();
     let design = dir.join("design.csv");
@@ -27,20 +27,14 @@ fn plan_error(exp: &dyn Experiment, params: &ParamSet, dir: &Path) -> String {
     )
     .unwrap();
     Plan::new(exp, &design, &[], 1, &ExperimentSettings::default(), None)
-        .expect_err("refused")
-        .to_string()
+}
+
+fn plan_error(exp: &dyn Experiment, params: &ParamSet, dir: &Path) -> String {
+    plan(exp, params, dir).expect_err("refused").to_string()
 }
 
 fn plan_ok(exp: &dyn Experiment, params: &ParamSet, dir: &Path) {
-    let names: Vec<&str> = params.iter().map(|(n, _)| n).collect();
-    let values: Vec<String> = params.iter().map(|(_, v)| format!("{v:?}")).collect();
-    let design = dir.join("ok.csv");
-    std::fs::write(
-        &design,
-        format!("{}\n{}\n", names.join(","), values.join(",")),
-    )
-    .unwrap();
-    Plan::new(exp, &design, &[], 1, &ExperimentSettings::default(), None).unwrap();
+    plan(exp, params, dir).unwrap();
 }
 
 #[test]

@@ -178,7 +178,10 @@ mod tests {
             assert_eq!(m, [0.0; 3], "no history");
         }
         let c = contact(1e-4, 0.0, [0.0; 3], [0.0; 3]);
-        assert_eq!(cdt::Cdt.torque(&c, &p, 100.0, &mut [0.0; 3], 1e-3), [0.0; 3]);
+        assert_eq!(
+            cdt::Cdt.torque(&c, &p, 100.0, &mut [0.0; 3], 1e-3),
+            [0.0; 3]
+        );
     }
 
     #[test]
