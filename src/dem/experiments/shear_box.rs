@@ -167,6 +167,12 @@ pub struct RunRecord {
     /// Particles below this height are removed (m).
     pub removal_height: f64,
     pub domain: (V3, V3),
+    /// Wall-clock seconds of the fill (creation to strike-off, relaxation included) and of the
+    /// outflow, for the cost breakdown of a whole run.
+    pub fill_seconds: f64,
+    pub flow_seconds: f64,
+    /// Particles created, and left in the box after the strike-off.
+    pub created: usize,
 }
 
 /// The flank profile and its fits.
@@ -383,6 +389,7 @@ impl ShearBox {
             particles.add(x, 0.5 * d, rho, grain)?;
         }
         let initial_positions = particles.x.clone();
+        let initial_positions_len = initial_positions.len();
 
         // Floor, back wall, two side walls and the flap, tall enough for the falling column.
         let wall_h = col_top.max(h) + lay.d_max;
@@ -500,6 +507,7 @@ impl ShearBox {
             )?;
         }
 
+        let fill_seconds = clock.elapsed().as_secs_f64();
         // Open the flap; material that falls off the floor's edge leaves the scene.
         sim.set_wall_active(flap, false);
         let open_step = sim.step;
@@ -587,6 +595,9 @@ impl ShearBox {
             chunk,
             removal_height: -2.0 * lay.d_max,
             domain,
+            fill_seconds,
+            flow_seconds: clock.elapsed().as_secs_f64() - fill_seconds,
+            created: initial_positions_len,
         };
         let outcome = Outcome {
             responses: vec![
