@@ -277,6 +277,9 @@ mod tests {
             chunk: 10,
             removal_height: -0.01,
             domain: ([-0.1; 3], [0.1; 3]),
+            fill_seconds: 0.0,
+            flow_seconds: 0.0,
+            created: 2,
         }
     }
 
