@@ -1023,7 +1023,8 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
     assert_eq!(header[4], "model_class");
     assert!(rows.iter().all(|r| r["model_class"] == "hertz+mindlin"));
     let before = std::fs::read(&out).unwrap();
-    let base: Vec<&str> = vec![
+    // WALL_SET without its class: each command below names its own.
+    let mut base: Vec<&str> = vec![
         "simulate",
         "--design",
         s(&design),
@@ -1031,17 +1032,8 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
         "wall-impact",
         "--out",
         s(&out),
-        "--set",
-        "E_p=380e9",
-        "--set",
-        "nu_p=0.23",
-        "--set",
-        "E_w=1e13",
-        "--set",
-        "e_pw=0.98",
-        "--set",
-        "impact_speed=3.9",
     ];
+    base.extend(&WALL_SET[2..]);
     let mut args = base.clone();
     args.extend([
         "--model-class",

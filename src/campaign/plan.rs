@@ -229,23 +229,15 @@ impl Plan {
             if !header.iter().any(|h| h == p) && !set.iter().any(|(n, _)| n == p) {
                 // Name the effect that needs it: the user may rather switch the effect off.
                 let owner = experiment.class().and_then(|c| {
-                    c.parameters(experiment.pairs())
-                        .into_iter()
-                        .find(|(n, _, _)| n == p)
-                        .and_then(|(_, spec, _)| {
-                            c.effects()
-                                .into_iter()
-                                .find(|e| e.params.iter().any(|q| q == spec))
-                                .map(|e| {
-                                    format!(
-                                        " ({} '{}' of the model class {c}: {}, {})",
-                                        e.slot.label(),
-                                        e.name,
-                                        spec.what,
-                                        spec.unit
-                                    )
-                                })
-                        })
+                    let params = c.parameters(experiment.pairs());
+                    let (_, spec, e) = params.into_iter().find(|(n, _, _)| n == p)?;
+                    Some(format!(
+                        " ({} '{}' of the model class {c}: {}, {})",
+                        e.slot.label(),
+                        e.name,
+                        spec.what,
+                        spec.unit
+                    ))
                 });
                 return Err(Error::input(
                     &file,

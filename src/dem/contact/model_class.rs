@@ -186,16 +186,19 @@ impl ModelClass {
         v
     }
 
-    /// The parameters the class needs for contacts of `pairs`, in slot order, each with the
-    /// effect it belongs to.
-    pub fn parameters(&self, pairs: &[Pair]) -> Vec<(&'static str, &'static ParamSpec, Pair)> {
-        let mut v = Vec::new();
+    /// The parameters the class needs for contacts of `pairs`, in slot order, each with its
+    /// spec and the effect it belongs to.
+    pub fn parameters(
+        &self,
+        pairs: &[Pair],
+    ) -> Vec<(&'static str, &'static ParamSpec, &'static EffectSpec)> {
+        let mut v: Vec<(&'static str, &'static ParamSpec, &'static EffectSpec)> = Vec::new();
         for e in self.effects() {
             for p in e.params {
                 for &pair in pairs {
                     let name = p.name(pair);
                     if !v.iter().any(|(n, _, _)| *n == name) {
-                        v.push((name, p, pair));
+                        v.push((name, p, e));
                     }
                 }
             }
