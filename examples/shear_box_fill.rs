@@ -1,0 +1,74 @@
+//! mbgc's shear box against an independent LIGGGHTS deck that fills itself (issue 13).
+//! cargo run --release --example shear_box_fill -- CODE POINT SEEDS [k] [classes] [out.tsv]
+//! CODE: mbgc | liggghts; POINT: a (mu_pp 0.1, mu_r_pp 0.1) | b (mu_pp 0.7, mu_r_pp 0.6);
+//! classes: mbgc's PSD quantised to that many classes (0: continuous), or LIGGGHTS' templates.
+use std::io::Write as _;
+
+use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet};
+use mbgc::studies::shear_box_fill::{fill_deck, mean_se, run_liggghts, run_mbgc, FillMeasure};
+
+fn main() {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let code = a.first().map(String::as_str).unwrap_or("mbgc").to_owned();
+    let point = a.get(1).map(String::as_str).unwrap_or("a").to_owned();
+    let seeds: u64 = a.get(2).map(|s| s.parse().expect("seeds")).unwrap_or(3);
+    let k: f64 = a.get(3).map(|s| s.parse().expect("k")).unwrap_or(10.0);
+    let classes: usize = a.get(4).map(|s| s.parse().expect("classes")).unwrap_or(5);
+    let out = a.get(5).cloned().unwrap_or("target/shear-box-fill.tsv".into());
+    let (mu, mur) = if point == "a" { (0.1, 0.1) } else { (0.7, 0.6) };
+    let p = ParamSet::from_pairs(&[
+        ("E_p", 5e6),
+        ("E_w", 5e6),
+        ("nu_p", 0.3),
+        ("e_pp", 0.5),
+        ("e_pw", 0.5),
+        ("mu_pp", mu),
+        ("mu_pw", 0.3),
+        ("mu_r_pp", mur),
+        ("mu_r_pw", 0.3),
+        ("rho_p", 2600.0),
+        ("d50", 8.0),
+        ("sigma_ln", 0.15),
+    ]);
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&out)
+        .expect("output table");
+    let (mut angle, mut bulk) = (Vec::new(), Vec::new());
+    for seed in 1..=seeds {
+        let t = std::time::Instant::now();
+        let m: FillMeasure = if code == "mbgc" {
+            let sb = ShearBox {
+                box_scale: k,
+                psd_classes: classes,
+                ..Default::default()
+            };
+            run_mbgc(&sb, &p, seed).expect("mbgc run")
+        } else {
+            let sb = ShearBox {
+                box_scale: k,
+                ..Default::default()
+            };
+            let deck = fill_deck(&sb, &p, seed, classes, None).expect("deck");
+            let d_max = sb.layout(&p, seed).expect("layout").d_max;
+            let dir = format!("target/shear-box-fill/{code}-{point}-{classes}-{seed}");
+            run_liggghts(std::path::Path::new(&dir), &p, &deck, d_max).expect("LIGGGHTS run")
+        };
+        let line = format!(
+            "{code}\t{point}\t{k}\t{classes}\t{seed}\t{}\t{:.1}",
+            m.row(),
+            t.elapsed().as_secs_f64()
+        );
+        println!("{line}");
+        writeln!(file, "{line}").expect("write");
+        angle.push(m.shear_angle);
+        bulk.push(m.bulk_density);
+    }
+    let (am, ase) = mean_se(&angle);
+    let (bm, bse) = mean_se(&bulk);
+    println!(
+        "# {code} point {point} k {k} classes {classes}: angle {am:.2} +- {ase:.2} deg, bulk {bm:.1} +- {bse:.1} kg/m3 (n = {seeds}); columns: code point k classes seed {} wall_s",
+        FillMeasure::HEADER.replace('\t', " ")
+    );
+}
