@@ -231,9 +231,13 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     let _ = writeln!(
         s,
         "variable vxz atom sqrt(vx*vx+vz*vz)*(x<={})\ncompute vmax all reduce max v_vxz\n\
-         thermo_style custom step atoms c_ke c_vmax\nvariable vm equal c_vmax\nvariable q equal 0\n\
-         variable open equal ${{st}}",
-        num(l)
+         thermo_style custom step atoms c_ke c_vmax\n\
+         thermo_modify lost ignore norm no\nvariable vm equal c_vmax\nvariable q equal 0\n\
+         variable open equal ${{st}}\n\
+         variable tmin equal ${{open}}+{}\nvariable tmax equal ${{open}}+{}",
+        num(l),
+        d.min_flow_steps,
+        d.max_flow_steps
     );
     let _ = writeln!(
         s,
@@ -241,13 +245,11 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
          variable n1 equal ${{na}}\n\
          variable qq equal (${{n1}}==${{n0}})*(${{vm}}<{})*(${{vrms}}<{})*(${{q}}+1)\n\
          variable q equal ${{qq}}\n\
-         if \"(${{q}} >= 5 && ${{st}} > ${{open}}+{}) || ${{st}} >= ${{open}}+{}\" then \"jump SELF done\"\n\
+         if \"(${{q}} >= 5 && ${{st}} > ${{tmin}}) || ${{st}} >= ${{tmax}}\" then \"jump SELF done\"\n\
          jump SELF flow\nlabel done",
         d.chunk,
         num(d.v_move),
         num(d.v_rest),
-        d.min_flow_steps,
-        d.max_flow_steps
     );
     let _ = writeln!(s, "print \"FLOW_END ${{st}} ${{q}}\"");
     s.push_str(&dump(FINAL_DUMP));
