@@ -2,6 +2,8 @@
 //! cargo run --release --example shear_box_fill -- CODE POINT SEEDS [k] [classes] [out.tsv]
 //! CODE: mbgc | liggghts; POINT: a (mu_pp 0.1, mu_r_pp 0.1) | b (mu_pp 0.7, mu_r_pp 0.6);
 //! classes: mbgc's PSD quantised to that many classes (0: continuous), or LIGGGHTS' templates.
+//! column (LIGGGHTS only): "lattice" (mbgc's column, from the floor) or "above" (the same
+//! height, starting at the rim), or "above:F": above the rim at solid fraction F.
 use std::io::Write as _;
 
 use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet};
@@ -15,6 +17,7 @@ fn main() {
     let k: f64 = a.get(3).map(|s| s.parse().expect("k")).unwrap_or(10.0);
     let classes: usize = a.get(4).map(|s| s.parse().expect("classes")).unwrap_or(5);
     let out = a.get(5).cloned().unwrap_or("target/shear-box-fill.tsv".into());
+    let col = a.get(6).cloned().unwrap_or("lattice".into());
     let (mu, mur) = if point == "a" { (0.1, 0.1) } else { (0.7, 0.6) };
     let p = ParamSet::from_pairs(&[
         ("E_p", 5e6),
@@ -50,13 +53,24 @@ fn main() {
                 box_scale: k,
                 ..Default::default()
             };
-            let deck = fill_deck(&sb, &p, seed, classes, None).expect("deck");
-            let d_max = sb.layout(&p, seed).expect("layout").d_max;
-            let dir = format!("target/shear-box-fill/{code}-{point}-{classes}-{seed}");
+            let lattice = fill_deck(&sb, &p, seed, classes, None).expect("deck");
+            let lay = sb.layout(&p, seed).expect("layout");
+            let [l, w, h] = lay.size;
+            let column = match col.split_once(':') {
+                _ if col == "lattice" => None,
+                None => Some((h, h + lattice.column.1 - lattice.column.0)),
+                Some((_, f)) => {
+                    let f: f64 = f.parse().expect("solid fraction");
+                    Some((h, h + lattice.mass / 2600.0 / (f * l * w)))
+                }
+            };
+            let deck = fill_deck(&sb, &p, seed, classes, column).expect("deck");
+            let d_max = lay.d_max;
+            let dir = format!("target/shear-box-fill/{code}-{point}-{classes}-{col}-{seed}");
             run_liggghts(std::path::Path::new(&dir), &p, &deck, d_max).expect("LIGGGHTS run")
         };
         let line = format!(
-            "{code}\t{point}\t{k}\t{classes}\t{seed}\t{}\t{:.1}",
+            "{code}\t{point}\t{k}\t{classes}/{col}\t{seed}\t{}\t{:.1}",
             m.row(),
             t.elapsed().as_secs_f64()
         );

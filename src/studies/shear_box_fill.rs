@@ -151,7 +151,9 @@ pub fn fill_deck(
         ((w / pitch).floor() as usize).max(1),
     );
     let layers = lay.diameters.len().div_ceil(nx * ny);
-    let col_top = layers as f64 * pitch + pitch;
+    let column = column.unwrap_or((0.0, layers as f64 * pitch));
+    // A column placed elsewhere than mbgc's needs the walls, domain and fall time to follow it.
+    let col_top = (layers as f64 * pitch).max(column.1) + pitch;
     let wall_h = col_top.max(h) + lay.d_max;
     let dt = sb.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, get("E_p")?, get("nu_p")?);
     let chunk = ((0.01 / dt).ceil() as u64).max(10);
@@ -167,7 +169,7 @@ pub fn fill_deck(
         size: lay.size,
         classes: reps,
         mass,
-        column: column.unwrap_or((0.0, layers as f64 * pitch)),
+        column,
         domain: (
             [-margin - l, -margin, -margin - h],
             [2.0 * l + margin, w + margin, wall_h + margin],
