@@ -16,7 +16,10 @@ fn main() {
     let seeds: u64 = a.get(2).map(|s| s.parse().expect("seeds")).unwrap_or(3);
     let k: f64 = a.get(3).map(|s| s.parse().expect("k")).unwrap_or(10.0);
     let classes: usize = a.get(4).map(|s| s.parse().expect("classes")).unwrap_or(5);
-    let out = a.get(5).cloned().unwrap_or("target/shear-box-fill.tsv".into());
+    let out = a
+        .get(5)
+        .cloned()
+        .unwrap_or("target/shear-box-fill.tsv".into());
     let col = a.get(6).cloned().unwrap_or("lattice".into());
     let (mu, mur) = if point == "a" { (0.1, 0.1) } else { (0.7, 0.6) };
     let p = ParamSet::from_pairs(&[

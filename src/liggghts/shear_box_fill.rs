@@ -65,7 +65,9 @@ pub struct FillDeck {
 /// seeds give distinct primes for seeds below about 10^6.
 pub fn prime_seed(seed: u64) -> u64 {
     let is_prime = |n: u64| n > 1 && (2..).take_while(|d| d * d <= n).all(|d| n % d != 0);
-    (10_001 + 7919 * seed..).find(|&n| is_prime(n)).unwrap_or(10_007)
+    (10_001 + 7919 * seed..)
+        .find(|&n| is_prime(n))
+        .unwrap_or(10_007)
 }
 
 /// Writes the wall meshes and the input script into `dir`.
@@ -101,7 +103,9 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     let rho = get("rho_p")?;
     let (e_p, e_w, nu) = (get("E_p")?, get("E_w")?, get("nu_p")?);
     let pair = |pp: f64, pw: f64| format!("{} {} {} {}", num(pp), num(pw), num(pw), num(pw));
-    let mut s = String::from("# mbgc shear box, filled by LIGGGHTS itself. Type 1: particles, type 2: walls.\n");
+    let mut s = String::from(
+        "# mbgc shear box, filled by LIGGGHTS itself. Type 1: particles, type 2: walls.\n",
+    );
     let _ = writeln!(s, "units si\natom_style granular\natom_modify map array\nboundary f f f\nnewton off\ncommunicate single vel yes");
     let _ = writeln!(
         s,

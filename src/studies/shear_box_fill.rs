@@ -14,8 +14,7 @@ use crate::dem::timestep::rayleigh_time;
 use crate::dem::vec3::V3;
 use crate::error::{read_to_string, Error, Result};
 use crate::liggghts::shear_box_fill::{
-    write_fill_deck, FillDeck, FILLED_DUMP, FINAL_DUMP, INPUT, INSERTED_DUMP, LOG,
-    PRE_STRIKE_DUMP,
+    write_fill_deck, FillDeck, FILLED_DUMP, FINAL_DUMP, INPUT, INSERTED_DUMP, LOG, PRE_STRIKE_DUMP,
 };
 use crate::liggghts::{parse_dump_rows, require_binary, run_deck};
 use crate::psd::{default_range, Distribution, LogNormal};
@@ -48,15 +47,22 @@ pub struct FillMeasure {
 type Spheres = Vec<(f64, V3)>;
 
 fn solid_in(s: &Spheres, lo: V3, hi: V3) -> f64 {
-    s.iter().map(|(r, x)| sphere_box_volume(*x, *r, lo, hi)).sum()
+    s.iter()
+        .map(|(r, x)| sphere_box_volume(*x, *r, lo, hi))
+        .sum()
 }
 
 /// Column fraction and height of the initial particles.
 fn column(s: &Spheres, size: V3) -> (f64, f64) {
-    let (z0, z1) = s.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (r, x)| {
-        (a.min(x[2] - r), b.max(x[2] + r))
-    });
-    let v: f64 = s.iter().map(|(r, _)| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3)).sum();
+    let (z0, z1) = s
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (r, x)| {
+            (a.min(x[2] - r), b.max(x[2] + r))
+        });
+    let v: f64 = s
+        .iter()
+        .map(|(r, _)| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3))
+        .sum();
     (v / (size[0] * size[1] * (z1 - z0)), z1 - z0)
 }
 
@@ -205,10 +211,12 @@ pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Re
     let rho = p.get("rho_p").unwrap_or(f64::NAN);
     let read = |name: &str| -> Result<Spheres> {
         let f = dir.join(name);
-        Ok(parse_dump_rows(&f.display().to_string(), &read_to_string(&f)?)?
-            .into_iter()
-            .map(|(_, r, x)| (r, x))
-            .collect())
+        Ok(
+            parse_dump_rows(&f.display().to_string(), &read_to_string(&f)?)?
+                .into_iter()
+                .map(|(_, r, x)| (r, x))
+                .collect(),
+        )
     };
     let inserted = read(INSERTED_DUMP)?;
     let filled = read(FILLED_DUMP)?;
