@@ -8,7 +8,7 @@ use std::path::Path;
 
 use crate::dem::analysis::sphere_box_volume;
 use crate::dem::experiments::shear_box::{measure_flank, psd_classes, ShearBox};
-use crate::dem::experiments::{Experiment, ParamSet, RunOptions};
+use crate::dem::experiments::{ParamSet, RunOptions};
 use crate::dem::particles::Particles;
 use crate::dem::timestep::rayleigh_time;
 use crate::dem::vec3::V3;
@@ -255,11 +255,6 @@ pub fn mean_se(v: &[f64]) -> (f64, f64) {
     (m, sd / (v.len() as f64).sqrt())
 }
 
-/// The experiment's default, so that a caller can check what it compares against.
-pub fn default_box() -> ShearBox {
-    ShearBox::default()
-}
-
 impl FillMeasure {
     /// One tab-separated row (see [`FillMeasure::HEADER`]).
     pub fn row(&self) -> String {
@@ -279,9 +274,4 @@ impl FillMeasure {
         )
     }
     pub const HEADER: &'static str = "angle\tbulk\tr2\tinserted\tfilled\tcol_frac\tcol_h\tbed_top\tcore_frac\tbox_frac_pre\tfill_steps";
-}
-
-/// Whether `sb` is the experiment as users run it, apart from the comparison hooks.
-pub fn is_default(sb: &ShearBox) -> bool {
-    sb.psd_classes == 0 && sb.name() == "shear-box"
 }

@@ -744,4 +744,29 @@ mod tests {
             "{e}"
         );
     }
+
+    #[test]
+    fn psd_classes_carry_equal_mass_and_quantising_keeps_the_default_draw() {
+        let p = ParamSet::from_pairs(&[("d50", 8.0), ("sigma_ln", 0.15)]);
+        let plain = ShearBox::default().layout(&p, 3).unwrap();
+        let five = ShearBox {
+            psd_classes: 5,
+            ..ShearBox::default()
+        }
+        .layout(&p, 3)
+        .unwrap();
+        let dist = Distribution::LogNormal(LogNormal::new(8.0, 0.15).unwrap());
+        let reps = psd_classes(&dist, default_range(&dist), 5);
+        // The middle class of five of equal mass is the mass median.
+        assert!((reps[2] - 8.0).abs() < 1e-9, "{reps:?}");
+        assert!(reps.windows(2).all(|w| w[0] < w[1]));
+        assert!(five
+            .diameters
+            .iter()
+            .all(|d| reps.iter().any(|r| (r * 1e-3 - d).abs() < 1e-12)));
+        // Same box, about the same solid volume.
+        assert_eq!(plain.size, five.size);
+        let vol = |l: &Layout| l.diameters.iter().map(|d| d.powi(3)).sum::<f64>();
+        assert!((vol(&five) / vol(&plain) - 1.0).abs() < 0.03);
+    }
 }
