@@ -40,6 +40,10 @@ pub struct FillMeasure {
     pub core_fraction: f64,
     /// Solid fraction of the whole box before the strike-off (spheres cut by the box's faces).
     pub box_fraction_pre: f64,
+    /// The bulk density the bed before the strike-off gives under another strike-off rule, one
+    /// a LIGGGHTS user may well write: every particle reaching above the rim deleted (not only
+    /// those whose centre is above), the rest counted whole.
+    pub top_rule_density: f64,
     pub fill_steps: u64,
 }
 
@@ -85,7 +89,7 @@ fn bed_top(s: &Spheres, size: V3, d_max: f64) -> f64 {
     t.iter().sum::<f64>() / t.len().max(1) as f64 / size[2]
 }
 
-fn bed(s: &Spheres, size: V3, d_max: f64, m: &mut FillMeasure) {
+fn bed(s: &Spheres, size: V3, d_max: f64, rho: f64, m: &mut FillMeasure) {
     let [l, w, h] = size;
     let lo = [d_max; 3];
     let hi = [l - d_max, w - d_max, h - d_max];
@@ -93,6 +97,12 @@ fn bed(s: &Spheres, size: V3, d_max: f64, m: &mut FillMeasure) {
     m.core_fraction = solid_in(s, lo, hi) / core_vol;
     m.box_fraction_pre = solid_in(s, [0.0; 3], size) / (l * w * h);
     m.bed_top = bed_top(s, size, d_max);
+    m.top_rule_density = rho
+        * s.iter()
+            .filter(|(r, x)| x[2] + r <= h)
+            .map(|(r, x)| sphere_box_volume(*x, *r, [0.0; 3], size))
+            .sum::<f64>()
+        / (l * w * h);
 }
 
 /// mbgc's own run, with the extra measures taken from its run record.
@@ -118,7 +128,8 @@ pub fn run_mbgc(sb: &ShearBox, p: &ParamSet, seed: u64) -> Result<FillMeasure> {
         fill_steps: rec.fill_steps,
         ..Default::default()
     };
-    bed(&rec.filled, size, rec.layout.d_max, &mut m);
+    let rho = p.get("rho_p").unwrap_or(f64::NAN);
+    bed(&rec.filled, size, rec.layout.d_max, rho, &mut m);
     Ok(m)
 }
 
@@ -245,7 +256,7 @@ pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Re
         fill_steps,
         ..Default::default()
     };
-    bed(&read(PRE_STRIKE_DUMP)?, size, d_max, &mut m);
+    bed(&read(PRE_STRIKE_DUMP)?, size, d_max, rho, &mut m);
     Ok(m)
 }
 
@@ -259,7 +270,7 @@ impl FillMeasure {
     /// One tab-separated row (see [`FillMeasure::HEADER`]).
     pub fn row(&self) -> String {
         format!(
-            "{:.3}\t{:.1}\t{:.3}\t{}\t{}\t{:.4}\t{:.4}\t{:.4}\t{:.4}\t{:.4}\t{}",
+            "{:.3}\t{:.1}\t{:.3}\t{}\t{}\t{:.4}\t{:.4}\t{:.4}\t{:.4}\t{:.4}\t{:.1}\t{}",
             self.shear_angle,
             self.bulk_density,
             self.flank_r2,
@@ -270,8 +281,9 @@ impl FillMeasure {
             self.bed_top,
             self.core_fraction,
             self.box_fraction_pre,
+            self.top_rule_density,
             self.fill_steps
         )
     }
-    pub const HEADER: &'static str = "angle\tbulk\tr2\tinserted\tfilled\tcol_frac\tcol_h\tbed_top\tcore_frac\tbox_frac_pre\tfill_steps";
+    pub const HEADER: &'static str = "angle\tbulk\tr2\tinserted\tfilled\tcol_frac\tcol_h\tbed_top\tcore_frac\tbox_frac_pre\ttop_rule_bulk\tfill_steps";
 }
