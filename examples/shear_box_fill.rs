@@ -1,6 +1,7 @@
 //! mbgc's shear box against an independent LIGGGHTS deck that fills itself (issue 13).
 //! cargo run --release --example shear_box_fill -- CODE POINT SEEDS [k] [classes] [out.tsv]
-//! CODE: mbgc | liggghts; POINT: a (mu_pp 0.1, mu_r_pp 0.1) | b (mu_pp 0.7, mu_r_pp 0.6);
+//! CODE: mbgc | liggghts | replay (mbgc, then LIGGGHTS continuing from mbgc's lattice: the
+//! replay deck, whose row is printed as code "replay-liggghts"); POINT: a (mu_pp 0.1, mu_r_pp 0.1) | b (mu_pp 0.7, mu_r_pp 0.6);
 //! classes: mbgc's PSD quantised to that many classes (0: continuous), or LIGGGHTS' templates.
 //! column (LIGGGHTS only): "lattice" (mbgc's column, from the floor) or "above" (the same
 //! height, starting at the rim), or "above:F": above the rim at solid fraction F.
@@ -44,13 +45,35 @@ fn main() {
     let (mut angle, mut bulk) = (Vec::new(), Vec::new());
     for seed in 1..=seeds {
         let t = std::time::Instant::now();
+        if code == "replay" {
+            let sb = ShearBox {
+                box_scale: k,
+                ..Default::default()
+            };
+            let (o, rec) = run_mbgc(&sb, &p, seed).expect("mbgc run");
+            let dir = format!("target/shear-box-fill/replay-{point}-{seed}");
+            let r =
+                mbgc::studies::shear_box_vs_liggghts::replay(std::path::Path::new(&dir), &p, &rec)
+                    .expect("LIGGGHTS replay");
+            let line = format!(
+                "mbgc\t{point}\t{k}\t0/lattice\t{seed}\t{}\nreplay-liggghts\t{point}\t{k}\t0\t{seed}\t{:.3}\t{:.1}",
+                o.row(),
+                r.shear_angle,
+                r.bulk_density
+            );
+            println!("{line}");
+            writeln!(file, "{line}").expect("write");
+            angle.push(r.shear_angle);
+            bulk.push(r.bulk_density);
+            continue;
+        }
         let m: FillMeasure = if code == "mbgc" {
             let sb = ShearBox {
                 box_scale: k,
                 psd_classes: classes,
                 ..Default::default()
             };
-            run_mbgc(&sb, &p, seed).expect("mbgc run")
+            run_mbgc(&sb, &p, seed).expect("mbgc run").0
         } else {
             let sb = ShearBox {
                 box_scale: k,

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use crate::dem::analysis::sphere_box_volume;
-use crate::dem::experiments::shear_box::{measure_flank, psd_classes, ShearBox};
+use crate::dem::experiments::shear_box::{measure_flank, psd_classes, RunRecord, ShearBox};
 use crate::dem::experiments::{ParamSet, RunOptions};
 use crate::dem::particles::Particles;
 use crate::dem::timestep::rayleigh_time;
@@ -105,8 +105,8 @@ fn bed(s: &Spheres, size: V3, d_max: f64, rho: f64, m: &mut FillMeasure) {
         / (l * w * h);
 }
 
-/// mbgc's own run, with the extra measures taken from its run record.
-pub fn run_mbgc(sb: &ShearBox, p: &ParamSet, seed: u64) -> Result<FillMeasure> {
+/// mbgc's own run, with the extra measures taken from its run record (returned for a replay).
+pub fn run_mbgc(sb: &ShearBox, p: &ParamSet, seed: u64) -> Result<(FillMeasure, RunRecord)> {
     let (o, rec) = sb.run_recorded(p, seed, &RunOptions::default())?;
     let size = rec.layout.size;
     let initial: Spheres = rec
@@ -130,7 +130,7 @@ pub fn run_mbgc(sb: &ShearBox, p: &ParamSet, seed: u64) -> Result<FillMeasure> {
     };
     let rho = p.get("rho_p").unwrap_or(f64::NAN);
     bed(&rec.filled, size, rec.layout.d_max, rho, &mut m);
-    Ok(m)
+    Ok((m, rec))
 }
 
 /// The LIGGGHTS deck of the same procedure as `sb` runs it for `p` and `seed`, with the PSD as
