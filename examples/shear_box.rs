@@ -1,6 +1,6 @@
 //! One shear-box run with a side-view picture:
 //! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png]
-use mbgc::dem::experiments::{shear_box::ShearBox, Experiment, ParamSet, RunOptions};
+use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
 
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
@@ -28,6 +28,18 @@ fn main() {
         threads: 1,
         ..Default::default()
     };
-    let o = sb.run(&p, 1, &opts).expect("run");
+    let (o, rec) = sb.run_recorded(&p, 1, &opts).expect("run");
     println!("{:?}\n{:?}", o.responses, o.diagnostics);
+    // Where a whole run's time goes: the fill (creation, fall, rest, strike-off) and the outflow.
+    println!(
+        "created {} particles, {} in the box after the strike-off; fill {} steps {:.1} s, \
+         outflow {} steps {:.1} s (dt {:.3e} s)",
+        rec.created,
+        o.diagnostics.particles,
+        rec.fill_steps + rec.relax_steps,
+        rec.fill_seconds,
+        rec.flow_steps,
+        rec.flow_seconds,
+        rec.dt
+    );
 }
