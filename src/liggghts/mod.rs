@@ -14,6 +14,7 @@ pub mod mesh;
 pub mod number;
 pub mod parse;
 pub mod shear_box;
+pub mod shear_box_fill;
 
 pub use binary::{find_binary, require_binary, run_deck};
 pub use closed_box::{LiggghtsCase, LiggghtsResult};

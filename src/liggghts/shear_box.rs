@@ -269,6 +269,7 @@ mod tests {
                 d_max: 0.005,
             },
             initial_positions: vec![[0.01, 0.01, 0.01], [0.02, 0.02, 0.02]],
+            filled: vec![],
             dt: 1e-5,
             skin: 8e-4,
             fill_steps: 100,

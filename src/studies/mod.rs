@@ -15,4 +15,5 @@ pub mod gp_vs_gplearn;
 pub mod reference;
 pub mod restitution;
 pub mod sampling_quality;
+pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;

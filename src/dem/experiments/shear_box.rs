@@ -32,7 +32,8 @@ use crate::dem::timestep::rayleigh_time;
 use crate::dem::vec3::V3;
 use crate::dem::walls::{Shape, Wall};
 use crate::error::{Error, Result};
-use crate::psd::{default_range, draw_by_number, Distribution, LogNormal};
+use crate::psd::draw::truncated_q3;
+use crate::psd::{default_range, draw_by_number, Distribution, LogNormal, MassDistribution};
 
 pub const BASE_MM: [f64; 3] = [100.0, 100.0, 150.0];
 const G: f64 = 9.81;
@@ -47,6 +48,10 @@ pub struct ShearBox {
     pub max_particles: usize,
     /// The effects of the contact law.
     pub class: ModelClass,
+    /// 0: diameters drawn from the continuous PSD (the experiment). n > 0: every drawn diameter
+    /// is replaced by the representative of its class among n classes of equal mass
+    /// ([`psd_classes`]), the way a LIGGGHTS user describes a PSD; for comparisons only.
+    pub psd_classes: usize,
 }
 
 /// The parameters the shear box needs whatever the model class (d50 in mm).
@@ -59,6 +64,7 @@ impl Default for ShearBox {
             dt_fraction: 0.25,
             max_particles: 200_000,
             class: ModelClass::default(),
+            psd_classes: 0,
         }
     }
 }
@@ -95,7 +101,11 @@ impl ShearBox {
             // then stands 20-40 % above the rim); the number-based mean volume comes from a
             // first draw.
             let probe = draw_by_number(&dist, (Some(lo), Some(hi)), 2000, seed, "shear box PSD")?;
-            (probe.diameters_mm, lo, hi)
+            (
+                quantize(&dist, (lo, hi), self.psd_classes, probe.diameters_mm),
+                lo,
+                hi,
+            )
         };
         let scale = self.box_scale * d_max_mm / BASE_MM[0].min(BASE_MM[1]).min(BASE_MM[2]);
         let size = [
@@ -127,17 +137,18 @@ impl ShearBox {
             vec![d50_mm * 1e-3; n]
         } else {
             let dist = Distribution::LogNormal(LogNormal::new(d50_mm, sigma)?);
-            draw_by_number(
+            let drawn = draw_by_number(
                 &dist,
                 (Some(d_min_mm), Some(d_max_mm)),
                 n,
                 seed ^ 0x5eed,
                 "shear box PSD",
             )?
-            .diameters_mm
-            .into_iter()
-            .map(|d| d * 1e-3)
-            .collect()
+            .diameters_mm;
+            quantize(&dist, (d_min_mm, d_max_mm), self.psd_classes, drawn)
+                .into_iter()
+                .map(|d| d * 1e-3)
+                .collect()
         };
         Ok(Layout {
             size,
@@ -148,6 +159,31 @@ impl ShearBox {
     }
 }
 
+/// Representative diameters (mm) of `n` classes of equal mass of `dist` truncated to `range`:
+/// class j spans the truncated Q3 from j/n to (j+1)/n, and its representative is the Q3
+/// quantile at the class's middle, so each class carries 1/n of the mass.
+pub fn psd_classes(dist: &Distribution, range: (f64, f64), n: usize) -> Vec<f64> {
+    let (q_lo, q_hi) = (dist.q3(range.0), dist.q3(range.1));
+    (0..n)
+        .map(|j| dist.q3_inv(q_lo + (q_hi - q_lo) * (j as f64 + 0.5) / n as f64))
+        .collect()
+}
+
+/// Each diameter replaced by its class representative (`n` = 0: unchanged). A drawn set keeps
+/// its mass per class, so the mass fractions stay close to 1/n each.
+fn quantize(dist: &Distribution, range: (f64, f64), n: usize, d: Vec<f64>) -> Vec<f64> {
+    if n == 0 {
+        return d;
+    }
+    let reps = psd_classes(dist, range, n);
+    d.into_iter()
+        .map(|x| {
+            let j = (truncated_q3(dist, range, x) * n as f64).floor() as usize;
+            reps[j.min(n - 1)]
+        })
+        .collect()
+}
+
 /// How a run went, so that another code can replay it: the initial particles and the schedule.
 #[derive(Debug, Clone)]
 pub struct RunRecord {
@@ -155,6 +191,8 @@ pub struct RunRecord {
     pub class: ModelClass,
     pub layout: Layout,
     pub initial_positions: Vec<V3>,
+    /// (radius, position) of every particle at the end of the fill, before the strike-off.
+    pub filled: Vec<(f64, V3)>,
     pub dt: f64,
     pub skin: f64,
     /// Steps from the start to the strike-off.
@@ -489,6 +527,13 @@ impl ShearBox {
             warnings.push("filling did not come to rest within the time limit".into());
         }
         let fill_steps = sim.step;
+        let filled_state: Vec<(f64, V3)> = sim
+            .particles
+            .r
+            .iter()
+            .copied()
+            .zip(sim.particles.x.iter().copied())
+            .collect();
         // Strike off at the rim, then let the bed relax a little.
         let cut: Vec<bool> = sim.particles.x.iter().map(|x| x[2] > h).collect();
         sim.remove_particles(&cut);
@@ -587,6 +632,7 @@ impl ShearBox {
             class: self.class,
             layout: lay.clone(),
             initial_positions,
+            filled: filled_state,
             dt,
             skin,
             fill_steps,
@@ -708,5 +754,30 @@ mod tests {
             e.starts_with("--box-scale 10") && e.contains("sigma_ln = 0.3") && e.contains("1000"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn psd_classes_carry_equal_mass_and_quantising_keeps_the_default_draw() {
+        let p = ParamSet::from_pairs(&[("d50", 8.0), ("sigma_ln", 0.15)]);
+        let plain = ShearBox::default().layout(&p, 3).unwrap();
+        let five = ShearBox {
+            psd_classes: 5,
+            ..ShearBox::default()
+        }
+        .layout(&p, 3)
+        .unwrap();
+        let dist = Distribution::LogNormal(LogNormal::new(8.0, 0.15).unwrap());
+        let reps = psd_classes(&dist, default_range(&dist), 5);
+        // The middle class of five of equal mass is the mass median.
+        assert!((reps[2] - 8.0).abs() < 1e-9, "{reps:?}");
+        assert!(reps.windows(2).all(|w| w[0] < w[1]));
+        assert!(five
+            .diameters
+            .iter()
+            .all(|d| reps.iter().any(|r| (r * 1e-3 - d).abs() < 1e-12)));
+        // Same box, about the same solid volume.
+        assert_eq!(plain.size, five.size);
+        let vol = |l: &Layout| l.diameters.iter().map(|d| d.powi(3)).sum::<f64>();
+        assert!((vol(&five) / vol(&plain) - 1.0).abs() < 0.03);
     }
 }

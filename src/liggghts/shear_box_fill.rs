@@ -1,0 +1,285 @@
+//! The shear box (seed 004) as an independent LIGGGHTS 3.8 deck that fills itself: LIGGGHTS
+//! creates the particles with its own insertion (`insert/pack` into the column mbgc's lattice
+//! occupies, the PSD as `n` particle templates of equal mass combined by
+//! `particledistribution/discrete`), so that a difference in how the box is filled shows up,
+//! which the replay of [`super::shear_box`] cannot see. Everything else follows mbgc's procedure
+//! and stop rules: the same box, walls, contact law, time step and total solid mass; fill until
+//! the translational rms speed falls below the same threshold (after the free-fall time); strike
+//! off every particle whose centre lies above the rim; relax one chunk; remove the flap; remove
+//! what fell below the floor every chunk; stop after five quiet chunks once the minimum outflow
+//! time has passed.
+//!
+//! LIGGGHTS 3.8 wants its random seeds prime and above 10 000, hence [`prime_seed`].
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::mesh::rect_stl;
+use super::number::num;
+use super::shear_box::{gran_model, GranModel};
+use crate::dem::contact::ModelClass;
+use crate::dem::experiments::ParamSet;
+use crate::dem::vec3::V3;
+use crate::error::{write_atomic, Error, Result};
+
+pub const INPUT: &str = "in.shear_box_fill";
+pub const LOG: &str = "log.shear_box_fill";
+/// Dumps: just after insertion, at the end of the fill, after strike-off and relaxation, final.
+pub const INSERTED_DUMP: &str = "inserted.dump";
+pub const PRE_STRIKE_DUMP: &str = "prestrike.dump";
+pub const FILLED_DUMP: &str = "filled.dump";
+pub const FINAL_DUMP: &str = "final.dump";
+
+/// What the deck needs, in SI units; the study derives it from mbgc's layout so that both codes
+/// run the same procedure.
+#[derive(Debug, Clone)]
+pub struct FillDeck {
+    pub class: ModelClass,
+    /// l, w, h of the box.
+    pub size: V3,
+    /// (diameter, mass fraction) of each particle template.
+    pub classes: Vec<(f64, f64)>,
+    /// Total particle mass inserted (kg).
+    pub mass: f64,
+    /// Insertion column: z range over the box's base.
+    pub column: (f64, f64),
+    pub domain: (V3, V3),
+    pub dt: f64,
+    pub skin: f64,
+    pub chunk: u64,
+    /// Fill ends at rest (rms speed below `v_rest`) after `fall_steps`, or at `max_fill_steps`.
+    pub v_rest: f64,
+    pub fall_steps: u64,
+    pub max_fill_steps: u64,
+    /// Outflow: a particle in the box moving faster than this in x-z counts as motion.
+    pub v_move: f64,
+    /// Least and most steps with the flap open.
+    pub min_flow_steps: u64,
+    pub max_flow_steps: u64,
+    pub removal_height: f64,
+    /// Any number; made prime for LIGGGHTS.
+    pub seed: u64,
+}
+
+/// The smallest prime above 10 000 + 7919 `seed` (LIGGGHTS refuses other seeds); distinct
+/// seeds give distinct primes for seeds below about 10^6.
+pub fn prime_seed(seed: u64) -> u64 {
+    let is_prime = |n: u64| {
+        n > 1
+            && (2..)
+                .take_while(|d| d * d <= n)
+                .all(|d| !n.is_multiple_of(d))
+    };
+    (10_001 + 7919 * seed..)
+        .find(|&n| is_prime(n))
+        .unwrap_or(10_007)
+}
+
+/// Writes the wall meshes and the input script into `dir`.
+pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
+    let get = |k: &str| {
+        p.get(k)
+            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
+    };
+    if d.classes.is_empty() {
+        return Err(Error::invalid("shear box fill deck: no particle classes"));
+    }
+    let GranModel { models, settings } = gran_model(&d.class)?;
+    let [l, w, h] = d.size;
+    let (lo, hi) = d.domain;
+    let wall_h = hi[2] - 1e-9;
+    let walls = [
+        ("floor", [0.0, 0.0, 0.0], [l, 0.0, 0.0], [0.0, w, 0.0]),
+        ("back", [0.0, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, wall_h]),
+        (
+            "side_lo",
+            [0.0, 0.0, 0.0],
+            [l, 0.0, 0.0],
+            [0.0, 0.0, wall_h],
+        ),
+        ("side_hi", [0.0, w, 0.0], [l, 0.0, 0.0], [0.0, 0.0, wall_h]),
+    ];
+    for (name, c, a, b) in walls {
+        write_atomic(
+            &dir.join(format!("{name}.stl")),
+            rect_stl(name, c, a, b).as_bytes(),
+        )?;
+    }
+    let rho = get("rho_p")?;
+    let (e_p, e_w, nu) = (get("E_p")?, get("E_w")?, get("nu_p")?);
+    let pair = |pp: f64, pw: f64| format!("{} {} {} {}", num(pp), num(pw), num(pw), num(pw));
+    let mut s = String::from(
+        "# mbgc shear box, filled by LIGGGHTS itself. Type 1: particles, type 2: walls.\n",
+    );
+    let _ = writeln!(s, "units si\natom_style granular\natom_modify map array\nboundary f f f\nnewton off\ncommunicate single vel yes");
+    let _ = writeln!(
+        s,
+        "region domain block {} {} {} {} {} {} units box\ncreate_box 2 domain",
+        num(lo[0]),
+        num(hi[0]),
+        num(lo[1]),
+        num(hi[1]),
+        num(lo[2]),
+        num(hi[2])
+    );
+    let _ = writeln!(s, "neighbor {} bin\nneigh_modify delay 0\n", num(d.skin));
+    let _ = writeln!(
+        s,
+        "fix m1 all property/global youngsModulus peratomtype {} {}",
+        num(e_p),
+        num(e_w)
+    );
+    let _ = writeln!(
+        s,
+        "fix m2 all property/global poissonsRatio peratomtype {} {}",
+        num(nu),
+        num(nu)
+    );
+    let _ = writeln!(
+        s,
+        "fix m3 all property/global coefficientRestitution peratomtypepair 2 {}",
+        pair(get("e_pp")?, get("e_pw")?)
+    );
+    let _ = writeln!(
+        s,
+        "fix m4 all property/global coefficientFriction peratomtypepair 2 {}",
+        pair(get("mu_pp")?, get("mu_pw")?)
+    );
+    let _ = writeln!(
+        s,
+        "fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n",
+        pair(get("mu_r_pp")?, get("mu_r_pw")?)
+    );
+    let _ = writeln!(
+        s,
+        "pair_style gran {models}{settings}\npair_coeff * *\ntimestep {}",
+        num(d.dt)
+    );
+    let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
+    for (name, ..) in &walls {
+        let _ = writeln!(s, "fix {name} all mesh/surface file {name}.stl type 2");
+    }
+    let _ = writeln!(
+        s,
+        "fix box all wall/gran {models} mesh n_meshes 4 meshes floor back side_lo side_hi{settings}"
+    );
+    let _ = writeln!(
+        s,
+        "fix flapwall all wall/gran {models} primitive type 2 xplane {}{settings}",
+        num(l)
+    );
+    // Each template and the distribution need their own prime seed.
+    let mut dist = format!(
+        "fix pdd all particledistribution/discrete {} {}",
+        prime_seed(d.seed * 31 + 1),
+        d.classes.len()
+    );
+    for (k, (diam, frac)) in d.classes.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "fix pts{k} all particletemplate/sphere {} atom_type 1 density constant {} radius constant {}",
+            prime_seed(d.seed * 31 + 2 + k as u64),
+            num(rho),
+            num(0.5 * diam)
+        );
+        let _ = write!(dist, " pts{k} {}", num(*frac));
+    }
+    let _ = writeln!(s, "{dist}");
+    let _ = writeln!(
+        s,
+        "region column block 0 {} 0 {} {} {} units box",
+        num(l),
+        num(w),
+        num(d.column.0),
+        num(d.column.1)
+    );
+    let _ = writeln!(
+        s,
+        "fix ins all insert/pack seed {} distributiontemplate pdd maxattempt 1000 insert_every once \
+         overlapcheck yes all_in yes vel constant 0. 0. 0. region column mass_in_region {}",
+        prime_seed(d.seed),
+        num(d.mass)
+    );
+    let _ = writeln!(s, "fix integrate all nve/sphere");
+    let dump = |name: &str| {
+        format!("write_dump all custom {name} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"\n")
+    };
+    // The rest checks read c_ke between runs; thermo at the end of each run keeps it current.
+    let _ = writeln!(
+        s,
+        "compute ke all ke\nvariable vrms equal sqrt(2*c_ke/mass(all))\nvariable st equal step\n\
+         variable na equal atoms\nthermo_style custom step atoms c_ke\nthermo {}\n\
+         thermo_modify lost ignore norm no\n",
+        d.chunk
+    );
+    let _ = writeln!(s, "run 1");
+    s.push_str(&dump(INSERTED_DUMP));
+    let _ = writeln!(
+        s,
+        "label fill\nrun {}\nif \"(${{vrms}} < {} && ${{st}} > {}) || ${{st}} >= {}\" then \"jump SELF filled\"\njump SELF fill\nlabel filled",
+        d.chunk,
+        num(d.v_rest),
+        d.fall_steps,
+        d.max_fill_steps
+    );
+    let _ = writeln!(s, "print \"FILL_STEPS ${{st}}\"");
+    s.push_str(&dump(PRE_STRIKE_DUMP));
+    let _ = writeln!(
+        s,
+        "region above block INF INF INF INF {} INF units box\ndelete_atoms region above compress no",
+        num(h)
+    );
+    let _ = writeln!(s, "run {}", d.chunk);
+    s.push_str(&dump(FILLED_DUMP));
+    let _ = writeln!(s, "unfix flapwall");
+    let _ = writeln!(
+        s,
+        "region below block INF INF INF INF INF {} units box",
+        num(d.removal_height)
+    );
+    let _ = writeln!(
+        s,
+        "variable vxz atom sqrt(vx*vx+vz*vz)*(x<={})\ncompute vmax all reduce max v_vxz\n\
+         thermo_style custom step atoms c_ke c_vmax\n\
+         thermo_modify lost ignore norm no\nvariable vm equal c_vmax\nvariable q equal 0\n\
+         variable open equal ${{st}}\n\
+         variable tmin equal ${{open}}+{}\nvariable tmax equal ${{open}}+{}",
+        num(l),
+        d.min_flow_steps,
+        d.max_flow_steps
+    );
+    let _ = writeln!(
+        s,
+        "label flow\nrun {}\nvariable n0 equal ${{na}}\ndelete_atoms region below compress no\n\
+         variable n1 equal ${{na}}\n\
+         variable qq equal (${{n1}}==${{n0}})*(${{vm}}<{})*(${{vrms}}<{})*(${{q}}+1)\n\
+         variable q equal ${{qq}}\n\
+         if \"(${{q}} >= 5 && ${{st}} > ${{tmin}}) || ${{st}} >= ${{tmax}}\" then \"jump SELF done\"\n\
+         jump SELF flow\nlabel done",
+        d.chunk,
+        num(d.v_move),
+        num(d.v_rest),
+    );
+    let _ = writeln!(s, "print \"FLOW_END ${{st}} ${{q}}\"");
+    s.push_str(&dump(FINAL_DUMP));
+    write_atomic(&dir.join(INPUT), s.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seeds_are_distinct_primes_above_ten_thousand() {
+        let s: Vec<u64> = (0..20).map(prime_seed).collect();
+        for (i, a) in s.iter().enumerate() {
+            assert!(
+                *a > 10_000
+                    && (2..*a)
+                        .take_while(|d| d * d <= *a)
+                        .all(|d| !a.is_multiple_of(d))
+            );
+            assert!(!s[..i].contains(a));
+        }
+    }
+}

@@ -1,0 +1,289 @@
+//! The shear box in mbgc against an independent LIGGGHTS 3.8 shear box that fills itself
+//! ([`crate::liggghts::shear_box_fill`]): the bulk density is decided by the fill, which the
+//! replay study cannot see. Both final states are measured by the same code as in the replay
+//! study, and so are the states along the way (the insertion column, the bed before the
+//! strike-off), so that a density gap can be traced to the stage where it opens.
+
+use std::path::Path;
+
+use crate::dem::analysis::sphere_box_volume;
+use crate::dem::experiments::shear_box::{measure_flank, psd_classes, RunRecord, ShearBox};
+use crate::dem::experiments::{ParamSet, RunOptions};
+use crate::dem::particles::Particles;
+use crate::dem::timestep::rayleigh_time;
+use crate::dem::vec3::V3;
+use crate::error::{read_to_string, Error, Result};
+use crate::liggghts::shear_box_fill::{
+    write_fill_deck, FillDeck, FILLED_DUMP, FINAL_DUMP, INPUT, INSERTED_DUMP, LOG, PRE_STRIKE_DUMP,
+};
+use crate::liggghts::{parse_dump_rows, require_binary, run_deck};
+use crate::psd::{default_range, Distribution, LogNormal};
+
+const G: f64 = 9.81;
+
+/// One run of either code, measured by the same functions.
+#[derive(Debug, Clone, Default)]
+pub struct FillMeasure {
+    pub shear_angle: f64,
+    pub bulk_density: f64,
+    pub flank_r2: f64,
+    /// Particles created, and left in the box after the strike-off.
+    pub inserted: usize,
+    pub filled: usize,
+    /// Solid fraction and height (m) of the insertion column: solid volume over base x height.
+    pub column_fraction: f64,
+    pub column_height: f64,
+    /// Mean top of the bed before the strike-off, in box heights.
+    pub bed_top: f64,
+    /// Solid fraction before the strike-off in the core of the box, one d_max away from the
+    /// walls, the floor and the rim: the packing without the wall layers.
+    pub core_fraction: f64,
+    /// Solid fraction of the whole box before the strike-off (spheres cut by the box's faces).
+    pub box_fraction_pre: f64,
+    /// The bulk density the bed before the strike-off gives under another strike-off rule, one
+    /// a LIGGGHTS user may well write: every particle reaching above the rim deleted (not only
+    /// those whose centre is above), the rest counted whole.
+    pub top_rule_density: f64,
+    pub fill_steps: u64,
+}
+
+/// (radius, position) of particles.
+type Spheres = Vec<(f64, V3)>;
+
+fn solid_in(s: &Spheres, lo: V3, hi: V3) -> f64 {
+    s.iter()
+        .map(|(r, x)| sphere_box_volume(*x, *r, lo, hi))
+        .sum()
+}
+
+/// Column fraction and height of the initial particles.
+fn column(s: &Spheres, size: V3) -> (f64, f64) {
+    let (z0, z1) = s
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (r, x)| {
+            (a.min(x[2] - r), b.max(x[2] + r))
+        });
+    let v: f64 = s
+        .iter()
+        .map(|(r, _)| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3))
+        .sum();
+    (v / (size[0] * size[1] * (z1 - z0)), z1 - z0)
+}
+
+/// Mean top of the bed over columns of width d_max, in box heights.
+fn bed_top(s: &Spheres, size: V3, d_max: f64) -> f64 {
+    let n = ((size[0] / d_max).floor() as usize).max(1);
+    let m = ((size[1] / d_max).floor() as usize).max(1);
+    let mut top = vec![f64::NAN; n * m];
+    for (r, x) in s {
+        if x[0] < 0.0 || x[0] >= size[0] || x[1] < 0.0 || x[1] >= size[1] {
+            continue;
+        }
+        let k = ((x[1] / size[1] * m as f64) as usize).min(m - 1) * n
+            + ((x[0] / size[0] * n as f64) as usize).min(n - 1);
+        if top[k].is_nan() || x[2] + r > top[k] {
+            top[k] = x[2] + r;
+        }
+    }
+    let t: Vec<f64> = top.into_iter().filter(|t| !t.is_nan()).collect();
+    t.iter().sum::<f64>() / t.len().max(1) as f64 / size[2]
+}
+
+fn bed(s: &Spheres, size: V3, d_max: f64, rho: f64, m: &mut FillMeasure) {
+    let [l, w, h] = size;
+    let lo = [d_max; 3];
+    let hi = [l - d_max, w - d_max, h - d_max];
+    let core_vol = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    m.core_fraction = solid_in(s, lo, hi) / core_vol;
+    m.box_fraction_pre = solid_in(s, [0.0; 3], size) / (l * w * h);
+    m.bed_top = bed_top(s, size, d_max);
+    m.top_rule_density = rho
+        * s.iter()
+            .filter(|(r, x)| x[2] + r <= h)
+            .map(|(r, x)| sphere_box_volume(*x, *r, [0.0; 3], size))
+            .sum::<f64>()
+        / (l * w * h);
+}
+
+/// mbgc's own run, with the extra measures taken from its run record (returned for a replay).
+pub fn run_mbgc(sb: &ShearBox, p: &ParamSet, seed: u64) -> Result<(FillMeasure, RunRecord)> {
+    let (o, rec) = sb.run_recorded(p, seed, &RunOptions::default())?;
+    let size = rec.layout.size;
+    let initial: Spheres = rec
+        .layout
+        .diameters
+        .iter()
+        .map(|d| 0.5 * d)
+        .zip(rec.initial_positions.iter().copied())
+        .collect();
+    let (column_fraction, column_height) = column(&initial, size);
+    let mut m = FillMeasure {
+        shear_angle: o.get("shear_angle").unwrap_or(f64::NAN),
+        bulk_density: o.get("bulk_density").unwrap_or(f64::NAN),
+        flank_r2: o.get("flank_r2").unwrap_or(f64::NAN),
+        inserted: initial.len(),
+        filled: o.diagnostics.particles,
+        column_fraction,
+        column_height,
+        fill_steps: rec.fill_steps,
+        ..Default::default()
+    };
+    let rho = p.get("rho_p").unwrap_or(f64::NAN);
+    bed(&rec.filled, size, rec.layout.d_max, rho, &mut m);
+    Ok((m, rec))
+}
+
+/// The LIGGGHTS deck of the same procedure as `sb` runs it for `p` and `seed`, with the PSD as
+/// `classes` templates of equal mass; `column` overrides the insertion column's z range.
+pub fn fill_deck(
+    sb: &ShearBox,
+    p: &ParamSet,
+    seed: u64,
+    classes: usize,
+    column: Option<(f64, f64)>,
+) -> Result<FillDeck> {
+    let lay = sb.layout(p, seed)?;
+    let get = |k: &str| {
+        p.get(k)
+            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
+    };
+    let rho = get("rho_p")?;
+    let d50 = get("d50")?;
+    let sigma = p.get("sigma_ln").unwrap_or(0.0);
+    let [l, w, h] = lay.size;
+    let reps: Vec<(f64, f64)> = if sigma < 1e-6 || classes == 0 {
+        vec![(d50 * 1e-3, 1.0)]
+    } else {
+        let dist = Distribution::LogNormal(LogNormal::new(d50, sigma)?);
+        psd_classes(&dist, default_range(&dist), classes)
+            .into_iter()
+            .map(|d| (d * 1e-3, 1.0 / classes as f64))
+            .collect()
+    };
+    // The rest of this mirrors `ShearBox::run_recorded` (lattice column, time step, chunk, rest
+    // thresholds, time limits, domain), so that only the particle creation differs.
+    let pitch = lay.d_max * 1.02;
+    let (nx, ny) = (
+        ((l / pitch).floor() as usize).max(1),
+        ((w / pitch).floor() as usize).max(1),
+    );
+    let layers = lay.diameters.len().div_ceil(nx * ny);
+    let column = column.unwrap_or((0.0, layers as f64 * pitch));
+    // A column placed elsewhere than mbgc's needs the walls, domain and fall time to follow it.
+    let col_top = (layers as f64 * pitch).max(column.1) + pitch;
+    let wall_h = col_top.max(h) + lay.d_max;
+    let dt = sb.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, get("E_p")?, get("nu_p")?);
+    let chunk = ((0.01 / dt).ceil() as u64).max(10);
+    let fall = (2.0 * col_top / G).sqrt();
+    let margin = 4.0 * lay.d_max + 0.5 * h;
+    let mass: f64 = lay
+        .diameters
+        .iter()
+        .map(|d| rho * std::f64::consts::PI / 6.0 * d.powi(3))
+        .sum();
+    Ok(FillDeck {
+        class: sb.class,
+        size: lay.size,
+        classes: reps,
+        mass,
+        column,
+        domain: (
+            [-margin - l, -margin, -margin - h],
+            [2.0 * l + margin, w + margin, wall_h + margin],
+        ),
+        dt,
+        skin: 0.2 * lay.d_min,
+        chunk,
+        v_rest: 0.01 * (G * lay.d_max).sqrt(),
+        fall_steps: (fall / dt) as u64,
+        max_fill_steps: ((fall + 40.0 * (h / G).sqrt()) / dt) as u64,
+        v_move: 0.05 * (G * lay.d_max).sqrt(),
+        min_flow_steps: (4.0 * (h / G).sqrt() / dt) as u64,
+        max_flow_steps: (60.0 * (h / G).sqrt() / dt) as u64,
+        removal_height: -2.0 * lay.d_max,
+        seed,
+    })
+}
+
+/// Runs the deck in `dir` and measures it as mbgc's run is measured.
+pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Result<FillMeasure> {
+    let binary = require_binary()?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    for stale in [INSERTED_DUMP, PRE_STRIKE_DUMP, FILLED_DUMP, FINAL_DUMP, LOG] {
+        let f = dir.join(stale);
+        if f.exists() {
+            std::fs::remove_file(&f).map_err(|e| Error::io(&f, e))?;
+        }
+    }
+    write_fill_deck(dir, p, deck)?;
+    run_deck(&binary, dir, INPUT, LOG)?;
+    let size = deck.size;
+    let [l, w, h] = size;
+    let rho = p.get("rho_p").unwrap_or(f64::NAN);
+    let read = |name: &str| -> Result<Spheres> {
+        let f = dir.join(name);
+        Ok(
+            parse_dump_rows(&f.display().to_string(), &read_to_string(&f)?)?
+                .into_iter()
+                .map(|(_, r, x)| (r, x))
+                .collect(),
+        )
+    };
+    let inserted = read(INSERTED_DUMP)?;
+    let filled = read(FILLED_DUMP)?;
+    let fin = read(FINAL_DUMP)?;
+    let mut fp = Particles::new();
+    for (r, x) in &fin {
+        // Density is irrelevant to the geometric measures.
+        let _ = fp.add(*x, *r, 1.0, 0);
+    }
+    let flank = measure_flank(&fp, size, d_max);
+    let (column_fraction, column_height) = column(&inserted, size);
+    let log = read_to_string(&dir.join(LOG))?;
+    let fill_steps = log
+        .lines()
+        .find_map(|s| s.strip_prefix("FILL_STEPS "))
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or(0);
+    let mut m = FillMeasure {
+        shear_angle: (-flank.slope).atan().to_degrees(),
+        bulk_density: rho * solid_in(&filled, [0.0; 3], [l, w, h]) / (l * w * h),
+        flank_r2: flank.r2,
+        inserted: inserted.len(),
+        filled: filled.len(),
+        column_fraction,
+        column_height,
+        fill_steps,
+        ..Default::default()
+    };
+    bed(&read(PRE_STRIKE_DUMP)?, size, d_max, rho, &mut m);
+    Ok(m)
+}
+
+/// Mean and standard error.
+pub fn mean_se(v: &[f64]) -> (f64, f64) {
+    let (m, sd) = crate::numeric::mean_sd(v);
+    (m, sd / (v.len() as f64).sqrt())
+}
+
+impl FillMeasure {
+    /// One tab-separated row (see [`FillMeasure::HEADER`]).
+    pub fn row(&self) -> String {
+        format!(
+            "{:.3}\t{:.1}\t{:.3}\t{}\t{}\t{:.4}\t{:.4}\t{:.4}\t{:.4}\t{:.4}\t{:.1}\t{}",
+            self.shear_angle,
+            self.bulk_density,
+            self.flank_r2,
+            self.inserted,
+            self.filled,
+            self.column_fraction,
+            self.column_height,
+            self.bed_top,
+            self.core_fraction,
+            self.box_fraction_pre,
+            self.top_rule_density,
+            self.fill_steps
+        )
+    }
+    pub const HEADER: &'static str = "angle\tbulk\tr2\tinserted\tfilled\tcol_frac\tcol_h\tbed_top\tcore_frac\tbox_frac_pre\ttop_rule_bulk\tfill_steps";
+}
