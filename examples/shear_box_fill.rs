@@ -1,13 +1,14 @@
 //! mbgc's shear box against an independent LIGGGHTS deck that fills itself (issue 13).
 //! cargo run --release --example shear_box_fill -- CODE POINT SEEDS [k] [classes] [out.tsv]
-//! CODE: mbgc | liggghts | replay (mbgc, then LIGGGHTS continuing from mbgc's lattice: the
-//! replay deck, whose row is printed as code "replay-liggghts"); POINT: a (mu_pp 0.1, mu_r_pp 0.1) | b (mu_pp 0.7, mu_r_pp 0.6);
+//! CODE: mbgc | liggghts | replay (mbgc, then LIGGGHTS continuing from mbgc's initial particles: the
+//! replay deck, whose row is printed as code "replay-liggghts"); POINT: a point of
+//! `mbgc::studies::shear_box_check::point` (a, c, b, a2, c2, b2, gravel);
 //! classes: mbgc's PSD quantised to that many classes (0: continuous), or LIGGGHTS' templates.
-//! column (LIGGGHTS only): "lattice" (mbgc's column, from the floor) or "above" (the same
+//! column (LIGGGHTS only): "lattice" (mbgc's poured column, from the floor; the name is historical) or "above" (the same
 //! height, starting at the rim), or "above:F": above the rim at solid fraction F.
 use std::io::Write as _;
 
-use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet};
+use mbgc::dem::experiments::shear_box::ShearBox;
 use mbgc::studies::shear_box_fill::{fill_deck, mean_se, run_liggghts, run_mbgc, FillMeasure};
 
 fn main() {
@@ -22,21 +23,8 @@ fn main() {
         .cloned()
         .unwrap_or("target/shear-box-fill.tsv".into());
     let col = a.get(6).cloned().unwrap_or("lattice".into());
-    let (mu, mur) = if point == "a" { (0.1, 0.1) } else { (0.7, 0.6) };
-    let p = ParamSet::from_pairs(&[
-        ("E_p", 5e6),
-        ("E_w", 5e6),
-        ("nu_p", 0.3),
-        ("e_pp", 0.5),
-        ("e_pw", 0.5),
-        ("mu_pp", mu),
-        ("mu_pw", 0.3),
-        ("mu_r_pp", mur),
-        ("mu_r_pw", 0.3),
-        ("rho_p", 2600.0),
-        ("d50", 8.0),
-        ("sigma_ln", 0.15),
-    ]);
+    let p = mbgc::studies::shear_box_check::point(&point)
+        .expect("point: a, c, b, a2, c2, b2 or gravel");
     let mut file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
@@ -87,7 +75,10 @@ fn main() {
                 None => Some((h, h + lattice.column.1 - lattice.column.0)),
                 Some((_, f)) => {
                     let f: f64 = f.parse().expect("solid fraction");
-                    Some((h, h + lattice.mass / 2600.0 / (f * l * w)))
+                    Some((
+                        h,
+                        h + lattice.mass / p.get("rho_p").expect("rho_p") / (f * l * w),
+                    ))
                 }
             };
             let deck = fill_deck(&sb, &p, seed, classes, column).expect("deck");

@@ -38,7 +38,8 @@ fn run(mu_pp: f64, mu_r_pp: f64) -> Outcome {
         f > 0.05 && f < 0.95,
         "some material flows out, some stays: {f}"
     );
-    assert!(o.get("flank_r2").unwrap() > 0.9);
+    // A 5 d_max box leaves about eight flank columns; a rolling flank (mu_r 0) bends there.
+    assert!(o.get("flank_r2").unwrap() > 0.85);
     o
 }
 
@@ -66,7 +67,7 @@ fn shear_angle_rises_and_bulk_density_falls_with_friction() {
 #[test]
 fn same_seed_same_result() {
     let sb = ShearBox {
-        box_scale: 4.0,
+        box_scale: 5.0,
         ..Default::default()
     };
     let a = sb
@@ -75,6 +76,7 @@ fn same_seed_same_result() {
     let b = sb
         .run(&params(0.5, 0.3), 7, &RunOptions::default())
         .unwrap();
+    assert!(a.get("shear_angle").unwrap().is_finite());
     assert_eq!(a.responses, b.responses);
 }
 

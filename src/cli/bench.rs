@@ -3,7 +3,8 @@
 use clap::{Args, Subcommand};
 
 use crate::studies::{
-    dem_throughput, gp_vs_gplearn, restitution, sampling_quality, shear_box_vs_liggghts,
+    dem_throughput, gp_vs_gplearn, restitution, sampling_quality, shear_box_check,
+    shear_box_vs_liggghts,
 };
 
 #[derive(Debug, Args)]
@@ -23,6 +24,9 @@ pub enum BenchCommand {
     /// Shear box: mbgc against LIGGGHTS replaying the identical runs (low, mid and high
     /// friction, several seeds), and the cost of a run for several PSDs and moduli.
     ShearBox(shear_box_vs_liggghts::Args),
+    /// Shear box checked independently: against a LIGGGHTS deck that fills itself (3 frictions x
+    /// 2 PSDs), seed 004's Gravel 8/16 point, box scale, replicate noise, whole-run cost.
+    ShearBoxCheck(shear_box_check::Args),
     /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
     /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
     Gp(gp_vs_gplearn::Args),
@@ -36,6 +40,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Sampling(s) => sampling_quality::run(s),
         BenchCommand::Dem(d) => dem_throughput::run(d),
         BenchCommand::ShearBox(b) => shear_box_vs_liggghts::run(b),
+        BenchCommand::ShearBoxCheck(b) => shear_box_check::run(b),
         BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
         BenchCommand::Restitution(r) => restitution::run(r),
     }

@@ -4,6 +4,7 @@
 //! - [`material`]: materials, interactions and the per-pair constants of the contact law.
 //! - [`contact`]: the contact law as a sum of effects (Hertz-Mindlin as LIGGGHTS 3.8, EPSD2,
 //!   power-law damped normal models of seed 003, simplified JKR cohesion).
+//! - [`insertion`]: random sequential insertion of a poured cloud.
 //! - [`walls`]: analytic planes, rectangles, cylinders and orifice plates.
 //! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
 //! - [`sim`]: a simulation, its run loop and blow-up checks ([`blowup`]); [`step`]: the
@@ -14,6 +15,7 @@ pub mod blowup;
 pub mod contact;
 pub mod experiments;
 pub mod impact;
+pub mod insertion;
 pub mod material;
 pub mod neighbor;
 pub mod param_set;

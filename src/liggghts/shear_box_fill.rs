@@ -1,6 +1,6 @@
 //! The shear box (seed 004) as an independent LIGGGHTS 3.8 deck that fills itself: LIGGGHTS
-//! creates the particles with its own insertion (`insert/pack` into the column mbgc's lattice
-//! occupies, the PSD as `n` particle templates of equal mass combined by
+//! creates the particles with its own insertion (`insert/pack` into the column mbgc pours from,
+//! the PSD as `n` particle templates of equal mass combined by
 //! `particledistribution/discrete`), so that a difference in how the box is filled shows up,
 //! which the replay of [`super::shear_box`] cannot see. Everything else follows mbgc's procedure
 //! and stop rules: the same box, walls, contact law, time step and total solid mass; fill until
@@ -195,7 +195,7 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "fix ins all insert/pack seed {} distributiontemplate pdd maxattempt 1000 insert_every once \
+        "fix ins all insert/pack seed {} distributiontemplate pdd maxattempt 20000 insert_every once \
          overlapcheck yes all_in yes vel constant 0. 0. 0. region column mass_in_region {}",
         prime_seed(d.seed),
         num(d.mass)

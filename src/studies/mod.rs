@@ -5,6 +5,8 @@
 //! - [`sampling_quality`]: seed 004 Figs. 7-8, space-filling metrics of every design method.
 //! - [`dem_scene`], [`dem_throughput`]: the settled polydisperse box, mbgc against LIGGGHTS.
 //! - [`shear_box_vs_liggghts`]: the shear box replayed in LIGGGHTS; the cost of a run.
+//! - [`shear_box_fill`], [`shear_box_check`]: the shear box against a LIGGGHTS deck that fills
+//!   itself; seed 004's validation point, box scale, noise and whole-run cost (docs/shear_box.md).
 //! - [`gp_vs_gplearn`]: symbolic regression against gplearn on Feynman equations.
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
 //! - [`reference`]: the reference codes (`--vs`).
@@ -15,5 +17,6 @@ pub mod gp_vs_gplearn;
 pub mod reference;
 pub mod restitution;
 pub mod sampling_quality;
+pub mod shear_box_check;
 pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;

@@ -10,7 +10,6 @@ use crate::dem::analysis::sphere_box_volume;
 use crate::dem::experiments::shear_box::{measure_flank, psd_classes, RunRecord, ShearBox};
 use crate::dem::experiments::{ParamSet, RunOptions};
 use crate::dem::particles::Particles;
-use crate::dem::timestep::rayleigh_time;
 use crate::dem::vec3::V3;
 use crate::error::{read_to_string, Error, Result};
 use crate::liggghts::shear_box_fill::{
@@ -150,7 +149,6 @@ pub fn fill_deck(
     let rho = get("rho_p")?;
     let d50 = get("d50")?;
     let sigma = p.get("sigma_ln").unwrap_or(0.0);
-    let [l, w, h] = lay.size;
     let reps: Vec<(f64, f64)> = if sigma < 1e-6 || classes == 0 {
         vec![(d50 * 1e-3, 1.0)]
     } else {
@@ -160,22 +158,14 @@ pub fn fill_deck(
             .map(|d| (d * 1e-3, 1.0 / classes as f64))
             .collect()
     };
-    // The rest of this mirrors `ShearBox::run_recorded` (lattice column, time step, chunk, rest
-    // thresholds, time limits, domain), so that only the particle creation differs.
-    let pitch = lay.d_max * 1.02;
-    let (nx, ny) = (
-        ((l / pitch).floor() as usize).max(1),
-        ((w / pitch).floor() as usize).max(1),
-    );
-    let layers = lay.diameters.len().div_ceil(nx * ny);
-    let column = column.unwrap_or((0.0, layers as f64 * pitch));
+    // Everything but the particle creation is the run's own schedule.
+    let sc = sb.schedule(&lay, rho, get("E_p")?, get("nu_p")?);
+    let column = column.unwrap_or((0.0, sc.column_top));
     // A column placed elsewhere than mbgc's needs the walls, domain and fall time to follow it.
-    let col_top = (layers as f64 * pitch).max(column.1) + pitch;
-    let wall_h = col_top.max(h) + lay.d_max;
-    let dt = sb.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, get("E_p")?, get("nu_p")?);
-    let chunk = ((0.01 / dt).ceil() as u64).max(10);
+    let col_top = sc.column_top.max(column.1);
     let fall = (2.0 * col_top / G).sqrt();
-    let margin = 4.0 * lay.d_max + 0.5 * h;
+    let (mut domain, dt) = (sc.domain, sc.dt);
+    domain.1[2] += col_top - sc.column_top;
     let mass: f64 = lay
         .diameters
         .iter()
@@ -187,20 +177,17 @@ pub fn fill_deck(
         classes: reps,
         mass,
         column,
-        domain: (
-            [-margin - l, -margin, -margin - h],
-            [2.0 * l + margin, w + margin, wall_h + margin],
-        ),
+        domain,
         dt,
-        skin: 0.2 * lay.d_min,
-        chunk,
-        v_rest: 0.01 * (G * lay.d_max).sqrt(),
+        skin: sc.skin,
+        chunk: sc.chunk,
+        v_rest: sc.v_rest,
         fall_steps: (fall / dt) as u64,
-        max_fill_steps: ((fall + 40.0 * (h / G).sqrt()) / dt) as u64,
-        v_move: 0.05 * (G * lay.d_max).sqrt(),
-        min_flow_steps: (4.0 * (h / G).sqrt() / dt) as u64,
-        max_flow_steps: (60.0 * (h / G).sqrt() / dt) as u64,
-        removal_height: -2.0 * lay.d_max,
+        max_fill_steps: sc.max_fill_steps + ((fall - sc.fall) / dt) as u64,
+        v_move: sc.v_move,
+        min_flow_steps: (sc.min_flow_time / dt) as u64,
+        max_flow_steps: sc.max_flow_steps,
+        removal_height: sc.removal_height,
         seed,
     })
 }

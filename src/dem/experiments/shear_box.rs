@@ -18,14 +18,13 @@
 use std::path::Path;
 use std::time::Instant;
 
-use rand::RngExt;
-
 use super::{
     materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
     RHO_RANGE,
 };
 use crate::dem::analysis::sphere_box_volume;
 use crate::dem::contact::{ModelClass, Pair};
+use crate::dem::insertion::random_pack;
 use crate::dem::particles::Particles;
 use crate::dem::sim::{Scene, Simulation};
 use crate::dem::timestep::rayleigh_time;
@@ -37,6 +36,11 @@ use crate::psd::{default_range, draw_by_number, Distribution, LogNormal, MassDis
 
 pub const BASE_MM: [f64; 3] = [100.0, 100.0, 150.0];
 const G: f64 = 9.81;
+/// Solid fraction of the poured column. Random sequential insertion of spheres between walls
+/// jams near 0.25 (0.38 for equal spheres in free space); 0.2 inserts every particle in a few
+/// attempts each, in mbgc as in LIGGGHTS, while the column stands about 4 box heights tall
+/// (the fall, and with it the fill's cost, grows with that height).
+pub const FILL_FRACTION: f64 = 0.2;
 
 #[derive(Debug, Clone)]
 pub struct ShearBox {
@@ -52,7 +56,14 @@ pub struct ShearBox {
     /// is replaced by the representative of its class among n classes of equal mass
     /// ([`psd_classes`]), the way a LIGGGHTS user describes a PSD; for comparisons only.
     pub psd_classes: usize,
+    /// Neighbour skin as a fraction of d_min. Only the cost depends on it: a wide skin lets the
+    /// pouring column fall many steps between list builds, while the few extra pairs it lists in
+    /// the settled bed are cheap to reject (docs/shear_box.md, cost section).
+    pub skin: f64,
 }
+
+/// Skin of the campaign runs, in units of d_min (0.2 before issue 13).
+pub const SKIN: f64 = 1.0;
 
 /// The parameters the shear box needs whatever the model class (d50 in mm).
 pub const OWN_PARAMETERS: [&str; 5] = ["E_p", "E_w", "nu_p", "rho_p", "d50"];
@@ -65,6 +76,7 @@ impl Default for ShearBox {
             max_particles: 200_000,
             class: ModelClass::default(),
             psd_classes: 0,
+            skin: SKIN,
         }
     }
 }
@@ -156,6 +168,69 @@ impl ShearBox {
             d_min: d_min_mm * 1e-3,
             d_max: d_max_mm * 1e-3,
         })
+    }
+}
+
+/// The numbers of the procedure (column, time step, rest thresholds, time limits), shared by the
+/// run and by the LIGGGHTS deck of the same procedure so that the two cannot drift apart.
+#[derive(Debug, Clone)]
+pub struct Schedule {
+    /// Top of the poured column, m (it starts on the floor).
+    pub column_top: f64,
+    /// Height of the walls that hold the column, m.
+    pub wall_h: f64,
+    pub dt: f64,
+    pub skin: f64,
+    /// Steps between rest checks (0.01 s).
+    pub chunk: u64,
+    /// Rest: translational rms speed below this, m/s.
+    pub v_rest: f64,
+    /// Outflow still running: a particle in the box faster than this in x-z, m/s.
+    pub v_move: f64,
+    /// Free-fall time from the column's top, s: no rest is declared before it.
+    pub fall: f64,
+    pub max_fill_steps: u64,
+    /// The outflow runs at least this long, s.
+    pub min_flow_time: f64,
+    pub max_flow_steps: u64,
+    /// Particles below this height have left the box over the floor's edge, m.
+    pub removal_height: f64,
+    /// Particles outside leave the run with an error: they escaped, m.
+    pub domain: (V3, V3),
+}
+
+impl ShearBox {
+    /// The schedule for the drawn layout, particle density `rho`, modulus `e` and Poisson `nu`.
+    pub fn schedule(&self, lay: &Layout, rho: f64, e: f64, nu: f64) -> Schedule {
+        let [l, w, h] = lay.size;
+        let v_solid: f64 = lay
+            .diameters
+            .iter()
+            .map(|d| std::f64::consts::PI / 6.0 * d.powi(3))
+            .sum();
+        let column_top = v_solid / (FILL_FRACTION * l * w);
+        let wall_h = column_top.max(h) + lay.d_max;
+        let dt = self.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, e, nu);
+        let fall = (2.0 * column_top / G).sqrt();
+        let margin = 4.0 * lay.d_max + 0.5 * h;
+        Schedule {
+            column_top,
+            wall_h,
+            dt,
+            skin: self.skin * lay.d_min,
+            chunk: ((0.01 / dt).ceil() as u64).max(10),
+            v_rest: 0.01 * (G * lay.d_max).sqrt(),
+            v_move: 0.05 * (G * lay.d_max).sqrt(),
+            fall,
+            max_fill_steps: ((fall + 40.0 * (h / G).sqrt()) / dt) as u64,
+            min_flow_time: 4.0 * (h / G).sqrt(),
+            max_flow_steps: (60.0 * (h / G).sqrt() / dt) as u64,
+            removal_height: -2.0 * lay.d_max,
+            domain: (
+                [-margin - l, -margin, -margin - h],
+                [2.0 * l + margin, w + margin, wall_h + margin],
+            ),
+        }
     }
 }
 
@@ -399,38 +474,23 @@ impl ShearBox {
         let [l, w, h] = lay.size;
         let mut warnings = Vec::new();
 
-        // Particles on a jittered lattice in a column over the box, drawn sizes in order.
-        let pitch = lay.d_max * 1.02;
-        let (nx, ny) = (
-            ((l / pitch).floor() as usize).max(1),
-            ((w / pitch).floor() as usize).max(1),
-        );
-        let layers = lay.diameters.len().div_ceil(nx * ny);
-        let col_top = layers as f64 * pitch + pitch;
+        // The material is poured: particles created at random, not overlapping, in a column over
+        // the box's base at solid fraction FILL_FRACTION (LIGGGHTS' insert/pack does the same),
+        // falling from rest.
+        let mat = &materials.materials[grain as usize];
+        let sched = self.schedule(&lay, rho, mat.youngs_modulus, mat.poisson);
+        let col_top = sched.column_top;
         let mut rng = crate::sampling::rng(seed);
         let mut particles = Particles::new();
-        for (k, &d) in lay.diameters.iter().enumerate() {
-            let (ix, iy, iz) = (k % nx, (k / nx) % ny, k / (nx * ny));
-            let slack = 0.45 * (pitch - d);
-            let mut j = || slack * (2.0 * rng.random::<f64>() - 1.0);
-            let x = [
-                (ix as f64 + 0.5) * (l / nx as f64)
-                    + j()
-                        .min(0.5 * (l / nx as f64 - d))
-                        .max(-0.5 * (l / nx as f64 - d)),
-                (iy as f64 + 0.5) * (w / ny as f64)
-                    + j()
-                        .min(0.5 * (w / ny as f64 - d))
-                        .max(-0.5 * (w / ny as f64 - d)),
-                (iz as f64 + 0.5) * pitch + j(),
-            ];
+        let centres = random_pack(&lay.diameters, [0.0; 3], [l, w, col_top], &mut rng)?;
+        for (&d, &x) in lay.diameters.iter().zip(&centres) {
             particles.add(x, 0.5 * d, rho, grain)?;
         }
         let initial_positions = particles.x.clone();
         let initial_positions_len = initial_positions.len();
 
         // Floor, back wall, two side walls and the flap, tall enough for the falling column.
-        let wall_h = col_top.max(h) + lay.d_max;
+        let wall_h = sched.wall_h;
         let rect = |name: &str, center: V3, u: V3, v: V3, hu: f64, hv: f64| {
             Wall::new(
                 name,
@@ -481,15 +541,7 @@ impl ShearBox {
             )?,
         ];
         let flap = 4;
-        let mat = &materials.materials[grain as usize];
-        let dt =
-            self.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, mat.youngs_modulus, mat.poisson);
-        let margin = 4.0 * lay.d_max + 0.5 * h;
-        let domain = (
-            [-margin - l, -margin, -margin - h],
-            [2.0 * l + margin, w + margin, wall_h + margin],
-        );
-        let skin = 0.2 * lay.d_min;
+        let (dt, skin, domain) = (sched.dt, sched.skin, sched.domain);
         let scene = Scene {
             particles,
             walls,
@@ -497,11 +549,8 @@ impl ShearBox {
             class: self.class,
             gravity: [0.0, 0.0, -G],
             dt,
-            skin: 0.2 * lay.d_min,
-            domain: (
-                [-margin - l, -margin, -margin - h],
-                [2.0 * l + margin, w + margin, wall_h + margin],
-            ),
+            skin,
+            domain,
             max_dt_fraction: self.dt_fraction + 1e-9,
         };
         let mut sim = Simulation::new(scene)?;
@@ -511,10 +560,8 @@ impl ShearBox {
 
         // Fill: let the column fall and come to rest (translational speed; EPSD2 keeps particles
         // rocking, so rotational energy is no rest criterion).
-        let v_rest = 0.01 * (G * lay.d_max).sqrt();
-        let chunk = ((0.01 / dt).ceil() as u64).max(10);
-        let fall = (2.0 * col_top / G).sqrt();
-        let max_fill = ((fall + 40.0 * (h / G).sqrt()) / dt) as u64;
+        let (v_rest, chunk, fall, max_fill) =
+            (sched.v_rest, sched.chunk, sched.fall, sched.max_fill_steps);
         let mut filled = false;
         while sim.step < max_fill {
             sim.run(chunk).map_err(blew)?;
@@ -557,7 +604,7 @@ impl ShearBox {
         sim.set_wall_active(flap, false);
         let open_step = sim.step;
         let open_time = sim.time;
-        let max_flow = sim.step + (60.0 * (h / G).sqrt() / dt) as u64;
+        let max_flow = sim.step + sched.max_flow_steps;
         let mut quiet = 0;
         let mut stopped = false;
         let mut left = 0;
@@ -568,7 +615,7 @@ impl ShearBox {
                 .particles
                 .x
                 .iter()
-                .map(|x| x[2] < -2.0 * lay.d_max)
+                .map(|x| x[2] < sched.removal_height)
                 .collect();
             left_mass += (0..gone.len())
                 .filter(|&i| gone[i])
@@ -576,15 +623,18 @@ impl ShearBox {
                 .sum::<f64>();
             let removed = sim.remove_particles(&gone);
             left += removed;
-            let in_motion = sim.particles.x.iter().zip(&sim.particles.v).any(|(x, v)| {
-                x[0] <= l && (v[0].powi(2) + v[2].powi(2)).sqrt() > 0.05 * (G * lay.d_max).sqrt()
-            });
+            let in_motion = sim
+                .particles
+                .x
+                .iter()
+                .zip(&sim.particles.v)
+                .any(|(x, v)| x[0] <= l && (v[0].powi(2) + v[2].powi(2)).sqrt() > sched.v_move);
             quiet = if removed == 0 && !in_motion && rms_speed(&sim.particles) < v_rest {
                 quiet + 1
             } else {
                 0
             };
-            if sim.time - open_time > 4.0 * (h / G).sqrt() && quiet >= 5 {
+            if sim.time - open_time > sched.min_flow_time && quiet >= 5 {
                 stopped = true;
                 break;
             }
@@ -639,7 +689,7 @@ impl ShearBox {
             relax_steps: chunk,
             flow_steps: sim.step - open_step,
             chunk,
-            removal_height: -2.0 * lay.d_max,
+            removal_height: sched.removal_height,
             domain,
             fill_seconds,
             flow_seconds: clock.elapsed().as_secs_f64() - fill_seconds,

@@ -1,0 +1,626 @@
+//! The shear box checked independently (issue 13): mbgc against a LIGGGHTS 3.8 deck of the same
+//! procedure that creates its own particles ([`super::shear_box_fill`]), seed 004's Gravel 8/16
+//! validation point, the box-scale study, the replicate noise and the whole-run cost against
+//! LIGGGHTS. `mbgc bench shear-box-check --report docs/shear_box.md` regenerates the report; every
+//! run is a row of `docs/data/shear_box_check.tsv`, so a killed study resumes where it stopped.
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::Context as _;
+
+use super::shear_box_fill::{fill_deck, mean_se, run_liggghts, run_mbgc};
+use crate::dem::experiments::shear_box::{ShearBox, FILL_FRACTION, SKIN};
+use crate::dem::experiments::ParamSet;
+
+/// Seed 004's validation run at the Gravel 8/16 parameters (Sec. 4).
+const SEED004_ANGLE: f64 = 34.90;
+const SEED004_BULK: f64 = 1514.1;
+/// The skin before issue 13, in units of d_min: the cost table's "before".
+const OLD_SKIN: f64 = 0.2;
+
+/// `mbgc bench shear-box-check`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Seeds per point and code in the comparison and at seed 004's point (1..=seeds).
+    #[arg(long, default_value_t = 4)]
+    pub seeds: u64,
+    /// Box scales of the box-scale study (k = 10 is taken from the comparison).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![6.0, 8.0, 10.0, 14.0])]
+    pub k: Vec<f64>,
+    /// Seeds per box scale.
+    #[arg(long, default_value_t = 3)]
+    pub k_seeds: u64,
+    /// Parts to run: compare, gravel, scale, cost (the report is made from every row there is).
+    #[arg(long, value_delimiter = ',', default_values_t = ["compare".to_string(), "gravel".into(), "scale".into(), "cost".into()])]
+    pub only: Vec<String>,
+    /// Points of the cost part (a: sigma_ln 0.15, a2: 0.25).
+    #[arg(long, value_delimiter = ',', default_values_t = COST_POINTS.map(String::from))]
+    pub cost_points: Vec<String>,
+    /// Runs at a time (the cost part always runs alone, one run after the other).
+    #[arg(long, default_value_t = 2)]
+    pub jobs: usize,
+    /// LIGGGHTS' run directories.
+    #[arg(long, default_value = "target/shear-box-check")]
+    pub work_dir: PathBuf,
+    /// The table of runs (one row per run, appended as runs finish; kept with the report).
+    #[arg(long, default_value = "docs/data/shear_box_check.tsv")]
+    pub table: PathBuf,
+    /// Markdown report (docs/shear_box.md).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+/// The parameter sets: low (a), middle (c) and high (b) friction at sigma_ln 0.15, the same at
+/// sigma_ln 0.25 (a2, c2, b2), and seed 004's Gravel 8/16 (Tables 3-5).
+pub fn point(name: &str) -> Option<ParamSet> {
+    if name == "gravel" {
+        return Some(ParamSet::from_pairs(&[
+            ("E_p", 5e6),
+            ("E_w", 5e6),
+            ("nu_p", 0.3),
+            ("e_pp", 0.6),
+            ("e_pw", 0.6),
+            ("mu_pp", 0.1852),
+            ("mu_pw", 0.363),
+            ("mu_r_pp", 0.8),
+            ("mu_r_pw", 0.8),
+            ("rho_p", 2608.4),
+            ("d50", 11.16),
+            ("sigma_ln", 0.26),
+        ]));
+    }
+    let sigma = match name.len() {
+        1 => 0.15,
+        2 if name.ends_with('2') => 0.25,
+        _ => return None,
+    };
+    let (mu, mur) = match &name[..1] {
+        "a" => (0.1, 0.1),
+        "c" => (0.4, 0.3),
+        "b" => (0.7, 0.6),
+        _ => return None,
+    };
+    Some(ParamSet::from_pairs(&[
+        ("E_p", 5e6),
+        ("E_w", 5e6),
+        ("nu_p", 0.3),
+        ("e_pp", 0.5),
+        ("e_pw", 0.5),
+        ("mu_pp", mu),
+        ("mu_pw", 0.3),
+        ("mu_r_pp", mur),
+        ("mu_r_pw", 0.3),
+        ("rho_p", 2600.0),
+        ("d50", 8.0),
+        ("sigma_ln", sigma),
+    ]))
+}
+
+const COMPARE_POINTS: [&str; 6] = ["a", "c", "b", "a2", "c2", "b2"];
+const SCALE_POINTS: [&str; 2] = ["c", "c2"];
+const COST_POINTS: [&str; 2] = ["a", "a2"];
+/// LIGGGHTS' PSD: classes of equal mass (a user's discrete description).
+const LIGGGHTS_CLASSES: usize = 5;
+
+#[derive(Debug, Clone, PartialEq)]
+struct Job {
+    part: &'static str,
+    code: &'static str,
+    point: String,
+    k: f64,
+    skin: f64,
+    seed: u64,
+}
+
+impl Job {
+    fn key(&self) -> String {
+        format!(
+            "{}\t{}\t{}\t{}\t{}\t{}",
+            self.part, self.code, self.point, self.k, self.skin, self.seed
+        )
+    }
+}
+
+const HEADER: &str = "part\tcode\tpoint\tk\tskin\tseed\tangle\tbulk\tr2\tinserted\tfilled\tfill_s\tflow_s\twall_s\tsteps";
+
+#[derive(Debug, Clone)]
+struct Row {
+    job: Job,
+    angle: f64,
+    bulk: f64,
+    inserted: usize,
+    fill_s: f64,
+    flow_s: f64,
+    wall_s: f64,
+    steps: u64,
+}
+
+fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
+    let p = point(&j.point).with_context(|| format!("unknown point {}", j.point))?;
+    let sb = ShearBox {
+        box_scale: j.k,
+        skin: j.skin,
+        ..Default::default()
+    };
+    let t = Instant::now();
+    let (m, fill_s, flow_s, steps) = if j.code == "mbgc" {
+        let (m, rec) = run_mbgc(&sb, &p, j.seed)?;
+        let steps = rec.fill_steps + rec.relax_steps + rec.flow_steps;
+        (m, rec.fill_seconds, rec.flow_seconds, steps)
+    } else {
+        let deck = fill_deck(&sb, &p, j.seed, LIGGGHTS_CLASSES, None)?;
+        let d_max = sb.layout(&p, j.seed)?.d_max;
+        let dir = work.join(format!(
+            "liggghts-{}-{}-k{}-s{}-{}",
+            j.part, j.point, j.k, j.skin, j.seed
+        ));
+        let m = run_liggghts(&dir, &p, &deck, d_max)?;
+        (m, f64::NAN, f64::NAN, 0)
+    };
+    Ok(format!(
+        "{}\t{:.3}\t{:.1}\t{:.3}\t{}\t{}\t{:.2}\t{:.2}\t{:.2}\t{}",
+        j.key(),
+        m.shear_angle,
+        m.bulk_density,
+        m.flank_r2,
+        m.inserted,
+        m.filled,
+        fill_s,
+        flow_s,
+        t.elapsed().as_secs_f64(),
+        steps
+    ))
+}
+
+fn read_rows(table: &Path) -> anyhow::Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    if !table.exists() {
+        return Ok(rows);
+    }
+    let text = std::fs::read_to_string(table).with_context(|| table.display().to_string())?;
+    for (n, line) in text.lines().enumerate().skip(1) {
+        let c: Vec<&str> = line.split('\t').collect();
+        let bad = || {
+            format!(
+                "{}: line {}: expected {} columns",
+                table.display(),
+                n + 1,
+                15
+            )
+        };
+        if c.len() != 15 {
+            anyhow::bail!(bad());
+        }
+        let f = |i: usize| -> anyhow::Result<f64> {
+            c[i].parse::<f64>()
+                .with_context(|| format!("{}: line {}: column {}", table.display(), n + 1, i + 1))
+        };
+        let part = ["compare", "gravel", "scale", "cost"]
+            .into_iter()
+            .find(|p| *p == c[0])
+            .with_context(bad)?;
+        let code = ["mbgc", "liggghts"]
+            .into_iter()
+            .find(|p| *p == c[1])
+            .with_context(bad)?;
+        rows.push(Row {
+            job: Job {
+                part,
+                code,
+                point: c[2].to_string(),
+                k: f(3)?,
+                skin: f(4)?,
+                seed: f(5)? as u64,
+            },
+            angle: f(6)?,
+            bulk: f(7)?,
+            inserted: f(9)? as usize,
+            fill_s: f(11)?,
+            flow_s: f(12)?,
+            wall_s: f(13)?,
+            steps: f(14)? as u64,
+        });
+    }
+    Ok(rows)
+}
+
+/// The runs, cheapest and most needed first (a study cut short still has whole tables): the
+/// narrow PSD's comparison, seed 004's point, the narrow box-scale series, then the wide PSD.
+fn jobs(a: &Args) -> Vec<Job> {
+    let mut v = Vec::new();
+    let job = |part, code, point: &str, k, seed| Job {
+        part,
+        code,
+        point: point.to_string(),
+        k,
+        skin: SKIN,
+        seed,
+    };
+    let wants = |p: &str| a.only.iter().any(|o| o == p);
+    let compare = |v: &mut Vec<Job>, pts: &[&str]| {
+        if wants("compare") {
+            for seed in 1..=a.seeds {
+                for pt in pts {
+                    for code in ["mbgc", "liggghts"] {
+                        v.push(job("compare", code, pt, 10.0, seed));
+                    }
+                }
+            }
+        }
+    };
+    let scale = |v: &mut Vec<Job>, pt: &str| {
+        if wants("scale") {
+            for seed in 1..=a.k_seeds {
+                for &k in a.k.iter().filter(|&&k| k != 10.0) {
+                    v.push(job("scale", "mbgc", pt, k, seed));
+                }
+            }
+        }
+    };
+    compare(&mut v, &COMPARE_POINTS[..3]);
+    if wants("gravel") {
+        for seed in 1..=a.seeds {
+            for code in ["mbgc", "liggghts"] {
+                v.push(job("gravel", code, "gravel", 10.0, seed));
+            }
+        }
+    }
+    scale(&mut v, SCALE_POINTS[0]);
+    compare(&mut v, &COMPARE_POINTS[3..]);
+    scale(&mut v, SCALE_POINTS[1]);
+    v
+}
+
+fn cost_jobs(points: &[String]) -> Vec<Job> {
+    let mut v = Vec::new();
+    for pt in points {
+        for skin in [OLD_SKIN, SKIN] {
+            for code in ["mbgc", "liggghts"] {
+                v.push(Job {
+                    part: "cost",
+                    code,
+                    point: pt.clone(),
+                    k: 10.0,
+                    skin,
+                    seed: 1,
+                });
+            }
+        }
+    }
+    v
+}
+
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    std::fs::create_dir_all(&a.work_dir)
+        .with_context(|| format!("{}: cannot create", a.work_dir.display()))?;
+    let table = a.table.clone();
+    let done: Vec<String> = read_rows(&table)?.iter().map(|r| r.job.key()).collect();
+    if !table.exists() {
+        std::fs::write(&table, format!("{HEADER}\n"))
+            .with_context(|| table.display().to_string())?;
+    }
+    let append = |line: &str| -> anyhow::Result<()> {
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&table)
+            .with_context(|| table.display().to_string())?;
+        writeln!(f, "{line}").with_context(|| table.display().to_string())?;
+        Ok(())
+    };
+    let todo: Vec<Job> = jobs(a)
+        .into_iter()
+        .filter(|j| !done.contains(&j.key()))
+        .collect();
+    eprintln!("shear-box-check: {} runs to do", todo.len());
+    let queue = Mutex::new(todo.into_iter().rev().collect::<Vec<_>>());
+    let out = Mutex::new(());
+    let failures = Mutex::new(Vec::<String>::new());
+    std::thread::scope(|s| {
+        for _ in 0..a.jobs.max(1) {
+            s.spawn(|| loop {
+                let Some(j) = queue.lock().expect("queue").pop() else {
+                    break;
+                };
+                match run_job(&j, &a.work_dir) {
+                    Ok(line) => {
+                        let _g = out.lock().expect("table");
+                        eprintln!("{line}");
+                        if let Err(e) = append(&line) {
+                            failures.lock().expect("failures").push(format!("{e:#}"));
+                        }
+                    }
+                    Err(e) => failures
+                        .lock()
+                        .expect("failures")
+                        .push(format!("{}: {e:#}", j.key())),
+                }
+            });
+        }
+    });
+    if a.only.iter().any(|o| o == "cost") {
+        // Alone on the machine, one after the other: the timings are compared.
+        for j in cost_jobs(&a.cost_points)
+            .into_iter()
+            .filter(|j| !done.contains(&j.key()))
+        {
+            match run_job(&j, &a.work_dir) {
+                Ok(line) => {
+                    eprintln!("{line}");
+                    append(&line)?;
+                }
+                Err(e) => failures
+                    .lock()
+                    .expect("failures")
+                    .push(format!("{}: {e:#}", j.key())),
+            }
+        }
+    }
+    let failures = failures.into_inner().expect("failures");
+    for f in &failures {
+        eprintln!("failed: {f}");
+    }
+    let rows = read_rows(&table)?;
+    let text = report(&rows);
+    match &a.report {
+        Some(path) => std::fs::write(path, &text).with_context(|| path.display().to_string())?,
+        None => print!("{text}"),
+    }
+    if !failures.is_empty() {
+        anyhow::bail!("{} runs failed (listed above)", failures.len());
+    }
+    Ok(())
+}
+
+/// Seed mean, standard error and count of a response over the rows that match.
+fn stat(rows: &[Row], f: impl Fn(&Row) -> bool, v: impl Fn(&Row) -> f64) -> (f64, f64, usize) {
+    let x: Vec<f64> = rows.iter().filter(|r| f(r)).map(v).collect();
+    if x.is_empty() {
+        return (f64::NAN, f64::NAN, 0);
+    }
+    let (m, se) = mean_se(&x);
+    (m, se, x.len())
+}
+
+fn sd(rows: &[Row], f: impl Fn(&Row) -> bool, v: impl Fn(&Row) -> f64) -> (f64, usize) {
+    let x: Vec<f64> = rows.iter().filter(|r| f(r)).map(v).collect();
+    if x.len() < 2 {
+        return (f64::NAN, x.len());
+    }
+    (crate::numeric::mean_sd(&x).1, x.len())
+}
+
+fn describe(pt: &str) -> String {
+    let p = point(pt).expect("known point");
+    let g = |k: &str| p.get(k).unwrap_or(f64::NAN);
+    format!(
+        "mu_pp {}, mu_r_pp {}, sigma_ln {}",
+        g("mu_pp"),
+        g("mu_r_pp"),
+        g("sigma_ln")
+    )
+}
+
+fn report(rows: &[Row]) -> String {
+    let mut s = String::new();
+    let w = &mut s;
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        w,
+        "# The shear box, checked independently\n\n\
+         Regenerate: `cargo run --release -- bench shear-box-check --report docs/shear_box.md` \
+         (runs are rows of `docs/data/shear_box_check.tsv`; a killed study resumes; \
+         `--only compare,gravel,scale,cost` runs parts). Needs Debian's `liggghts`.\n"
+    );
+    let _ = writeln!(
+        w,
+        "{}",
+        PROCEDURE.replace("{FILL}", &FILL_FRACTION.to_string())
+    );
+    let is = |part: &'static str, code: &'static str, pt: String, k: f64| {
+        move |r: &Row| r.job.part == part && r.job.code == code && r.job.point == pt && r.job.k == k
+    };
+
+    // 1. Comparison.
+    let _ = writeln!(
+        w,
+        "## mbgc against an independent LIGGGHTS 3.8 deck of the same procedure\n\n\
+         k = 10, d50 8 mm, rho_p 2600, E 5e6, nu 0.3, e 0.5, mu_pw 0.3, mu_r_pw 0.3; seed means \
+         +- standard errors (n seeds). LIGGGHTS creates its own particles (`insert/pack`, \
+         {LIGGGHTS_CLASSES} size classes of equal mass); both final states are measured by \
+         mbgc's code. Targets: density within 2 %, angle within 2 deg.\n\n\
+         | point | set | mbgc angle deg | LIGGGHTS angle deg | diff deg | mbgc bulk kg/m3 | \
+         LIGGGHTS bulk kg/m3 | diff % | particles mbgc / LIGGGHTS |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    for pt in COMPARE_POINTS {
+        let m = |v: fn(&Row) -> f64| stat(rows, is("compare", "mbgc", pt.into(), 10.0), v);
+        let l = |v: fn(&Row) -> f64| stat(rows, is("compare", "liggghts", pt.into(), 10.0), v);
+        let (ma, mas, mn) = m(|r| r.angle);
+        let (la, las, ln) = l(|r| r.angle);
+        let (mb, mbs, _) = m(|r| r.bulk);
+        let (lb, lbs, _) = l(|r| r.bulk);
+        let (mi, _, _) = m(|r| r.inserted as f64);
+        let (li, _, _) = l(|r| r.inserted as f64);
+        if mn + ln == 0 {
+            continue;
+        }
+        let _ = writeln!(
+            w,
+            "| {pt} | {} | {ma:.2} +- {mas:.2} ({mn}) | {la:.2} +- {las:.2} ({ln}) | {:+.2} | \
+             {mb:.1} +- {mbs:.1} | {lb:.1} +- {lbs:.1} | {:+.2} | {mi:.0} / {li:.0} |",
+            describe(pt),
+            ma - la,
+            100.0 * (mb / lb - 1.0)
+        );
+    }
+
+    // 2. Seed 004's point.
+    let _ = writeln!(
+        w,
+        "\n## Seed 004's Gravel 8/16 validation point\n\n\
+         d50 11.16 mm, sigma_ln 0.26, mu_pp 0.1852, mu_pw 0.363, mu_r 0.8 (pp and pw), e 0.6 (pp \
+         and pw), rho_p 2608.4 kg/m3 (seed 004 Tables 3-5), E 5e6 Pa, nu 0.3, k = 10. Seed 004's \
+         DEM validation run: {SEED004_ANGLE} deg, {SEED004_BULK} kg/m3.\n\n\
+         | code | n | shear angle deg | vs seed 004 deg | bulk density kg/m3 | vs seed 004 % |\n\
+         |---|---|---|---|---|---|"
+    );
+    for code in ["mbgc", "liggghts"] {
+        let (a, ase, n) = stat(rows, is("gravel", code, "gravel".into(), 10.0), |r| r.angle);
+        let (b, bse, _) = stat(rows, is("gravel", code, "gravel".into(), 10.0), |r| r.bulk);
+        if n > 0 {
+            let _ = writeln!(
+                w,
+                "| {code} | {n} | {a:.2} +- {ase:.2} | {:+.2} | {b:.1} +- {bse:.1} | {:+.2} |",
+                a - SEED004_ANGLE,
+                100.0 * (b / SEED004_BULK - 1.0)
+            );
+        }
+    }
+
+    // 3. Box scale.
+    let _ = writeln!(
+        w,
+        "\n## Box scale\n\nmbgc, middle friction (mu_pp 0.4, mu_r_pp 0.3), seed means +- standard \
+         errors; k = 10 rows are the comparison's runs. Bias: difference from k = 14.\n\n\
+         | sigma_ln | k | n | particles | shear angle deg | bias deg | bulk density kg/m3 | bias % | wall s |\n\
+         |---|---|---|---|---|---|---|---|---|"
+    );
+    for pt in SCALE_POINTS {
+        let at = |k: f64| {
+            move |r: &Row| {
+                r.job.code == "mbgc"
+                    && r.job.point == pt
+                    && r.job.k == k
+                    && (r.job.part == "scale" || r.job.part == "compare")
+            }
+        };
+        let (a14, _, _) = stat(rows, at(14.0), |r| r.angle);
+        let (b14, _, _) = stat(rows, at(14.0), |r| r.bulk);
+        let ks: std::collections::BTreeSet<u64> = rows
+            .iter()
+            .filter(|r| r.job.point == pt && (r.job.part == "scale" || r.job.part == "compare"))
+            .map(|r| (r.job.k * 100.0) as u64)
+            .collect();
+        for k in ks {
+            let k = k as f64 / 100.0;
+            let (a, ase, n) = stat(rows, at(k), |r| r.angle);
+            let (b, bse, _) = stat(rows, at(k), |r| r.bulk);
+            let (np, _, _) = stat(rows, at(k), |r| r.inserted as f64);
+            let (ws, _, _) = stat(rows, at(k), |r| r.wall_s);
+            let _ = writeln!(
+                w,
+                "| {} | {k} | {n} | {np:.0} | {a:.2} +- {ase:.2} | {:+.2} | {b:.1} +- {bse:.1} | {:+.2} | {ws:.0} |",
+                point(pt).and_then(|p| p.get("sigma_ln")).unwrap_or(f64::NAN),
+                a - a14,
+                100.0 * (b / b14 - 1.0)
+            );
+        }
+    }
+
+    // 4. Noise.
+    let _ = writeln!(
+        w,
+        "\n## Replicate noise at k = 10 (mbgc, seed-to-seed standard deviation)\n\n\
+         | point | set | n | sd shear angle deg | sd bulk density kg/m3 | sd bulk % |\n|---|---|---|---|---|---|"
+    );
+    let mut noise_pts: Vec<&str> = COMPARE_POINTS.to_vec();
+    noise_pts.push("gravel");
+    for pt in noise_pts {
+        let f = |r: &Row| {
+            r.job.code == "mbgc"
+                && r.job.point == pt
+                && r.job.k == 10.0
+                && (r.job.part == "compare" || r.job.part == "gravel")
+        };
+        let (sa, n) = sd(rows, f, |r| r.angle);
+        let (sb, _) = sd(rows, f, |r| r.bulk);
+        let (mb, _, _) = stat(rows, f, |r| r.bulk);
+        if n >= 2 {
+            let _ = writeln!(
+                w,
+                "| {pt} | {} | {n} | {sa:.2} | {sb:.1} | {:.2} |",
+                describe(pt),
+                100.0 * sb / mb
+            );
+        }
+    }
+
+    // 5. Cost.
+    let _ = writeln!(
+        w,
+        "\n## Whole-run cost against LIGGGHTS\n\n\
+         k = 10, seed 1, one core each, one run after the other with nothing else running \
+         (`--only cost`). The same procedure and particle count in both codes; the skin (units of \
+         d_min) is the same in both. Before: skin {OLD_SKIN} (the setting before issue 13); \
+         after: skin {SKIN}.\n\n\
+         | point | skin | particles | mbgc fill s | mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio |\n\
+         |---|---|---|---|---|---|---|---|"
+    );
+    let mut by: BTreeMap<(String, u64), (Option<Row>, Option<Row>)> = BTreeMap::new();
+    for r in rows.iter().filter(|r| r.job.part == "cost") {
+        let e = by
+            .entry((r.job.point.clone(), (r.job.skin * 100.0) as u64))
+            .or_default();
+        if r.job.code == "mbgc" {
+            e.0 = Some(r.clone());
+        } else {
+            e.1 = Some(r.clone());
+        }
+    }
+    for ((pt, skin), (m, l)) in by {
+        let (Some(m), Some(l)) = (m, l) else { continue };
+        let _ = writeln!(
+            w,
+            "| {pt} ({}) | {} | {} / {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} |",
+            describe(&pt),
+            skin as f64 / 100.0,
+            m.inserted,
+            l.inserted,
+            m.fill_s,
+            m.flow_s,
+            m.wall_s,
+            l.wall_s,
+            l.wall_s / m.wall_s
+        );
+    }
+    let _ = writeln!(w, "\nsteps of the mbgc cost runs: {}", {
+        let v: Vec<String> = rows
+            .iter()
+            .filter(|r| r.job.part == "cost" && r.job.code == "mbgc")
+            .map(|r| format!("{} skin {}: {}", r.job.point, r.job.skin, r.steps))
+            .collect();
+        v.join(", ")
+    });
+    s
+}
+
+const PROCEDURE: &str = "## The fill procedure\n\n\
+The real test (Roessler et al. 2019, used by seed 004) fills a box with material, strikes it level \
+with the rim, opens one side and lets the material run out; the bulk density is the mass in the \
+box over its volume, the shear angle the slope of the flank left behind. mbgc's box \
+(`src/dem/experiments/shear_box.rs`, `ShearBox::schedule` holds every number) does this:\n\n\
+1. Box 100 x 100 x 150 mm scaled so that its smallest side is k d_max (seed 004's Eq. 4 with \
+k = 10). Particles: 0.78 box volumes of solid, diameters drawn from the log-normal PSD truncated \
+at its 1 %/99 % mass quantiles.\n\
+2. Pouring: the particles are created at rest at random, non-overlapping positions \
+(random sequential insertion, largest first, `src/dem/insertion.rs`) in a column over the box's \
+base at solid fraction {FILL}, and fall under gravity into the box (walls extended upwards). \
+This stands for material poured from a scoop: a random, isotropic cloud with no layering. \
+(Before issue 13 the particles started on a jittered lattice at solid fraction 0.05-0.13, \
+a column 6-14 box heights tall: the fall was longer, the impact harder, the bed denser.)\n\
+3. At rest: after the free-fall time from the column's top, when the translational rms speed \
+is below 0.01 sqrt(g d_max) (checked every 0.01 s; EPSD2 keeps particles rocking, so rotation is \
+no criterion).\n\
+4. Strike-off: every particle whose centre is above the rim is deleted; one 0.01 s relaxation; \
+the bulk density counts the solid volume inside the box (spheres cut by the rim by their exact \
+part inside).\n\
+5. Outflow: the flap (the +x side wall) is removed; particles that fall 2 d_max below the floor \
+over its edge are deleted. Rest: at least 4 sqrt(h/g) after opening and 5 checks in a row with no \
+removal, no particle in the box faster than 0.05 sqrt(g d_max) in x-z, rms below the rest speed.\n\
+6. Shear angle: a line fitted through the top of the flank.\n\n\
+The LIGGGHTS deck (`src/liggghts/shear_box_fill.rs`) runs the same schedule with `fix insert/pack` \
+into the same column and `particledistribution/discrete` templates; the time step is 0.25 \
+Rayleigh times of d_min in both.\n";
