@@ -484,7 +484,8 @@ fn report(rows: &[Row]) -> String {
     let _ = writeln!(
         w,
         "\n## Box scale\n\nmbgc, middle friction (mu_pp 0.4, mu_r_pp 0.3), seed means +- standard \
-         errors; k = 10 rows are the comparison's runs. Bias: difference from k = 14.\n\n\
+         errors; k = 10 rows are the comparison's runs. Bias: difference from k = 14. Wall times \
+         are indicative only (two runs at a time).\n\n\
          | sigma_ln | k | n | particles | shear angle deg | bias deg | bulk density kg/m3 | bias % | wall s |\n\
          |---|---|---|---|---|---|---|---|---|"
     );
@@ -553,9 +554,12 @@ fn report(rows: &[Row]) -> String {
         w,
         "\n## Whole-run cost against LIGGGHTS\n\n\
          k = 10, seed 1, one core each, one run after the other with nothing else running \
-         (`--only cost`). The same procedure and particle count in both codes; the skin (units of \
-         d_min) is the same in both. Before: skin {OLD_SKIN} (the setting before issue 13); \
-         after: skin {SKIN}.\n\n\
+         (`--only cost`). The same procedure and solid mass in both codes (LIGGGHTS' 5 classes give \
+         a slightly different count, in the table); the skin (units of d_min) is the same in both. \
+         Skin {OLD_SKIN} was the setting before issue 13, {SKIN} is the campaign's. Before issue \
+         13, with the lattice column 6 box heights tall, the same mbgc run (k = 10, d50 8 mm, \
+         sigma_ln 0.15, mu_pp 0.1, `examples/shear_box`) took 28.3 s: fill 8778 steps 16.1 s, \
+         outflow 29640 steps 12.2 s (earlier measurement, not regenerated here).\n\n\
          | point | skin | particles | mbgc fill s | mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio |\n\
          |---|---|---|---|---|---|---|---|"
     );
