@@ -125,23 +125,7 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     }
     write_atomic(&dir.join("data.shear_box"), data.as_bytes())?;
     let wall_h = hi[2] - 1e-9;
-    let walls = [
-        ("floor", [0.0, 0.0, 0.0], [l, 0.0, 0.0], [0.0, w, 0.0]),
-        ("back", [0.0, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, wall_h]),
-        (
-            "side_lo",
-            [0.0, 0.0, 0.0],
-            [l, 0.0, 0.0],
-            [0.0, 0.0, wall_h],
-        ),
-        ("side_hi", [0.0, w, 0.0], [l, 0.0, 0.0], [0.0, 0.0, wall_h]),
-    ];
-    for (name, c, a, b) in walls {
-        write_atomic(
-            &dir.join(format!("{name}.stl")),
-            rect_stl(name, c, a, b).as_bytes(),
-        )?;
-    }
+    write_box_walls(dir, l, w, wall_h)?;
     let (e_p, e_w, nu) = (get("E_p")?, get("E_w")?, get("nu_p")?);
     let (e_pp, e_pw, mu_pp, mu_pw, mr_pp, mr_pw) = (
         get("e_pp")?,
@@ -217,7 +201,7 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         num(rec.dt)
     );
     let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
-    for (name, ..) in &walls[..4] {
+    for name in BOX_WALLS {
         let _ = writeln!(s, "fix {name} all mesh/surface file {name}.stl type 2");
     }
     let _ = writeln!(
@@ -252,6 +236,32 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     let _ = writeln!(s, "variable i loop {n_chunks}\nlabel flow\nrun {}\ndelete_atoms region below compress no\nnext i\njump SELF flow", rec.chunk);
     let _ = writeln!(s, "write_dump all custom {FINAL_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"");
     write_atomic(&dir.join(INPUT), s.as_bytes())
+}
+
+/// The names of the box's fixed walls, in the order [`write_box_walls`] writes them.
+pub(crate) const BOX_WALLS: [&str; 4] = ["floor", "back", "side_lo", "side_hi"];
+
+/// The box's fixed walls (floor, back, two sides; the flap is a plane of its own) as STL meshes
+/// `wall_h` high, written into `dir`.
+pub(crate) fn write_box_walls(dir: &Path, l: f64, w: f64, wall_h: f64) -> Result<()> {
+    let walls = [
+        ("floor", [0.0, 0.0, 0.0], [l, 0.0, 0.0], [0.0, w, 0.0]),
+        ("back", [0.0, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, wall_h]),
+        (
+            "side_lo",
+            [0.0, 0.0, 0.0],
+            [l, 0.0, 0.0],
+            [0.0, 0.0, wall_h],
+        ),
+        ("side_hi", [0.0, w, 0.0], [l, 0.0, 0.0], [0.0, 0.0, wall_h]),
+    ];
+    for (name, c, a, b) in walls {
+        write_atomic(
+            &dir.join(format!("{name}.stl")),
+            rect_stl(name, c, a, b).as_bytes(),
+        )?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

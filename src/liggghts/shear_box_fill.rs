@@ -14,9 +14,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::mesh::rect_stl;
 use super::number::num;
-use super::shear_box::{gran_model, GranModel};
+use super::shear_box::{gran_model, write_box_walls, GranModel, BOX_WALLS};
 use crate::dem::contact::ModelClass;
 use crate::dem::experiments::ParamSet;
 use crate::dem::vec3::V3;
@@ -88,23 +87,7 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     let [l, w, h] = d.size;
     let (lo, hi) = d.domain;
     let wall_h = hi[2] - 1e-9;
-    let walls = [
-        ("floor", [0.0, 0.0, 0.0], [l, 0.0, 0.0], [0.0, w, 0.0]),
-        ("back", [0.0, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, wall_h]),
-        (
-            "side_lo",
-            [0.0, 0.0, 0.0],
-            [l, 0.0, 0.0],
-            [0.0, 0.0, wall_h],
-        ),
-        ("side_hi", [0.0, w, 0.0], [l, 0.0, 0.0], [0.0, 0.0, wall_h]),
-    ];
-    for (name, c, a, b) in walls {
-        write_atomic(
-            &dir.join(format!("{name}.stl")),
-            rect_stl(name, c, a, b).as_bytes(),
-        )?;
-    }
+    write_box_walls(dir, l, w, wall_h)?;
     let rho = get("rho_p")?;
     let (e_p, e_w, nu) = (get("E_p")?, get("E_w")?, get("nu_p")?);
     let pair = |pp: f64, pw: f64| format!("{} {} {} {}", num(pp), num(pw), num(pw), num(pw));
@@ -156,7 +139,7 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
         num(d.dt)
     );
     let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
-    for (name, ..) in &walls {
+    for name in BOX_WALLS {
         let _ = writeln!(s, "fix {name} all mesh/surface file {name}.stl type 2");
     }
     let _ = writeln!(
