@@ -34,12 +34,22 @@ pub struct Args {
     /// Seeds per box scale.
     #[arg(long, default_value_t = 3)]
     pub k_seeds: u64,
-    /// Parts to run: compare, gravel, scale, cost (the report is made from every row there is).
-    #[arg(long, value_delimiter = ',', default_values_t = ["compare".to_string(), "gravel".into(), "scale".into(), "cost".into()])]
+    /// Parts to run: compare, gravel, causes, scale, cost (the report is made from every row
+    /// there is). causes: mbgc at seed 004's point with E 5e7, and with the PSD as 5 classes.
+    #[arg(long, value_delimiter = ',', default_values_t = ["compare".to_string(), "gravel".into(), "causes".into(), "scale".into(), "cost".into()])]
     pub only: Vec<String>,
-    /// Points of the cost part (a: sigma_ln 0.15, a2: 0.25).
+    /// Points of the cost part (a: sigma_ln 0.15, a2: 0.25; "-5cls": mbgc draws LIGGGHTS'
+    /// 5 classes, so that both codes hold the same particles).
     #[arg(long, value_delimiter = ',', default_values_t = COST_POINTS.map(String::from))]
     pub cost_points: Vec<String>,
+    /// Skins (units of d_min) of the cost part: the campaign's; add 0.2 (before issue 13) to
+    /// compare.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![SKIN])]
+    pub cost_skins: Vec<f64>,
+    /// Seeds of the cost part (1..=cost_seeds): the step count to rest varies by 10-20 % from
+    /// seed to seed in either code, so one seed decides little.
+    #[arg(long, default_value_t = 2)]
+    pub cost_seeds: u64,
     /// Runs at a time (the cost part always runs alone, one run after the other).
     #[arg(long, default_value_t = 2)]
     pub jobs: usize,
@@ -57,10 +67,19 @@ pub struct Args {
 /// The parameter sets: low (a), middle (c) and high (b) friction at sigma_ln 0.15, the same at
 /// sigma_ln 0.25 (a2, c2, b2), and seed 004's Gravel 8/16 (Tables 3-5).
 pub fn point(name: &str) -> Option<ParamSet> {
-    if name == "gravel" {
+    // "-5cls": the same point with the PSD as LIGGGHTS' classes (run_job), for equal particles.
+    let name = name.strip_suffix("-5cls").unwrap_or(name);
+    if let Some(variant) = name.strip_prefix("gravel") {
+        // Variants for the causes of the gap to seed 004: ten times stiffer, or (run_job)
+        // the PSD as 5 classes.
+        let e = match variant {
+            "" => 5e6,
+            "-E5e7" => 5e7,
+            _ => return None,
+        };
         return Some(ParamSet::from_pairs(&[
-            ("E_p", 5e6),
-            ("E_w", 5e6),
+            ("E_p", e),
+            ("E_w", e),
             ("nu_p", 0.3),
             ("e_pp", 0.6),
             ("e_pw", 0.6),
@@ -102,7 +121,11 @@ pub fn point(name: &str) -> Option<ParamSet> {
 
 const COMPARE_POINTS: [&str; 6] = ["a", "c", "b", "a2", "c2", "b2"];
 const SCALE_POINTS: [&str; 2] = ["c", "c2"];
-const COST_POINTS: [&str; 2] = ["a", "a2"];
+/// The cost is compared on equal particles: mbgc draws LIGGGHTS' 5 classes too.
+const COST_POINTS: [&str; 2] = ["a-5cls", "a2-5cls"];
+/// Seed 004's point varied, mbgc only: ten times stiffer, the PSD as 5 classes.
+const CAUSE_POINTS: [&str; 2] = ["gravel-E5e7", "gravel-5cls"];
+const CAUSE_SEEDS: u64 = 2;
 /// LIGGGHTS' PSD: classes of equal mass (a user's discrete description).
 const LIGGGHTS_CLASSES: usize = 5;
 
@@ -125,7 +148,10 @@ impl Job {
     }
 }
 
-const HEADER: &str = "part\tcode\tpoint\tk\tskin\tseed\tangle\tbulk\tr2\tinserted\tfilled\tfill_s\tflow_s\twall_s\tsteps";
+const HEADER: &str = "part\tcode\tpoint\tk\tskin\tseed\tangle\tbulk\tr2\tinserted\tfilled\tfill_s\tflow_s\twall_s\tsteps\tcore_frac\ttop_rule_bulk";
+/// Rows written before the last two columns were added have this many (read as NaN there).
+const OLD_COLUMNS: usize = 15;
+const COLUMNS: usize = 17;
 
 #[derive(Debug, Clone)]
 struct Row {
@@ -137,6 +163,10 @@ struct Row {
     flow_s: f64,
     wall_s: f64,
     steps: u64,
+    /// Solid fraction of the bed's core before the strike-off (one d_max from every face).
+    core_frac: f64,
+    /// Bulk density had every particle reaching above the rim been deleted.
+    top_rule_bulk: f64,
 }
 
 fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
@@ -144,6 +174,7 @@ fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
     let sb = ShearBox {
         box_scale: j.k,
         skin: j.skin,
+        psd_classes: if j.point.ends_with("-5cls") { 5 } else { 0 },
         ..Default::default()
     };
     let t = Instant::now();
@@ -159,10 +190,11 @@ fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
             j.part, j.point, j.k, j.skin, j.seed
         ));
         let m = run_liggghts(&dir, &p, &deck, d_max)?;
-        (m, f64::NAN, f64::NAN, 0)
+        let steps = m.steps;
+        (m, f64::NAN, f64::NAN, steps)
     };
     Ok(format!(
-        "{}\t{:.3}\t{:.1}\t{:.3}\t{}\t{}\t{:.2}\t{:.2}\t{:.2}\t{}",
+        "{}\t{:.3}\t{:.1}\t{:.3}\t{}\t{}\t{:.2}\t{:.2}\t{:.2}\t{}\t{:.4}\t{:.1}",
         j.key(),
         m.shear_angle,
         m.bulk_density,
@@ -172,7 +204,9 @@ fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
         fill_s,
         flow_s,
         t.elapsed().as_secs_f64(),
-        steps
+        steps,
+        m.core_fraction,
+        m.top_rule_density
     ))
 }
 
@@ -186,20 +220,19 @@ fn read_rows(table: &Path) -> anyhow::Result<Vec<Row>> {
         let c: Vec<&str> = line.split('\t').collect();
         let bad = || {
             format!(
-                "{}: line {}: expected {} columns",
+                "{}: line {}: expected {OLD_COLUMNS} or {COLUMNS} columns",
                 table.display(),
                 n + 1,
-                15
             )
         };
-        if c.len() != 15 {
+        if c.len() != OLD_COLUMNS && c.len() != COLUMNS {
             anyhow::bail!(bad());
         }
         let f = |i: usize| -> anyhow::Result<f64> {
             c[i].parse::<f64>()
                 .with_context(|| format!("{}: line {}: column {}", table.display(), n + 1, i + 1))
         };
-        let part = ["compare", "gravel", "scale", "cost"]
+        let part = ["compare", "gravel", "causes", "scale", "cost"]
             .into_iter()
             .find(|p| *p == c[0])
             .with_context(bad)?;
@@ -223,6 +256,8 @@ fn read_rows(table: &Path) -> anyhow::Result<Vec<Row>> {
             flow_s: f(12)?,
             wall_s: f(13)?,
             steps: f(14)? as u64,
+            core_frac: if c.len() == COLUMNS { f(15)? } else { f64::NAN },
+            top_rule_bulk: if c.len() == COLUMNS { f(16)? } else { f64::NAN },
         });
     }
     Ok(rows)
@@ -269,25 +304,34 @@ fn jobs(a: &Args) -> Vec<Job> {
             }
         }
     }
+    if wants("causes") {
+        for seed in 1..=CAUSE_SEEDS {
+            for pt in CAUSE_POINTS {
+                v.push(job("causes", "mbgc", pt, 10.0, seed));
+            }
+        }
+    }
     scale(&mut v, SCALE_POINTS[0]);
     compare(&mut v, &COMPARE_POINTS[3..]);
     scale(&mut v, SCALE_POINTS[1]);
     v
 }
 
-fn cost_jobs(points: &[String]) -> Vec<Job> {
+fn cost_jobs(points: &[String], skins: &[f64], seeds: u64) -> Vec<Job> {
     let mut v = Vec::new();
     for pt in points {
-        for skin in [OLD_SKIN, SKIN] {
-            for code in ["mbgc", "liggghts"] {
-                v.push(Job {
-                    part: "cost",
-                    code,
-                    point: pt.clone(),
-                    k: 10.0,
-                    skin,
-                    seed: 1,
-                });
+        for &skin in skins {
+            for seed in 1..=seeds {
+                for code in ["mbgc", "liggghts"] {
+                    v.push(Job {
+                        part: "cost",
+                        code,
+                        point: pt.clone(),
+                        k: 10.0,
+                        skin,
+                        seed,
+                    });
+                }
             }
         }
     }
@@ -295,6 +339,19 @@ fn cost_jobs(points: &[String]) -> Vec<Job> {
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    const PARTS: [&str; 6] = ["compare", "gravel", "causes", "scale", "cost", "none"];
+    if let Some(o) = a.only.iter().find(|o| !PARTS.contains(&o.as_str())) {
+        anyhow::bail!("--only {o}: expected parts among {}", PARTS.join(", "));
+    }
+    if let Some(p) = a.cost_points.iter().find(|p| point(p).is_none()) {
+        anyhow::bail!("--cost-points {p}: expected a point among a, c, b, a2, c2, b2, gravel");
+    }
+    if let Some(s) = a.cost_skins.iter().find(|s| !(**s > 0.0 && s.is_finite())) {
+        anyhow::bail!("--cost-skins {s}: expected a positive skin in units of d_min");
+    }
+    if let Some(k) = a.k.iter().find(|k| !(**k >= 3.0 && k.is_finite())) {
+        anyhow::bail!("--k {k}: expected box scales of at least 3");
+    }
     std::fs::create_dir_all(&a.work_dir)
         .with_context(|| format!("{}: cannot create", a.work_dir.display()))?;
     let table = a.table.clone();
@@ -343,7 +400,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     });
     if a.only.iter().any(|o| o == "cost") {
         // Alone on the machine, one after the other: the timings are compared.
-        for j in cost_jobs(&a.cost_points)
+        for j in cost_jobs(&a.cost_points, &a.cost_skins, a.cost_seeds)
             .into_iter()
             .filter(|j| !done.contains(&j.key()))
         {
@@ -403,6 +460,9 @@ fn describe(pt: &str) -> String {
         g("sigma_ln")
     )
 }
+
+/// The mbgc and the LIGGGHTS run of one cost seed.
+type CostPair = (Option<Row>, Option<Row>);
 
 fn report(rows: &[Row]) -> String {
     let mut s = String::new();
@@ -480,6 +540,52 @@ fn report(rows: &[Row]) -> String {
         }
     }
 
+    // 2b. What moves the gap.
+    let _ = writeln!(
+        w,
+        "\nWhat moves it (k = 10, seed means +- standard errors). core: solid fraction of the bed \
+         before the strike-off, one d_max away from every face (no wall layers). top rule: the \
+         bulk density had every particle reaching above the rim been deleted and the rest \
+         counted whole, a rule a LIGGGHTS user may well write (mbgc deletes only those whose \
+         centre is above and counts the part of each sphere inside the box). Only runs made \
+         after these two columns were added have them (n in brackets).\n\n\
+         | variant | n | shear angle deg | bulk density kg/m3 | vs seed 004 % | core fraction | top rule kg/m3 | top rule vs seed 004 % |\n\
+         |---|---|---|---|---|---|---|---|"
+    );
+    let variants: [(&str, &str, &'static str, &str); 4] = [
+        ("gravel", "gravel", "mbgc", "mbgc, continuous PSD, E 5e6"),
+        ("gravel", "gravel", "liggghts", "LIGGGHTS, 5 classes, E 5e6"),
+        (
+            "causes",
+            "gravel-5cls",
+            "mbgc",
+            "mbgc, 5 classes of equal mass, E 5e6",
+        ),
+        (
+            "causes",
+            "gravel-E5e7",
+            "mbgc",
+            "mbgc, continuous PSD, E 5e7",
+        ),
+    ];
+    for (part, pt, code, label) in variants {
+        let f = |r: &Row| r.job.part == part && r.job.code == code && r.job.point == pt;
+        let (a, ase, n) = stat(rows, f, |r| r.angle);
+        let (b, bse, _) = stat(rows, f, |r| r.bulk);
+        let g = |r: &Row| f(r) && r.core_frac.is_finite();
+        let (c, cse, cn) = stat(rows, g, |r| r.core_frac);
+        let (t, tse, _) = stat(rows, g, |r| r.top_rule_bulk);
+        if n > 0 {
+            let _ = writeln!(
+                w,
+                "| {label} | {n} | {a:.2} +- {ase:.2} | {b:.1} +- {bse:.1} | {:+.2} | \
+                 {c:.4} +- {cse:.4} ({cn}) | {t:.1} +- {tse:.1} | {:+.2} |",
+                100.0 * (b / SEED004_BULK - 1.0),
+                100.0 * (t / SEED004_BULK - 1.0)
+            );
+        }
+    }
+
     // 3. Box scale.
     let _ = writeln!(
         w,
@@ -553,20 +659,29 @@ fn report(rows: &[Row]) -> String {
     let _ = writeln!(
         w,
         "\n## Whole-run cost against LIGGGHTS\n\n\
-         k = 10, seed 1, one core each, one run after the other with nothing else running \
-         (`--only cost`). The same procedure and solid mass in both codes (LIGGGHTS' 5 classes give \
-         a slightly different count, in the table); the skin (units of d_min) is the same in both. \
-         Skin {OLD_SKIN} was the setting before issue 13, {SKIN} is the campaign's. Before issue \
+         k = 10, one core each, one run after the other with nothing else running \
+         (`--only cost`). The same procedure and solid mass in both codes; points named `-5cls` \
+         give mbgc LIGGGHTS' 5 size classes too, so that both hold the same particles (the \
+         continuous PSD makes about 2-5 % more, smaller particles for the same mass). The skin \
+         (units of d_min) is the same in both. Rows without LIGGGHTS' step count (written \
+         before it was recorded) show no per particle-step ratio. Skin {OLD_SKIN} was the setting before issue 13, {SKIN} is the campaign's. Before issue \
          13, with the lattice column 6 box heights tall, the same mbgc run (k = 10, d50 8 mm, \
          sigma_ln 0.15, mu_pp 0.1, `examples/shear_box`) took 28.3 s: fill 8778 steps 16.1 s, \
          outflow 29640 steps 12.2 s (earlier measurement, not regenerated here).\n\n\
-         | point | skin | particles | mbgc fill s | mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio |\n\
-         |---|---|---|---|---|---|---|---|"
+         Times are seed means; ratio: LIGGGHTS' summed whole-run time over mbgc's (seeds both \
+         codes ran); per particle-step: the same for time / (particles x steps), which removes \
+         the seed-to-seed spread of the step count to rest.\n\n\
+         | point | skin | seeds | particles mbgc / LIGGGHTS | steps mbgc / LIGGGHTS | mbgc fill s | \
+         mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio | per particle-step |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|"
     );
-    let mut by: BTreeMap<(String, u64), (Option<Row>, Option<Row>)> = BTreeMap::new();
+    // Seeds both codes have, per (point, skin): whole-run times are summed over them.
+    let mut by: BTreeMap<(String, u64), BTreeMap<u64, CostPair>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.job.part == "cost") {
         let e = by
-            .entry((r.job.point.clone(), (r.job.skin * 100.0) as u64))
+            .entry((r.job.point.clone(), (r.job.skin * 100.0).round() as u64))
+            .or_default()
+            .entry(r.job.seed)
             .or_default();
         if r.job.code == "mbgc" {
             e.0 = Some(r.clone());
@@ -574,30 +689,53 @@ fn report(rows: &[Row]) -> String {
             e.1 = Some(r.clone());
         }
     }
-    for ((pt, skin), (m, l)) in by {
-        let (Some(m), Some(l)) = (m, l) else { continue };
+    for ((pt, skin), seeds) in by {
+        let pairs: Vec<(Row, Row)> = seeds
+            .into_values()
+            .filter_map(|(m, l)| Some((m?, l?)))
+            .collect();
+        if pairs.is_empty() {
+            continue;
+        }
+        let n = pairs.len() as f64;
+        let sum = |f: &dyn Fn(&(Row, Row)) -> f64| pairs.iter().map(f).sum::<f64>();
+        let (m_wall, l_wall) = (sum(&|p| p.0.wall_s), sum(&|p| p.1.wall_s));
+        let (m_np, l_np) = (
+            sum(&|p| p.0.inserted as f64) / n,
+            sum(&|p| p.1.inserted as f64) / n,
+        );
+        let (m_steps, l_steps) = (
+            sum(&|p| p.0.steps as f64) / n,
+            sum(&|p| p.1.steps as f64) / n,
+        );
+        // Cost per particle-step: the whole run's time over (particles created x steps).
+        let per = |p: &Row| {
+            if p.steps == 0 {
+                f64::NAN
+            } else {
+                p.wall_s / (p.inserted as f64 * p.steps as f64)
+            }
+        };
+        let per_ratio = sum(&|p| per(&p.1)) / sum(&|p| per(&p.0));
+        let classes = if pt.ends_with("-5cls") {
+            "LIGGGHTS' 5 classes in both"
+        } else {
+            "mbgc continuous, LIGGGHTS 5 classes"
+        };
         let _ = writeln!(
             w,
-            "| {pt} ({}) | {} | {} / {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} |",
+            "| {pt} ({}; {classes}) | {} | {} | {m_np:.0} / {l_np:.0} | {m_steps:.0} / {l_steps:.0} | \
+             {:.1} | {:.1} | {:.1} | {:.1} | **{:.2}** | {per_ratio:.2} |",
             describe(&pt),
             skin as f64 / 100.0,
-            m.inserted,
-            l.inserted,
-            m.fill_s,
-            m.flow_s,
-            m.wall_s,
-            l.wall_s,
-            l.wall_s / m.wall_s
+            pairs.len(),
+            sum(&|p| p.0.fill_s) / n,
+            sum(&|p| p.0.flow_s) / n,
+            m_wall / n,
+            l_wall / n,
+            l_wall / m_wall,
         );
     }
-    let _ = writeln!(w, "\nsteps of the mbgc cost runs: {}", {
-        let v: Vec<String> = rows
-            .iter()
-            .filter(|r| r.job.part == "cost" && r.job.code == "mbgc")
-            .map(|r| format!("{} skin {}: {}", r.job.point, r.job.skin, r.steps))
-            .collect();
-        v.join(", ")
-    });
     s
 }
 
@@ -628,3 +766,44 @@ removal, no particle in the box faster than 0.05 sqrt(g d_max) in x-z, rms below
 The LIGGGHTS deck (`src/liggghts/shear_box_fill.rs`) runs the same schedule with `fix insert/pack` \
 into the same column and `particledistribution/discrete` templates; the time step is 0.25 \
 Rayleigh times of d_min in both.\n";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_from_before_the_new_columns_read_as_nan_and_bad_rows_name_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = dir.path().join("t.tsv");
+        let old =
+            "compare\tmbgc\ta\t10\t1\t1\t21.6\t1591.0\t0.99\t6921\t5505\t10.6\t17.4\t28.0\t40014";
+        let new = format!("{old}\t0.6123\t1570.2").replace("\t1\t1\t", "\t1\t2\t");
+        std::fs::write(&t, format!("{HEADER}\n{old}\n{new}\n")).unwrap();
+        let rows = read_rows(&t).unwrap();
+        assert_eq!(rows.len(), 2);
+        assert!(rows[0].core_frac.is_nan() && rows[0].top_rule_bulk.is_nan());
+        assert_eq!((rows[1].core_frac, rows[1].top_rule_bulk), (0.6123, 1570.2));
+        assert_eq!(rows[1].job.seed, 2);
+
+        std::fs::write(&t, format!("{HEADER}\n{old}\tx\n")).unwrap();
+        let e = format!("{:#}", read_rows(&t).unwrap_err());
+        assert!(e.contains("t.tsv") && e.contains("line 2"), "{e}");
+        std::fs::write(
+            &t,
+            format!("{HEADER}\n{}\n", old.replace("compare", "lunch")),
+        )
+        .unwrap();
+        let e = format!("{:#}", read_rows(&t).unwrap_err());
+        assert!(e.contains("line 2"), "{e}");
+    }
+
+    #[test]
+    fn variants_of_seed_004_point_differ_only_where_named() {
+        let base = point("gravel").unwrap();
+        let stiff = point("gravel-E5e7").unwrap();
+        assert_eq!(stiff.get("E_p"), Some(5e7));
+        assert_eq!(stiff.get("mu_pp"), base.get("mu_pp"));
+        assert_eq!(point("gravel-5cls").unwrap().get("E_p"), base.get("E_p"));
+        assert!(point("gravel-E5").is_none() && point("d").is_none() && point("a3").is_none());
+    }
+}

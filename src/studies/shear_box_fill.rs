@@ -44,6 +44,8 @@ pub struct FillMeasure {
     /// those whose centre is above), the rest counted whole.
     pub top_rule_density: f64,
     pub fill_steps: u64,
+    /// Time steps of the whole run (LIGGGHTS: summed over its `run` commands).
+    pub steps: u64,
 }
 
 /// (radius, position) of particles.
@@ -232,6 +234,19 @@ pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Re
         .find_map(|s| s.strip_prefix("FILL_STEPS "))
         .and_then(|s| s.trim().parse().ok())
         .unwrap_or(0);
+    // "Loop time of T on P procs for N steps with A atoms": one line per `run` command.
+    let steps = log
+        .lines()
+        .filter(|s| s.starts_with("Loop time of"))
+        .filter_map(|s| {
+            s.split(" for ")
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse::<u64>()
+                .ok()
+        })
+        .sum();
     let mut m = FillMeasure {
         shear_angle: (-flank.slope).atan().to_degrees(),
         bulk_density: rho * solid_in(&filled, [0.0; 3], [l, w, h]) / (l * w * h),
@@ -241,6 +256,7 @@ pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Re
         column_fraction,
         column_height,
         fill_steps,
+        steps,
         ..Default::default()
     };
     bed(&read(PRE_STRIKE_DUMP)?, size, d_max, rho, &mut m);
