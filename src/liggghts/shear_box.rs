@@ -195,26 +195,7 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         );
     }
     s.push('\n');
-    let _ = writeln!(
-        s,
-        "pair_style gran {models}{settings}\npair_coeff * *\ntimestep {}",
-        num(rec.dt)
-    );
-    let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
-    for name in BOX_WALLS {
-        let _ = writeln!(s, "fix {name} all mesh/surface file {name}.stl type 2");
-    }
-    let _ = writeln!(
-        s,
-        "fix box all wall/gran {models} mesh n_meshes 4 meshes floor back side_lo side_hi{settings}"
-    );
-    // LIGGGHTS takes one mesh wall fix only; the flap is a plane, which inside the box acts as
-    // the flap rectangle does, and is gone before anything reaches beyond it.
-    let _ = writeln!(
-        s,
-        "fix flapwall all wall/gran {models} primitive type 2 xplane {}{settings}",
-        num(l)
-    );
+    write_box_physics(&mut s, &models, &settings, rec.dt, l);
     let _ = writeln!(
         s,
         "fix integrate all nve/sphere\nthermo 2000\nthermo_modify lost ignore norm no\n"
@@ -239,6 +220,31 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
 }
 
 /// The names of the box's fixed walls, in the order [`write_box_walls`] writes them.
+/// The pair style, time step, gravity, the box's wall meshes and the flap: the part of a shear-box
+/// deck that the replay and the self-filling deck share.
+pub(crate) fn write_box_physics(s: &mut String, models: &str, settings: &str, dt: f64, l: f64) {
+    let _ = writeln!(
+        s,
+        "pair_style gran {models}{settings}\npair_coeff * *\ntimestep {}",
+        num(dt)
+    );
+    let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
+    for name in BOX_WALLS {
+        let _ = writeln!(s, "fix {name} all mesh/surface file {name}.stl type 2");
+    }
+    let _ = writeln!(
+        s,
+        "fix box all wall/gran {models} mesh n_meshes 4 meshes floor back side_lo side_hi{settings}"
+    );
+    // LIGGGHTS takes one mesh wall fix only; the flap is a plane, which inside the box acts as
+    // the flap rectangle does, and is gone before anything reaches beyond it.
+    let _ = writeln!(
+        s,
+        "fix flapwall all wall/gran {models} primitive type 2 xplane {}{settings}",
+        num(l)
+    );
+}
+
 pub(crate) const BOX_WALLS: [&str; 4] = ["floor", "back", "side_lo", "side_hi"];
 
 /// The box's fixed walls (floor, back, two sides; the flap is a plane of its own) as STL meshes

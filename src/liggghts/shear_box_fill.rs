@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::number::num;
-use super::shear_box::{gran_model, write_box_walls, GranModel, BOX_WALLS};
+use super::shear_box::{gran_model, write_box_physics, write_box_walls, GranModel};
 use crate::dem::contact::ModelClass;
 use crate::dem::experiments::ParamSet;
 use crate::dem::vec3::V3;
@@ -133,24 +133,7 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
         "fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n",
         pair(get("mu_r_pp")?, get("mu_r_pw")?)
     );
-    let _ = writeln!(
-        s,
-        "pair_style gran {models}{settings}\npair_coeff * *\ntimestep {}",
-        num(d.dt)
-    );
-    let _ = writeln!(s, "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0");
-    for name in BOX_WALLS {
-        let _ = writeln!(s, "fix {name} all mesh/surface file {name}.stl type 2");
-    }
-    let _ = writeln!(
-        s,
-        "fix box all wall/gran {models} mesh n_meshes 4 meshes floor back side_lo side_hi{settings}"
-    );
-    let _ = writeln!(
-        s,
-        "fix flapwall all wall/gran {models} primitive type 2 xplane {}{settings}",
-        num(l)
-    );
+    write_box_physics(&mut s, &models, &settings, d.dt, l);
     // Each template and the distribution need their own prime seed.
     let mut dist = format!(
         "fix pdd all particledistribution/discrete {} {}",
