@@ -126,15 +126,6 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
     write_atomic(&dir.join("data.shear_box"), data.as_bytes())?;
     let wall_h = hi[2] - 1e-9;
     write_box_walls(dir, l, w, wall_h)?;
-    let (e_p, e_w, nu) = (get("E_p")?, get("E_w")?, get("nu_p")?);
-    let (e_pp, e_pw, mu_pp, mu_pw, mr_pp, mr_pw) = (
-        get("e_pp")?,
-        get("e_pw")?,
-        get("mu_pp")?,
-        get("mu_pw")?,
-        get("mu_r_pp")?,
-        get("mu_r_pw")?,
-    );
     let n_chunks = rec.flow_steps.div_ceil(rec.chunk);
     let mut s = String::new();
     let _ = writeln!(
@@ -147,42 +138,7 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         "read_data data.shear_box\nneighbor {} bin\nneigh_modify delay 0\n",
         num(rec.skin)
     );
-    let _ = writeln!(
-        s,
-        "fix m1 all property/global youngsModulus peratomtype {} {}",
-        num(e_p),
-        num(e_w)
-    );
-    let _ = writeln!(
-        s,
-        "fix m2 all property/global poissonsRatio peratomtype {} {}",
-        num(nu),
-        num(nu)
-    );
-    let _ = writeln!(
-        s,
-        "fix m3 all property/global coefficientRestitution peratomtypepair 2 {} {} {} {}",
-        num(e_pp),
-        num(e_pw),
-        num(e_pw),
-        num(e_pw)
-    );
-    let _ = writeln!(
-        s,
-        "fix m4 all property/global coefficientFriction peratomtypepair 2 {} {} {} {}",
-        num(mu_pp),
-        num(mu_pw),
-        num(mu_pw),
-        num(mu_pw)
-    );
-    let _ = writeln!(
-        s,
-        "fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {} {} {} {}",
-        num(mr_pp),
-        num(mr_pw),
-        num(mr_pw),
-        num(mr_pw)
-    );
+    write_contact_properties(&mut s, p)?;
     if rec.class.cohesion == CohesionKind::Sjkr {
         let (ced_pp, ced_pw) = (get("ced_pp")?, get("ced_pw")?);
         let _ = writeln!(
@@ -220,6 +176,42 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
 }
 
 /// The names of the box's fixed walls, in the order [`write_box_walls`] writes them.
+/// The contact properties of particles (type 1) and walls (type 2), fixes m1-m5: moduli,
+/// Poisson ratio, restitution, friction and rolling friction, the wall-wall entries set to the
+/// particle-wall ones. Shared by the replay and the self-filling deck.
+pub(crate) fn write_contact_properties(s: &mut String, p: &ParamSet) -> Result<()> {
+    let get = |k: &str| {
+        p.get(k)
+            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
+    };
+    let pair = |pp: f64, pw: f64| format!("{} {} {} {}", num(pp), num(pw), num(pw), num(pw));
+    let nu = get("nu_p")?;
+    let _ = writeln!(
+        s,
+        "fix m1 all property/global youngsModulus peratomtype {} {}",
+        num(get("E_p")?),
+        num(get("E_w")?)
+    );
+    let _ = writeln!(
+        s,
+        "fix m2 all property/global poissonsRatio peratomtype {} {}",
+        num(nu),
+        num(nu)
+    );
+    for (fix, name, pp, pw) in [
+        ("m3", "coefficientRestitution", "e_pp", "e_pw"),
+        ("m4", "coefficientFriction", "mu_pp", "mu_pw"),
+        ("m5", "coefficientRollingFriction", "mu_r_pp", "mu_r_pw"),
+    ] {
+        let _ = writeln!(
+            s,
+            "fix {fix} all property/global {name} peratomtypepair 2 {}",
+            pair(get(pp)?, get(pw)?)
+        );
+    }
+    Ok(())
+}
+
 /// The pair style, time step, gravity, the box's wall meshes and the flap: the part of a shear-box
 /// deck that the replay and the self-filling deck share.
 pub(crate) fn write_box_physics(s: &mut String, models: &str, settings: &str, dt: f64, l: f64) {

@@ -15,7 +15,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::number::num;
-use super::shear_box::{gran_model, write_box_physics, write_box_walls, GranModel};
+use super::shear_box::{
+    gran_model, write_box_physics, write_box_walls, write_contact_properties, GranModel,
+};
 use crate::dem::contact::ModelClass;
 use crate::dem::experiments::ParamSet;
 use crate::dem::vec3::V3;
@@ -89,8 +91,6 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     let wall_h = hi[2] - 1e-9;
     write_box_walls(dir, l, w, wall_h)?;
     let rho = get("rho_p")?;
-    let (e_p, e_w, nu) = (get("E_p")?, get("E_w")?, get("nu_p")?);
-    let pair = |pp: f64, pw: f64| format!("{} {} {} {}", num(pp), num(pw), num(pw), num(pw));
     let mut s = String::from(
         "# mbgc shear box, filled by LIGGGHTS itself. Type 1: particles, type 2: walls.\n",
     );
@@ -106,33 +106,8 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
         num(hi[2])
     );
     let _ = writeln!(s, "neighbor {} bin\nneigh_modify delay 0\n", num(d.skin));
-    let _ = writeln!(
-        s,
-        "fix m1 all property/global youngsModulus peratomtype {} {}",
-        num(e_p),
-        num(e_w)
-    );
-    let _ = writeln!(
-        s,
-        "fix m2 all property/global poissonsRatio peratomtype {} {}",
-        num(nu),
-        num(nu)
-    );
-    let _ = writeln!(
-        s,
-        "fix m3 all property/global coefficientRestitution peratomtypepair 2 {}",
-        pair(get("e_pp")?, get("e_pw")?)
-    );
-    let _ = writeln!(
-        s,
-        "fix m4 all property/global coefficientFriction peratomtypepair 2 {}",
-        pair(get("mu_pp")?, get("mu_pw")?)
-    );
-    let _ = writeln!(
-        s,
-        "fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n",
-        pair(get("mu_r_pp")?, get("mu_r_pw")?)
-    );
+    write_contact_properties(&mut s, p)?;
+    s.push('\n');
     write_box_physics(&mut s, &models, &settings, d.dt, l);
     // Each template and the distribution need their own prime seed.
     let mut dist = format!(
