@@ -18,6 +18,9 @@ pub struct NeighborList {
     pub nb: Vec<u32>,
     /// Contact history per list entry.
     pub hist: Vec<History>,
+    /// Per list entry: 0 promises that its history is zero. Most entries are separated pairs;
+    /// the force loop then skips them without touching their 48-byte histories.
+    pub live: Vec<u8>,
     x_build: Vec<V3>,
     pub builds: u64,
     // Scratch kept between builds so a rebuild does not allocate once warmed up.
@@ -71,6 +74,7 @@ impl NeighborList {
             self.start.push(0);
             self.nb.clear();
             self.hist.clear();
+            self.live.clear();
             self.x_build.clear();
             return;
         }
@@ -266,6 +270,9 @@ impl NeighborList {
         self.new_hist.truncate(self.new_nb.len());
         std::mem::swap(&mut self.nb, &mut self.new_nb);
         std::mem::swap(&mut self.hist, &mut self.new_hist);
+        self.live.clear();
+        self.live
+            .extend(self.hist.iter().map(|h| u8::from(!h.is_zero())));
         self.x_build.clear();
         self.x_build.extend_from_slice(&p.x);
     }

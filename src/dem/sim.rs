@@ -271,11 +271,13 @@ impl Simulation {
                 let j = nl.nb[e] as usize;
                 if let Some(h) = carried.get(&(p.id[i], p.id[j])) {
                     nl.hist[e] = *h;
+                    nl.live[e] = 1;
                 } else if let Some(h) = carried.get(&(p.id[j], p.id[i])) {
                     nl.hist[e] = History {
                         shear: scale(h.shear, -1.0),
                         rolling: scale(h.rolling, -1.0),
                     };
+                    nl.live[e] = 1;
                 }
             }
         }

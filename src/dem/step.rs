@@ -123,6 +123,7 @@ pub(crate) struct Raw {
     start: *const u32,
     nb: *const u32,
     hist: *mut History,
+    live: *mut u8,
     entries: usize,
     wall_hist: *mut History,
     walls: *const Wall,
@@ -167,6 +168,7 @@ impl Raw {
             "rows end at the last entry"
         );
         debug_assert_eq!(nl.hist.len(), nl.nb.len(), "one history per list entry");
+        debug_assert_eq!(nl.live.len(), nl.nb.len(), "one live flag per list entry");
         debug_assert_eq!(
             wall_hist.len(),
             n * walls.len(),
@@ -194,6 +196,7 @@ impl Raw {
             start: nl.start.as_ptr(),
             nb: nl.nb.as_ptr(),
             hist: nl.hist.as_mut_ptr(),
+            live: nl.live.as_mut_ptr(),
             entries: nl.nb.len(),
             wall_hist: wall_hist.as_mut_ptr(),
             walls: walls.as_ptr(),
@@ -285,8 +288,9 @@ impl Raw {
         let nb = std::slice::from_raw_parts(self.nb, self.entries);
         let (e0, e1) = (start[rows.start] as usize, start[rows.end] as usize);
         let hist = std::slice::from_raw_parts_mut(self.hist.add(e0), e1 - e0);
+        let live = std::slice::from_raw_parts_mut(self.live.add(e0), e1 - e0);
         pair_rows(
-            law, materials, dt, rows, start, nb, hist, e0, view, f_out, t_out,
+            law, materials, dt, rows, start, nb, hist, live, e0, view, f_out, t_out,
         );
         let n_walls = self.n_walls;
         if n_walls > 0 {
@@ -711,6 +715,7 @@ fn pair_rows<L: ContactLaw>(
     start: &[u32],
     nb: &[u32],
     hist: &mut [History],
+    live: &mut [u8],
     base: usize,
     p: P,
     f: &mut [V3],
@@ -723,17 +728,20 @@ fn pair_rows<L: ContactLaw>(
             let j = nb[e] as usize;
             // A half list: the team's buffers are cleared only from a member's first row on.
             debug_assert!(j > i, "entry {e}: {i} -> {j} is not a half-list entry");
-            let h = &mut hist[e - base];
             let d = sub(xi, p.x[j]);
             let rsum = ri + p.r[j];
             let dist2 = norm2(d);
+            let lv = &mut live[e - base];
             if dist2 >= rsum * rsum {
-                // Most separated pairs already have no history: skip the store.
-                if h.shear[0] != 0.0 || h.shear[1] != 0.0 || h.shear[2] != 0.0 || !h.is_zero() {
-                    *h = History::default();
+                // Most separated pairs have no history: skip them without loading it.
+                if *lv != 0 {
+                    hist[e - base] = History::default();
+                    *lv = 0;
                 }
                 continue;
             }
+            *lv = 1;
+            let h = &mut hist[e - base];
             let rj = p.r[j];
             let dist = dist2.sqrt();
             let inv = 1.0 / dist;
