@@ -35,7 +35,8 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     pub k_seeds: u64,
     /// Parts to run: compare, gravel, causes, scale, cost (the report is made from every row
-    /// there is). causes: mbgc at seed 004's point with E 5e7, and with the PSD as 5 classes.
+    /// there is). causes: seed 004's point with E 5e7 (mbgc and LIGGGHTS) and 5e8 (mbgc), and
+    /// with the PSD as 5 classes (mbgc).
     #[arg(long, value_delimiter = ',', default_values_t = ["compare".to_string(), "gravel".into(), "causes".into(), "scale".into(), "cost".into()])]
     pub only: Vec<String>,
     /// Points of the cost part (a: sigma_ln 0.15, a2: 0.25; "-5cls": mbgc draws LIGGGHTS'
@@ -70,11 +71,12 @@ pub fn point(name: &str) -> Option<ParamSet> {
     // "-5cls": the same point with the PSD as LIGGGHTS' classes (run_job), for equal particles.
     let name = name.strip_suffix("-5cls").unwrap_or(name);
     if let Some(variant) = name.strip_prefix("gravel") {
-        // Variants for the causes of the gap to seed 004: ten times stiffer, or (run_job)
-        // the PSD as 5 classes.
+        // Variants for the causes of the gap to seed 004: ten or a hundred times stiffer (the
+        // ends of seed 004's E range are 5e6 and 5e8), or (run_job) the PSD as 5 classes.
         let e = match variant {
             "" => 5e6,
             "-E5e7" => 5e7,
+            "-E5e8" => 5e8,
             _ => return None,
         };
         return Some(ParamSet::from_pairs(&[
@@ -123,9 +125,17 @@ const COMPARE_POINTS: [&str; 6] = ["a", "c", "b", "a2", "c2", "b2"];
 const SCALE_POINTS: [&str; 2] = ["c", "c2"];
 /// The cost is compared on equal particles: mbgc draws LIGGGHTS' 5 classes too.
 const COST_POINTS: [&str; 2] = ["a-5cls", "a2-5cls"];
-/// Seed 004's point varied, mbgc only: ten times stiffer, the PSD as 5 classes.
-const CAUSE_POINTS: [&str; 2] = ["gravel-E5e7", "gravel-5cls"];
-const CAUSE_SEEDS: u64 = 2;
+/// Seed 004's point varied: (point, code, seeds). Stiffer particles (the time step, and with it
+/// the cost, grows as sqrt(E): one seed at 5e8) and the PSD as 5 classes.
+const CAUSE_RUNS: [(&str, &str, u64); 4] = [
+    ("gravel-E5e7", "mbgc", 2),
+    ("gravel-5cls", "mbgc", 2),
+    ("gravel-E5e8", "mbgc", 1),
+    ("gravel-E5e7", "liggghts", 1),
+];
+/// Cost rows measured before the last change to the step, next to the table (kept to show
+/// before and after).
+const COST_BEFORE: &str = "shear_box_cost_before.tsv";
 /// LIGGGHTS' PSD: classes of equal mass (a user's discrete description).
 const LIGGGHTS_CLASSES: usize = 5;
 
@@ -305,9 +315,12 @@ fn jobs(a: &Args) -> Vec<Job> {
         }
     }
     if wants("causes") {
-        for seed in 1..=CAUSE_SEEDS {
-            for pt in CAUSE_POINTS {
-                v.push(job("causes", "mbgc", pt, 10.0, seed));
+        let most = CAUSE_RUNS.iter().map(|c| c.2).max().unwrap_or(0);
+        for seed in 1..=most {
+            for (pt, code, seeds) in CAUSE_RUNS {
+                if seed <= seeds {
+                    v.push(job("causes", code, pt, 10.0, seed));
+                }
             }
         }
     }
@@ -421,7 +434,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         eprintln!("failed: {f}");
     }
     let rows = read_rows(&table)?;
-    let text = report(&rows);
+    let before = read_rows(&table.with_file_name(COST_BEFORE))?;
+    let text = report(&rows, &before);
     match &a.report {
         Some(path) => std::fs::write(path, &text).with_context(|| path.display().to_string())?,
         None => print!("{text}"),
@@ -464,7 +478,8 @@ fn describe(pt: &str) -> String {
 /// The mbgc and the LIGGGHTS run of one cost seed.
 type CostPair = (Option<Row>, Option<Row>);
 
-fn report(rows: &[Row]) -> String {
+/// The report from the study's rows; `before`: cost rows of an earlier build, shown apart.
+fn report(rows: &[Row], before: &[Row]) -> String {
     let mut s = String::new();
     let w = &mut s;
     use std::fmt::Write as _;
@@ -552,7 +567,7 @@ fn report(rows: &[Row]) -> String {
          | variant | n | shear angle deg | bulk density kg/m3 | vs seed 004 % | core fraction | top rule kg/m3 | top rule vs seed 004 % |\n\
          |---|---|---|---|---|---|---|---|"
     );
-    let variants: [(&str, &str, &'static str, &str); 4] = [
+    let variants: [(&str, &str, &'static str, &str); 6] = [
         ("gravel", "gravel", "mbgc", "mbgc, continuous PSD, E 5e6"),
         ("gravel", "gravel", "liggghts", "LIGGGHTS, 5 classes, E 5e6"),
         (
@@ -566,6 +581,18 @@ fn report(rows: &[Row]) -> String {
             "gravel-E5e7",
             "mbgc",
             "mbgc, continuous PSD, E 5e7",
+        ),
+        (
+            "causes",
+            "gravel-E5e7",
+            "liggghts",
+            "LIGGGHTS, 5 classes, E 5e7",
+        ),
+        (
+            "causes",
+            "gravel-E5e8",
+            "mbgc",
+            "mbgc, continuous PSD, E 5e8",
         ),
     ];
     for (part, pt, code, label) in variants {
@@ -675,6 +702,25 @@ fn report(rows: &[Row]) -> String {
          mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio | per particle-step |\n\
          |---|---|---|---|---|---|---|---|---|---|---|"
     );
+    cost_table(w, rows);
+    if !before.is_empty() {
+        let _ = writeln!(
+            w,
+            "\nBefore the pair loop skipped separated pairs by a 1-byte flag (commit a72e4be; \
+             rows of `{COST_BEFORE}` next to the table, the same runs otherwise):\n\n\
+             | point | skin | seeds | particles mbgc / LIGGGHTS | steps mbgc / LIGGGHTS | mbgc fill s | \
+             mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio | per particle-step |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|"
+        );
+        cost_table(w, before);
+    }
+    s
+}
+
+/// One line per (point, skin) of the cost rows: seed means, and ratios over the seeds both codes
+/// ran.
+fn cost_table(w: &mut String, rows: &[Row]) {
+    use std::fmt::Write as _;
     // Seeds both codes have, per (point, skin): whole-run times are summed over them.
     let mut by: BTreeMap<(String, u64), BTreeMap<u64, CostPair>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.job.part == "cost") {
@@ -736,7 +782,6 @@ fn report(rows: &[Row]) -> String {
             l_wall / m_wall,
         );
     }
-    s
 }
 
 const PROCEDURE: &str = "## The fill procedure\n\n\
@@ -802,6 +847,7 @@ mod tests {
         let base = point("gravel").unwrap();
         let stiff = point("gravel-E5e7").unwrap();
         assert_eq!(stiff.get("E_p"), Some(5e7));
+        assert_eq!(point("gravel-E5e8").unwrap().get("E_w"), Some(5e8));
         assert_eq!(stiff.get("mu_pp"), base.get("mu_pp"));
         assert_eq!(point("gravel-5cls").unwrap().get("E_p"), base.get("E_p"));
         assert!(point("gravel-E5").is_none() && point("d").is_none() && point("a3").is_none());
