@@ -949,9 +949,11 @@ This stands for material poured from a scoop: a random, isotropic cloud with no 
 (Before issue 13 the particles started on a jittered lattice at solid fraction 0.05-0.13, \
 a column 6-14 box heights tall: the fall was longer, the impact harder, the bed denser.)\n\
 3. At rest: after the free-fall time from the column's top, when the translational rms speed \
-is below 0.01 sqrt(g d_max) (checked every 0.01 s; EPSD2 keeps particles rocking, so rotation is \
+is below 0.01 sqrt(g d_max) (checked every 0.3 sqrt(d_max/g), 0.01 s at d_max = 10.9 mm; the rows of this report were \
+run with a fixed 0.01 s, before issue 14 made every time of the procedure a multiple of \
+sqrt(d_max/g); EPSD2 keeps particles rocking, so rotation is \
 no criterion).\n\
-4. Strike-off: every particle whose centre is above the rim is deleted; one 0.01 s relaxation; \
+4. Strike-off: every particle whose centre is above the rim is deleted; one such check interval of relaxation; \
 the bulk density counts the solid volume inside the box (spheres cut by the rim by their exact \
 part inside).\n\
 5. Outflow: the flap (the +x side wall) is removed; particles that fall 2 d_max below the floor \
