@@ -21,6 +21,7 @@ pub mod outputs;
 pub mod plot;
 pub mod psd;
 pub mod sampling;
+pub mod similarity;
 pub mod space;
 pub mod studies;
 

@@ -173,6 +173,57 @@ impl<'m> Problem<'m> {
                 }
             }
         }
+        // A group whose inputs are all fixed must lie in its domain already.
+        for gd in &model.groups {
+            let parts = &gd.group.monomial.powers;
+            let values: Option<Vec<f64>> = parts
+                .iter()
+                .map(|(n, _)| names.iter().position(|m| m == n).and_then(|k| fixed[k]))
+                .collect();
+            if let Some(values) = values {
+                let v = gd
+                    .group
+                    .monomial
+                    .value(|n| values[parts.iter().position(|(m, _)| m == n).unwrap_or(0)]);
+                if !(v >= gd.domain[0] && v <= gd.domain[1]) {
+                    return Err(Error::input(
+                        file,
+                        "fixed",
+                        format!(
+                            "{} = {} = {v:.4e} from the fixed {}, inside the model's range \
+                             [{:.4e}, {:.4e}] ({}; outside it the equations extrapolate)",
+                            gd.group.name,
+                            gd.group.monomial.text(),
+                            parts
+                                .iter()
+                                .map(|(n, _)| n.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", "),
+                            gd.domain[0],
+                            gd.domain[1],
+                            gd.group.what
+                        ),
+                    ));
+                }
+            }
+        }
+        if !model.groups.is_empty() {
+            notes.push(format!(
+                "the model is fitted in {}: each kept inside the range of its training data",
+                model
+                    .groups
+                    .iter()
+                    .map(|g| format!(
+                        "{} = {} in [{:.3e}, {:.3e}]",
+                        g.group.name,
+                        g.group.monomial.text(),
+                        g.domain[0],
+                        g.domain[1]
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
         let mut lower: Vec<f64> = model.inputs.iter().map(|i| i.domain[0]).collect();
         let mut upper: Vec<f64> = model.inputs.iter().map(|i| i.domain[1]).collect();
         for (name, [lo, hi]) in &material.bounds {
@@ -267,16 +318,37 @@ impl<'m> Problem<'m> {
             .collect()
     }
 
-    /// Sum of squared violations of the constraints.
+    /// Sum of squared violations of the constraints, and of the model's group domains (in
+    /// natural-log units: a group 10 % beyond its range counts 0.0095).
     pub fn violation(&self, free: &[f64]) -> f64 {
         let x = self.full(free);
-        self.constraints
-            .iter()
-            .map(|(c, terms)| {
-                let v = terms.iter().map(|(k, a)| a * x[*k]).sum::<f64>() + c.constant;
-                v.max(0.0).powi(2)
-            })
-            .sum()
+        let groups: f64 = (0..self.model.groups.len())
+            .map(|g| self.group_excess(g, &x).powi(2))
+            .sum();
+        groups
+            + self
+                .constraints
+                .iter()
+                .map(|(c, terms)| {
+                    let v = terms.iter().map(|(k, a)| a * x[*k]).sum::<f64>() + c.constant;
+                    v.max(0.0).powi(2)
+                })
+                .sum::<f64>()
+    }
+
+    /// How far group `g` lies outside its domain at `x`, in ln units, signed: positive above the
+    /// range, negative below, 0 inside.
+    fn group_excess(&self, g: usize, x: &[f64]) -> f64 {
+        let gd = &self.model.groups[g];
+        let v = self.model.group_value(&gd.group, x).ln();
+        let (lo, hi) = (gd.domain[0].ln(), gd.domain[1].ln());
+        if v > hi {
+            v - hi
+        } else if v < lo {
+            v - lo
+        } else {
+            0.0
+        }
     }
 
     /// chi^2 = sum ((prediction - measured) / sd)^2 plus the constraint penalty, and its gradient
@@ -293,6 +365,18 @@ impl<'m> Problem<'m> {
             f += r * r;
             for (j, &k) in self.free.iter().enumerate() {
                 g[j] += 2.0 * r * dy[k] / t.sd;
+            }
+        }
+        // A group outside the range the model was fitted on is extrapolation, like an input
+        // outside its bounds: kept out by a penalty on its log.
+        for gi in 0..self.model.groups.len() {
+            let v = self.group_excess(gi, &x);
+            if v != 0.0 {
+                f += PENALTY * v * v;
+                let m = &self.model.groups[gi].group.monomial;
+                for (j, &k) in self.free.iter().enumerate() {
+                    g[j] += 2.0 * PENALTY * v * m.log_derivative(&self.names[k], x[k]);
+                }
             }
         }
         for (c, terms) in &self.constraints {

@@ -69,6 +69,14 @@ pub struct FitArgs {
     /// Without any, the model records none.
     #[arg(long, value_name = "EFFECTS", value_parser = crate::cli::simulate::parse_model_class)]
     pub model_class: Option<crate::dem::contact::ModelClass>,
+    /// Fit in the dimensionless groups of this experiment's similarity (e.g. shear-box: K_p,
+    /// K_w and the solid fraction); the equations are written back in the inputs. An
+    /// experiment without one is refused.
+    #[arg(long, value_name = "EXPERIMENT")]
+    pub similarity: Option<String>,
+    /// A separate table (same columns) never trained on: its metrics are saved per response.
+    #[arg(long, value_name = "CSV")]
+    pub validation: Option<PathBuf>,
     /// Standard output holds one JSON object (equations and metrics); text goes to standard
     /// error.
     #[arg(long)]
@@ -92,9 +100,33 @@ pub fn parse_duration(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The similarity of experiment `name` under `class`; an experiment without one is refused.
+pub fn similarity_of(
+    name: &str,
+    class: Option<crate::dem::contact::ModelClass>,
+) -> anyhow::Result<crate::similarity::Similarity> {
+    let settings = crate::campaign::ExperimentSettings {
+        box_scale: None,
+        model_class: class,
+    };
+    let e = crate::campaign::experiment_by_name(name, &settings)?;
+    e.similarity().ok_or_else(|| {
+        anyhow::anyhow!(
+            "--similarity {name}: {name} has no dimensionless groups{} (a dimensional effect \
+             parameter such as cohesion's energy density brings its own); fit without it",
+            class
+                .map(|c| format!(" with the effects {c}"))
+                .unwrap_or_default()
+        )
+    })
+}
+
 pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     let out = Output::new(a.json);
     let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", &a.data)];
+    if let Some(v) = &a.validation {
+        inputs.push(("--validation", v));
+    }
     if let Some(s) = &a.space {
         inputs.push(("--space", s));
     }
@@ -144,6 +176,11 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         config,
         plots: figures,
         model_class: a.model_class,
+        similarity: match &a.similarity {
+            Some(name) => Some(similarity_of(name, a.model_class)?),
+            None => None,
+        },
+        validation: a.validation.clone(),
     };
     let bar = ProgressBar::new(a.generations as u64);
     bar.set_style(

@@ -1,14 +1,15 @@
 //! Fitting a metamodel to a table: split, scale, one GP run per response, metrics, figures.
 
 use super::model::{
-    residual_quantiles, DataSource, FrontMember, Input, Metamodel, Metrics, ResponseModel,
-    Transform, FORMAT, VERSION,
+    residual_quantiles, DataSource, FrontMember, GroupDomain, GroupedEquation, Input, Metamodel,
+    Metrics, ResponseModel, Transform, FORMAT, VERSION,
 };
 use super::table::{read_columns, Columns};
 use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{Error, Result};
 use crate::gp::{self, expr, Dataset};
 use crate::numeric::fnv1a64;
+use crate::similarity::Similarity;
 use crate::space::{Scale, Space};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -29,6 +30,12 @@ pub struct FitOptions {
     /// The model class of the data when the table does not say (`--model-class`); a campaign
     /// table's `model_class` column and the space's `[model]` must agree with it.
     pub model_class: Option<ModelClass>,
+    /// Fit in the experiment's dimensionless groups (inputs they absorb are not offered to GP;
+    /// scaled responses are fitted divided by their factor); the equations are composed back
+    /// into the physical inputs.
+    pub similarity: Option<Similarity>,
+    /// A separate table whose rows are never trained on: each response's `validation` metrics.
+    pub validation: Option<PathBuf>,
 }
 
 pub struct FitReport {
@@ -36,7 +43,7 @@ pub struct FitReport {
     pub figures: Vec<PathBuf>,
 }
 
-fn transforms(opts: &FitOptions) -> Result<Vec<Transform>> {
+fn transforms(opts: &FitOptions, absorbed: &[String]) -> Result<Vec<Transform>> {
     let Some(path) = &opts.space else {
         return Ok(vec![Transform::Identity; opts.inputs.len()]);
     };
@@ -45,6 +52,10 @@ fn transforms(opts: &FitOptions) -> Result<Vec<Transform>> {
     opts.inputs
         .iter()
         .map(|name| {
+            // The composed equations read an absorbed input raw, inside the log of its group.
+            if absorbed.contains(name) {
+                return Ok(Transform::Identity);
+            }
             let p = space.get(name).ok_or_else(|| {
                 Error::input(
                     &file,
@@ -175,15 +186,27 @@ pub fn fit_table(
     opts.config
         .check()
         .map_err(|e| Error::invalid(format!("GP settings: {e}")))?;
-    let transforms = transforms(opts)?;
+    let absorbed = opts
+        .similarity
+        .as_ref()
+        .map(Similarity::absorbed)
+        .unwrap_or_default();
+    for a in &absorbed {
+        if !opts.inputs.contains(a) {
+            return Err(Error::invalid(format!(
+                "--inputs: the experiment's groups are made of {}, so {a} must be an input",
+                absorbed.join(", ")
+            )));
+        }
+    }
+    let transforms = transforms(opts, &absorbed)?;
     let bytes = std::fs::read(&opts.data).map_err(|e| Error::io(&opts.data, e))?;
     let names: Vec<String> = opts.inputs.iter().chain(&opts.targets).cloned().collect();
     let cols = read_columns(&opts.data, &names)?;
-    let space_class = match &opts.space {
-        Some(p) => Space::from_file(p)?
-            .model_class
-            .map(|c| (c, p.display().to_string())),
-        None => None,
+    let space = opts.space.as_deref().map(Space::from_file).transpose()?;
+    let space_class = match (&space, &opts.space) {
+        (Some(sp), Some(p)) => sp.model_class.map(|c| (c, p.display().to_string())),
+        _ => None,
     };
     let class = data_class(&file, &cols, opts.model_class, space_class)?;
     if let Some(class) = &class {
@@ -197,7 +220,8 @@ pub fn fit_table(
     let n_in = opts.inputs.len();
     let x_phys = &cols.values[..n_in];
     for (k, t) in transforms.iter().enumerate() {
-        if let Transform::Log { .. } = t {
+        let logged = matches!(t, Transform::Log { .. }) || absorbed.contains(&opts.inputs[k]);
+        if logged {
             if let Some(v) = x_phys[k].iter().find(|v| **v <= 0.0) {
                 return Err(Error::input(
                     &file,
@@ -227,37 +251,139 @@ pub fn fit_table(
     train_idx.sort_unstable();
     test_idx.sort_unstable();
 
+    let range = |col: &[f64]| {
+        [
+            col.iter().copied().fold(f64::INFINITY, f64::min),
+            col.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        ]
+    };
     let inputs: Vec<Input> = opts
         .inputs
         .iter()
         .zip(&transforms)
         .zip(x_phys)
-        .map(|((name, t), col)| Input {
-            name: name.clone(),
-            transform: t.clone(),
-            domain: [
-                col.iter().copied().fold(f64::INFINITY, f64::min),
-                col.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            ],
+        .map(|((name, t), col)| {
+            // An absorbed input is valid wherever its groups are: over the space's bounds, not
+            // only at the values the campaign held it at.
+            let bounds = space
+                .as_ref()
+                .filter(|_| absorbed.contains(name))
+                .and_then(|sp| sp.get(name))
+                .map(|p| [p.min, p.max]);
+            Input {
+                name: name.clone(),
+                transform: t.clone(),
+                domain: bounds.unwrap_or_else(|| range(col)),
+            }
         })
         .collect();
+    let var_of = |name: &str| opts.inputs.iter().position(|n| n == name).unwrap_or(0) as u16;
+    // The groups: their values on every row, and the log scaling to the unit interval.
+    let mut groups: Vec<GroupDomain> = Vec::new();
+    let mut group_cols: Vec<Vec<f64>> = Vec::new();
+    for g in opts.similarity.iter().flat_map(|s| &s.groups) {
+        let col: Vec<f64> = (0..n)
+            .map(|r| g.monomial.value(|name| x_phys[var_of(name) as usize][r]))
+            .collect();
+        let domain = range(&col);
+        let (lo, hi) = (domain[0].ln(), domain[1].ln());
+        let transform = Transform::Log {
+            offset: lo,
+            width: if hi > lo { hi - lo } else { 1.0 },
+        };
+        group_cols.push(col.iter().map(|&v| transform.apply(v)).collect());
+        groups.push(GroupDomain {
+            group: g.clone(),
+            transform,
+            domain,
+        });
+    }
     let symbols: Vec<String> = inputs.iter().map(Input::symbol).collect();
     let xt: Vec<Vec<f64>> = inputs
         .iter()
         .zip(x_phys)
         .map(|(i, c)| c.iter().map(|&v| i.transform.apply(v)).collect())
         .collect();
+    // What GP sees: the inputs not absorbed, then the groups.
+    let gp_inputs: Vec<usize> = (0..n_in)
+        .filter(|&k| !absorbed.contains(&opts.inputs[k]))
+        .collect();
+    let gp_symbols: Vec<String> = gp_inputs
+        .iter()
+        .map(|&k| symbols[k].clone())
+        .chain(groups.iter().map(|g| format!("{}_u", g.group.name)))
+        .collect();
+    let gp_cols: Vec<&Vec<f64>> = gp_inputs
+        .iter()
+        .map(|&k| &xt[k])
+        .chain(group_cols.iter())
+        .collect();
+    // A GP program over its own variables, written as one over the model's inputs.
+    let compose = |p: &[gp::Node], factor: Option<&crate::similarity::Monomial>| {
+        let mut out = Vec::with_capacity(p.len() + 8);
+        for node in p {
+            match *node {
+                gp::Node::Var(j) if (j as usize) < gp_inputs.len() => {
+                    out.push(gp::Node::Var(gp_inputs[j as usize] as u16))
+                }
+                gp::Node::Var(j) => {
+                    let g = &groups[j as usize - gp_inputs.len()];
+                    let Transform::Log { offset, width } = g.transform else {
+                        unreachable!("groups are log-scaled")
+                    };
+                    out.extend(g.group.monomial.ln_program(&var_of));
+                    out.extend([
+                        gp::Node::Const(offset),
+                        gp::Node::Sub,
+                        gp::Node::Const(width),
+                        gp::Node::Div,
+                    ]);
+                }
+                other => out.push(other),
+            }
+        }
+        if let Some(f) = factor {
+            out.extend(f.program(&var_of));
+            out.push(gp::Node::Mul);
+        }
+        out
+    };
     let pick = |col: &[f64], idx: &[usize]| idx.iter().map(|&i| col[i]).collect::<Vec<f64>>();
+    let validation = match &opts.validation {
+        Some(path) => {
+            let v = read_columns(path, &names)?;
+            let x: Vec<Vec<f64>> = inputs
+                .iter()
+                .zip(&v.values[..n_in])
+                .map(|(i, c)| c.iter().map(|&x| i.transform.apply(x)).collect())
+                .collect();
+            Some((v, x))
+        }
+        None => None,
+    };
 
     let mut responses = Vec::new();
     let mut figures = Vec::new();
     for (t, target) in opts.targets.iter().enumerate() {
         let y = &cols.values[n_in + t];
+        let scaled = opts.similarity.as_ref().and_then(|s| s.scaled(target));
+        let factor = scaled.map(|s| &s.factor);
+        // The response GP fits: divided by its factor when the similarity has one.
+        let y_fit: Vec<f64> = match factor {
+            Some(f) => (0..n)
+                .map(|r| y[r] / f.value(|name| x_phys[var_of(name) as usize][r]))
+                .collect(),
+            None => y.clone(),
+        };
         let train = Dataset::new(
             xt.iter().map(|c| pick(c, &train_idx)).collect(),
             pick(y, &train_idx),
         );
-        if train.y_var() <= 0.0 {
+        let gp_train = Dataset::new(
+            gp_cols.iter().map(|c| pick(c, &train_idx)).collect(),
+            pick(&y_fit, &train_idx),
+        );
+        if gp_train.y_var() <= 0.0 {
             return Err(Error::input(
                 &file,
                 format!("column {target}"),
@@ -268,7 +394,7 @@ pub fn fit_table(
             xt.iter().map(|c| pick(c, &test_idx)).collect(),
             pick(y, &test_idx),
         );
-        let res = gp::fit(&train, &opts.config, |p| progress(target, p))
+        let res = gp::fit(&gp_train, &opts.config, |p| progress(target, p))
             .map_err(|e| Error::invalid(format!("fitting {target}: {e}")))?;
         let predict = |p: &[gp::Node], d: &Dataset| {
             let mut out = vec![0.0; d.rows()];
@@ -286,9 +412,10 @@ pub fn fit_table(
             .front
             .iter()
             .map(|e| {
+                let program = compose(&e.program, factor);
                 let test_r2 = (test.rows() > 0)
                     .then(|| {
-                        let (ok, out) = predict(&e.program, &test);
+                        let (ok, out) = predict(&program, &test);
                         ok.then(|| Metrics::of(&test.y, &out).r2)
                     })
                     .flatten();
@@ -296,14 +423,15 @@ pub fn fit_table(
                     size: e.size,
                     train_r2: 1.0 - e.train_nmse,
                     test_r2,
-                    equation: text(&e.program),
-                    program: e.program.clone(),
+                    equation: text(&program),
+                    program,
                 }
             })
             .collect();
         let best = res.best();
-        let (_, train_pred) = predict(&best.program, &train);
-        let (test_ok, test_pred) = predict(&best.program, &test);
+        let program = compose(&best.program, factor);
+        let (_, train_pred) = predict(&program, &train);
+        let (test_ok, test_pred) = predict(&program, &test);
         if test.rows() > 0 && !test_ok {
             eprintln!(
                 "warning: the equation for {target} is not finite on some test rows \
@@ -311,6 +439,11 @@ pub fn fit_table(
             );
         }
         let test_metrics = (test.rows() > 0).then(|| Metrics::of(&test.y, &test_pred));
+        let validation_set = validation.as_ref().map(|(v, x)| {
+            let d = Dataset::new(x.clone(), v.values[n_in + t].clone());
+            let (_, pred) = predict(&program, &d);
+            (d, pred)
+        });
         if let Some(dir) = &opts.plots {
             let mut splits = vec![crate::plot::parity::Split {
                 label: "train",
@@ -324,6 +457,13 @@ pub fn fit_table(
                     predicted: &test_pred,
                 });
             }
+            if let Some((d, pred)) = &validation_set {
+                splits.push(crate::plot::parity::Split {
+                    label: "validation",
+                    observed: &d.y,
+                    predicted: pred,
+                });
+            }
             let parity = dir.join(format!("{target}_parity.svg"));
             let hist = dir.join(format!("{target}_residuals.svg"));
             crate::plot::parity::parity(&parity, target, &splits)?;
@@ -331,15 +471,24 @@ pub fn fit_table(
             figures.push(parity);
             figures.push(hist);
         }
+        let grouped = opts.similarity.as_ref().map(|_| GroupedEquation {
+            fitted: scaled.map_or_else(|| target.clone(), |s| s.fitted.clone()),
+            equation: expr::infix(
+                &expr::Expr::from_postfix(&best.program),
+                &gp_symbols,
+                &expr::exact_constant,
+            ),
+            factor: factor.cloned(),
+        });
         responses.push(ResponseModel {
             name: target.clone(),
-            equation: text(&best.program),
-            program: best.program.clone(),
+            equation: text(&program),
             size: best.size,
-            uses: gp::program::used_variables(&best.program)
+            uses: gp::program::used_variables(&program)
                 .into_iter()
                 .map(|k| opts.inputs[k].clone())
                 .collect(),
+            program,
             train: Metrics::of(&train.y, &train_pred),
             test: test_metrics,
             train_residual_quantiles: residual_quantiles(&train.y, &train_pred),
@@ -354,6 +503,8 @@ pub fn fit_table(
             generations: res.generations,
             node_evals: res.node_evals,
             seconds: res.seconds,
+            grouped,
+            validation: validation_set.map(|(d, pred)| Metrics::of(&d.y, &pred)),
         });
     }
     let model = Metamodel {
@@ -373,7 +524,102 @@ pub fn fit_table(
             test_rows: test_idx.len(),
             test_fraction: opts.test_fraction,
             skipped_rows: cols.skipped,
+            no_value_rows: cols.no_value,
         },
+        groups,
     };
     Ok(FitReport { model, figures })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::similarity::{Group, Monomial, ScaledResponse};
+
+    /// A table held at one rho and one d (as the shipped campaign is), whose density is
+    /// rho * (0.5 + 0.02 ln K) with K = E / (rho d): the fitted model must be right at other rho
+    /// and d too, since it is written in K and rho.
+    #[test]
+    fn a_fit_in_groups_extends_to_the_absorbed_inputs() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("t.csv");
+        let mut text = String::from("E,rho,d,mu,density,angle\n");
+        for r in 0..60 {
+            let e = 1e6 * (1.0 + 0.37 * r as f64);
+            let mu = (r as f64 * 0.618).fract();
+            let k: f64 = e / (2000.0 * 4.0);
+            let density = 2000.0 * (0.5 + 0.02 * k.ln());
+            text.push_str(&format!("{e},2000,4,{mu},{density},{}\n", 20.0 + 15.0 * mu));
+        }
+        std::fs::write(&data, text).unwrap();
+        let k = Monomial {
+            coefficient: 1.0,
+            powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
+        };
+        let similarity = Similarity {
+            groups: vec![Group {
+                name: "K".into(),
+                what: "stiffness".into(),
+                monomial: k,
+            }],
+            scaled: vec![ScaledResponse {
+                response: "density".into(),
+                factor: Monomial {
+                    coefficient: 1.0,
+                    powers: vec![("rho".into(), 1.0)],
+                },
+                fitted: "phi".into(),
+            }],
+        };
+        let opts = FitOptions {
+            data,
+            inputs: vec!["E".into(), "rho".into(), "d".into(), "mu".into()],
+            targets: vec!["density".into(), "angle".into()],
+            test_fraction: 0.0,
+            space: None,
+            config: gp::Config {
+                population: 300,
+                generations: 5,
+                ..gp::Config::default()
+            },
+            plots: None,
+            model_class: None,
+            similarity: Some(similarity),
+            validation: None,
+        };
+        let m = fit_table(&opts, |_, _| {}).unwrap().model;
+        let density = &m.responses[0];
+        assert!(density.train.r2 > 0.999999, "{:?}", density.train);
+        let g = density.grouped.as_ref().unwrap();
+        assert_eq!(g.fitted, "phi");
+        assert!(
+            !g.equation.contains("rho") && !g.equation.contains("E"),
+            "{}",
+            g.equation
+        );
+        // At another density and size with the same K range: rho * phi(K).
+        for (e, rho, d) in [(2e7, 2600.0, 3.0), (1e7, 1000.0, 5.0)] {
+            let kv: f64 = e / (rho * d);
+            let want = rho * (0.5 + 0.02 * kv.ln());
+            let got = m.predict_point(density, &[e, rho, d, 0.5]);
+            assert!((got / want - 1.0).abs() < 1e-6, "{got} {want}");
+            // Without a space file an absorbed input's bounds are the data's (one value); the
+            // group is inside its range.
+            let out = m.outside_domain(&[e, rho, d, 0.5]);
+            assert!(
+                out.iter().all(|o| ["E", "rho", "d"].contains(&o.0)),
+                "{out:?}"
+            );
+            // Gradient by the chain rule through K and the factor.
+            let (_, grad) = m.value_and_gradient(density, &[e, rho, d, 0.5]).unwrap();
+            let want_drho = 0.5 + 0.02 * kv.ln() - 0.02;
+            assert!((grad[1] / want_drho - 1.0).abs() < 1e-5, "{grad:?}");
+        }
+        // The angle's equation reads no group and no absorbed input.
+        assert_eq!(m.responses[1].uses, vec!["mu".to_string()]);
+        // K beyond the data is outside the domain, named by the group.
+        let out = m.outside_domain(&[1e9, 2000.0, 4.0, 0.5]);
+        assert!(out.iter().any(|o| o.0 == "K"), "{out:?}");
+        assert!(m.outside_domain(&[1e7, 2000.0, 4.0, 0.5]).is_empty());
+    }
 }

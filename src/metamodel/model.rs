@@ -4,6 +4,7 @@
 use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::gp::{self, Node};
+use crate::similarity::{Group, Monomial};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -173,6 +174,32 @@ pub struct ResponseModel {
     pub generations: usize,
     pub node_evals: u64,
     pub seconds: f64,
+    /// With a similarity: the equation as fitted, in the groups and the dimensionless response
+    /// (what `program` computes once the groups and the factor are written out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grouped: Option<GroupedEquation>,
+    /// Metrics on a separate validation table never trained on (`mbgc train`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validation: Option<Metrics>,
+}
+
+/// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GroupedEquation {
+    pub fitted: String,
+    pub equation: String,
+    /// `response = factor * fitted` (None: the response itself was fitted).
+    pub factor: Option<Monomial>,
+}
+
+/// A dimensionless group the equations read, with the scaling the fit gave it and the range of
+/// the data (the model's valid domain in that group).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GroupDomain {
+    pub group: Group,
+    /// `u = (ln G - offset) / width` is the variable the fitted equation read.
+    pub transform: Transform,
+    pub domain: [f64; 2],
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -185,6 +212,9 @@ pub struct DataSource {
     pub test_rows: usize,
     pub test_fraction: f64,
     pub skipped_rows: usize,
+    /// Finished runs without a value of some response (NaN), left out.
+    #[serde(default)]
+    pub no_value_rows: usize,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -202,6 +232,10 @@ pub struct Metamodel {
     /// model classes existed: no class is guessed for it).
     #[serde(default)]
     pub model_class: Option<String>,
+    /// The dimensionless groups the equations were fitted in (their domains bound the model
+    /// besides the inputs' own); empty for a fit in the inputs themselves.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<GroupDomain>,
 }
 
 impl Metamodel {
@@ -240,6 +274,21 @@ impl Metamodel {
                     .map_err(|e| {
                         Error::input(&file, format!("inputs.{}", i.name), e.to_string())
                     })?;
+            }
+        }
+        for g in &m.groups {
+            if let Some((n, _)) = g
+                .group
+                .monomial
+                .powers
+                .iter()
+                .find(|(n, _)| !m.inputs.iter().any(|i| &i.name == n))
+            {
+                return Err(Error::input(
+                    &file,
+                    format!("groups.{}", g.group.name),
+                    format!("a product of the model's inputs, but {n} is not one"),
+                ));
             }
         }
         if m.version != VERSION {
@@ -363,11 +412,29 @@ impl Metamodel {
 
     /// Inputs of a point outside the valid domain, as `(name, value, [min, max])`.
     pub fn outside_domain<'a>(&'a self, x: &[f64]) -> Vec<(&'a str, f64, [f64; 2])> {
-        self.inputs
+        let mut v: Vec<(&str, f64, [f64; 2])> = self
+            .inputs
             .iter()
             .zip(x)
             .filter(|(i, &v)| !(v >= i.domain[0] && v <= i.domain[1]))
             .map(|(i, &v)| (i.name.as_str(), v, i.domain))
-            .collect()
+            .collect();
+        for g in &self.groups {
+            let value = self.group_value(&g.group, x);
+            if !(value >= g.domain[0] && value <= g.domain[1]) {
+                v.push((g.group.name.as_str(), value, g.domain));
+            }
+        }
+        v
+    }
+
+    /// A group's value at a point of physical inputs (NaN if it names an input the model lacks).
+    pub fn group_value(&self, g: &Group, x: &[f64]) -> f64 {
+        g.monomial.value(|n| {
+            self.inputs
+                .iter()
+                .position(|i| i.name == n)
+                .map_or(f64::NAN, |k| x[k])
+        })
     }
 }

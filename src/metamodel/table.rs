@@ -15,10 +15,14 @@ pub struct Columns {
     pub records: Vec<Vec<String>>,
     /// Rows left out because a `status` column said the run did not finish.
     pub skipped: usize,
+    /// Finished campaign runs left out because a requested column is `NaN`: the experiment
+    /// measured nothing there (a shear box whose material ran out flat has no flank).
+    pub no_value: usize,
 }
 
 /// Reads the columns `names` (every value must be a finite number). If the table has a `status`
-/// column (campaign tables), rows whose status is not `done` are skipped and counted.
+/// column (campaign tables), rows whose status is not `done` are skipped and counted, and so are
+/// done rows with a `NaN` in a requested column (counted apart); elsewhere NaN is an error.
 pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
     let file = path.display().to_string();
     let (mut rdr, header) = csv_open(path)?;
@@ -41,6 +45,7 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
     let mut values = vec![Vec::new(); names.len()];
     let mut records = Vec::new();
     let mut skipped = 0;
+    let mut no_value = 0;
     for rec in rdr.records() {
         let rec = rec.map_err(|e| csv_error(&file, e))?;
         let line = rec.position().map_or(0, |p| p.line());
@@ -62,6 +67,10 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
                 continue;
             }
         }
+        if status.is_some() && idx.iter().any(|&i| rec.get(i) == Some("NaN")) {
+            no_value += 1;
+            continue;
+        }
         for (k, &i) in idx.iter().enumerate() {
             let field = rec.get(i).unwrap_or("");
             values[k].push(csv_number(&file, line, &names[k], field)?);
@@ -73,5 +82,6 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
         values,
         records,
         skipped,
+        no_value,
     })
 }

@@ -71,6 +71,8 @@ pub fn run_mbgc(dir: &Path, eq: &Equation, cfg: &Config) -> Result<EngineResult>
         config: cfg.clone(),
         plots: None,
         model_class: None,
+        similarity: None,
+        validation: None,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

@@ -109,6 +109,11 @@ pub struct RunOptions {
 pub trait Experiment: Send + Sync {
     /// Name used on the command line, e.g. `shear-box`.
     fn name(&self) -> &'static str;
+    /// The dimensionless groups its inputs act through, if it has such a similarity (the
+    /// metamodel is then fitted in them, `crate::similarity`).
+    fn similarity(&self) -> Option<crate::similarity::Similarity> {
+        None
+    }
     /// Parameters the experiment needs.
     fn parameters(&self) -> Vec<&'static str>;
     /// Parameters it reads when given (with a default otherwise). A constant that is neither a

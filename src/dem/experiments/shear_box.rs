@@ -33,6 +33,7 @@ use crate::dem::walls::{Shape, Wall};
 use crate::error::{Error, Result};
 use crate::psd::draw::truncated_q3;
 use crate::psd::{default_range, draw_by_number, Distribution, LogNormal, MassDistribution};
+use crate::similarity::{Group, Monomial, ScaledResponse, Similarity};
 
 pub const BASE_MM: [f64; 3] = [100.0, 100.0, 150.0];
 const G: f64 = 9.81;
@@ -444,6 +445,52 @@ impl Experiment for ShearBox {
 
     fn class(&self) -> Option<&ModelClass> {
         Some(&self.class)
+    }
+
+    /// Without a dimensional effect parameter (cohesion's energy density would bring its own
+    /// group), gravity, d50 and the box (k d_max) are the only lengths and E_p, E_w the only
+    /// stresses: E_p, E_w, rho_p and d50 act through K_p and K_w alone (bit-for-bit test below),
+    /// and the bulk density is rho_p times the solid fraction.
+    fn similarity(&self) -> Option<Similarity> {
+        let dimensional = self
+            .class
+            .parameters(&Pair::BOTH)
+            .iter()
+            .any(|(_, spec, _)| spec.unit != "-");
+        if dimensional {
+            return None;
+        }
+        let k = |e: &str| Monomial {
+            // d50 is in mm.
+            coefficient: 1.0 / (G * 1e-3),
+            powers: vec![
+                (e.into(), 1.0),
+                ("rho_p".into(), -1.0),
+                ("d50".into(), -1.0),
+            ],
+        };
+        Some(Similarity {
+            groups: vec![
+                Group {
+                    name: "K_p".into(),
+                    what: "dimensionless particle stiffness E_p / (rho_p g d50)".into(),
+                    monomial: k("E_p"),
+                },
+                Group {
+                    name: "K_w".into(),
+                    what: "dimensionless wall stiffness E_w / (rho_p g d50)".into(),
+                    monomial: k("E_w"),
+                },
+            ],
+            scaled: vec![ScaledResponse {
+                response: "bulk_density".into(),
+                factor: Monomial {
+                    coefficient: 1.0,
+                    powers: vec![("rho_p".into(), 1.0)],
+                },
+                fitted: "solid_fraction".into(),
+            }],
+        })
     }
 
     fn responses(&self) -> Vec<&'static str> {
