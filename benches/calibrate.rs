@@ -48,6 +48,8 @@ fn main() {
         },
         plots: None,
         model_class: None,
+        similarity: None,
+        validation: None,
     };
     let model = fit_table(&opts, |_, _| {}).expect("fit").model;
     let material = Material::from_toml_str(

@@ -24,6 +24,7 @@ pub mod sampling;
 pub mod similarity;
 pub mod space;
 pub mod studies;
+pub mod train;
 
 pub use error::{Error, Result};
 

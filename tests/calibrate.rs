@@ -51,6 +51,8 @@ fn model() -> &'static Metamodel {
             },
             plots: None,
             model_class: None,
+            similarity: None,
+            validation: None,
         };
         let m = fit_table(&opts, |_, _| {}).unwrap().model;
         for r in &m.responses {
@@ -215,6 +217,8 @@ fn bayesian_posterior_and_evidence_of_a_linear_model() {
         },
         plots: None,
         model_class: None,
+        similarity: None,
+        validation: None,
     };
     let m = fit_table(&opts, |_, _| {}).unwrap().model;
     assert_eq!(m.responses[0].equation, "a");

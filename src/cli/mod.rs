@@ -14,6 +14,7 @@ pub mod predict;
 pub mod psd;
 pub mod sample;
 pub mod simulate;
+pub mod train;
 pub mod validate;
 
 #[derive(Debug, Parser)]
@@ -43,6 +44,8 @@ pub enum Command {
     Campaign(campaign::CampaignArgs),
     /// Fit one equation per response by genetic-programming symbolic regression.
     Fit(fit::FitArgs),
+    /// Sample, simulate and fit in one resumable command (a design, its runs, the metamodel).
+    Train(train::TrainArgs),
     /// Evaluate a saved metamodel on the rows of a table.
     Predict(predict::PredictArgs),
     /// Write a saved metamodel's equations as Rust, LaTeX or sympy.
@@ -64,6 +67,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Effects(a) => effects::run(&a),
         Command::Campaign(a) => campaign::run(&a),
         Command::Fit(a) => fit::run(&a),
+        Command::Train(a) => train::run(&a),
         Command::Predict(a) => predict::run(&a),
         Command::Export(a) => export::run(&a),
         Command::Calibrate(a) => calibrate::run(&a),

@@ -109,6 +109,11 @@ pub struct RunOptions {
 pub trait Experiment: Send + Sync {
     /// Name used on the command line, e.g. `shear-box`.
     fn name(&self) -> &'static str;
+    /// The responses a metamodel of it is fitted to by default (`mbgc train`): the measured
+    /// ones, not the diagnostics.
+    fn calibration_responses(&self) -> Vec<&'static str> {
+        self.responses()
+    }
     /// The dimensionless groups its inputs act through, if it has such a similarity (the
     /// metamodel is then fitted in them, `crate::similarity`).
     fn similarity(&self) -> Option<crate::similarity::Similarity> {

@@ -503,6 +503,10 @@ impl Experiment for ShearBox {
         ]
     }
 
+    fn calibration_responses(&self) -> Vec<&'static str> {
+        vec!["shear_angle", "bulk_density"]
+    }
+
     fn check(&self, p: &ParamSet) -> Result<()> {
         materials_from(p, &self.class)?;
         p.require("rho_p", RHO_RANGE.0, RHO_RANGE.1)?;
