@@ -4,7 +4,7 @@ use super::model::{
     residual_quantiles, DataSource, FrontMember, GroupDomain, GroupedEquation, Input, Metamodel,
     Metrics, ResponseModel, Transform, FORMAT, VERSION,
 };
-use super::table::{read_columns, Columns};
+use super::table::{read_columns_skipping_nan, Columns};
 use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{Error, Result};
 use crate::gp::{self, expr, Dataset};
@@ -202,7 +202,7 @@ pub fn fit_table(
     let transforms = transforms(opts, &absorbed)?;
     let bytes = std::fs::read(&opts.data).map_err(|e| Error::io(&opts.data, e))?;
     let names: Vec<String> = opts.inputs.iter().chain(&opts.targets).cloned().collect();
-    let cols = read_columns(&opts.data, &names)?;
+    let cols = read_columns_skipping_nan(&opts.data, &names, opts.inputs.len())?;
     let space = opts.space.as_deref().map(Space::from_file).transpose()?;
     let space_class = match (&space, &opts.space) {
         (Some(sp), Some(p)) => sp.model_class.map(|c| (c, p.display().to_string())),
@@ -351,7 +351,7 @@ pub fn fit_table(
     let pick = |col: &[f64], idx: &[usize]| idx.iter().map(|&i| col[i]).collect::<Vec<f64>>();
     let validation = match &opts.validation {
         Some(path) => {
-            let v = read_columns(path, &names)?;
+            let v = read_columns_skipping_nan(path, &names, opts.inputs.len())?;
             let x: Vec<Vec<f64>> = inputs
                 .iter()
                 .zip(&v.values[..n_in])

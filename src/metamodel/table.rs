@@ -21,9 +21,19 @@ pub struct Columns {
 }
 
 /// Reads the columns `names` (every value must be a finite number). If the table has a `status`
-/// column (campaign tables), rows whose status is not `done` are skipped and counted, and so are
-/// done rows with a `NaN` in a requested column (counted apart); elsewhere NaN is an error.
+/// column (campaign tables), rows whose status is not `done` are skipped and counted.
 pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
+    read_columns_skipping_nan(path, names, names.len())
+}
+
+/// As [`read_columns`], but in a campaign table a done row whose value in one of the columns
+/// `names[first_response..]` is `NaN` is left out and counted in `no_value` (the experiment
+/// measured nothing there); a NaN input is still an error.
+pub fn read_columns_skipping_nan(
+    path: &Path,
+    names: &[String],
+    first_response: usize,
+) -> Result<Columns> {
     let file = path.display().to_string();
     let (mut rdr, header) = csv_open(path)?;
     let mut idx = Vec::with_capacity(names.len());
@@ -67,7 +77,11 @@ pub fn read_columns(path: &Path, names: &[String]) -> Result<Columns> {
                 continue;
             }
         }
-        if status.is_some() && idx.iter().any(|&i| rec.get(i) == Some("NaN")) {
+        if status.is_some()
+            && idx[first_response.min(idx.len())..]
+                .iter()
+                .any(|&i| rec.get(i) == Some("NaN"))
+        {
             no_value += 1;
             continue;
         }
