@@ -53,7 +53,8 @@ impl Monomial {
         let mut s = if self.coefficient == 1.0 {
             String::new()
         } else {
-            format!("{:?} ", self.coefficient)
+            // Four significant digits: the text is for reading, the exact value is `coefficient`.
+            format!("{} ", crate::export::latex::constant(self.coefficient))
         };
         s.push_str(&if num.is_empty() {
             "1".into()
@@ -195,6 +196,6 @@ mod tests {
         assert!((eval(&sq.program(&var), &x) / want - 1.0).abs() < 1e-12);
         assert!((m.log_derivative("rho", 2600.0) + 1.0 / 2600.0).abs() < 1e-18);
         assert_eq!(m.log_derivative("nu", 0.3), 0.0);
-        assert_eq!(m.text(), format!("{:?} E / (rho d)", 1.0 / 9.81e-3));
+        assert_eq!(m.text(), "101.9 E / (rho d)");
     }
 }

@@ -255,3 +255,47 @@ fn calibrate_refuses_bad_material_files_naming_the_key_path() {
         assert!(e.contains(want), "{want}: {e}");
     }
 }
+
+#[test]
+fn free_releases_a_fixed_parameter_and_refuses_one_that_is_not_fixed() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = fit_model(dir.path());
+    let mat = dir.path().join("mat.toml");
+    std::fs::write(
+        &mat,
+        "name = \"toy\"\n[measured]\ny = { value = 0.85, sd = 0.01 }\nz = { value = 0.45, sd = 0.01 }\n[fixed]\nc = 1.5\n",
+    )
+    .unwrap();
+    let json = ok(&[
+        "calibrate",
+        "--material",
+        s(&mat),
+        "--model",
+        s(&model),
+        "--free",
+        "c",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    // Two measurements, three unknowns: c is searched, no longer held at 1.5, and every optimum
+    // still reproduces z = a c = 0.45.
+    let sols = v["solutions"].as_array().unwrap();
+    assert!(
+        sols.iter()
+            .any(|b| (b["params"]["c"].as_f64().unwrap() - 1.5).abs() > 1e-3),
+        "{v}"
+    );
+    let e = fails(&[
+        "calibrate",
+        "--material",
+        s(&mat),
+        "--model",
+        s(&model),
+        "--free",
+        "b",
+    ]);
+    assert!(
+        e.contains("--free b") && e.contains("mat.toml") && e.contains("fixes: c"),
+        "{e}"
+    );
+}

@@ -135,3 +135,49 @@ fn a_shard_simulates_its_rows_and_does_not_fit() {
     assert_eq!(rows(&d.join("run/training_data/sleep_test.csv")), 2);
     assert!(!d.join("run/models/sleep_test.json").exists());
 }
+
+#[test]
+fn partial_fits_on_the_rows_there_are_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("space.toml"), SPACE).unwrap();
+    let base = [
+        "train",
+        "--space",
+        "space.toml",
+        "--experiment",
+        "sleep-test",
+        "--n",
+        "16",
+        "--responses",
+        "f",
+        "--population",
+        "200",
+        "--generations",
+        "3",
+        "--threads",
+        "1",
+    ];
+    ok(d, &[&base[..], &["--shard", "1/2"]].concat());
+    // Without --partial the fit waits for the missing rows.
+    let o = mbgc(d, &base);
+    assert!(o.status.success());
+    assert_eq!(rows(&d.join("training_data/sleep_test.csv")), 16);
+    std::fs::remove_file(d.join("models/sleep_test.json")).unwrap();
+    // A fresh campaign half done: --partial simulates nothing and fits on the 8 rows there are.
+    std::fs::remove_dir_all(d.join("training_data")).unwrap();
+    ok(d, &[&base[..], &["--shard", "2/2"]].concat());
+    let err = ok(d, &[&base[..], &["--partial"]].concat());
+    assert!(
+        err.contains("skipped (--partial), 8 rows not yet simulated")
+            && err.contains("provisional"),
+        "{err}"
+    );
+    assert_eq!(rows(&d.join("training_data/sleep_test.csv")), 8);
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("models/sleep_test.json")).unwrap())
+            .unwrap();
+    assert_eq!(model["data"]["rows"], 8, "{model}");
+    let o = mbgc(d, &[&base[..], &["--partial", "--no-fit"]].concat());
+    assert!(!o.status.success());
+}

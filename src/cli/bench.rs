@@ -3,8 +3,8 @@
 use clap::{Args, Subcommand};
 
 use crate::studies::{
-    dem_throughput, gp_vs_gplearn, restitution, sampling_quality, shear_box_check,
-    shear_box_vs_liggghts,
+    dem_throughput, gp_vs_gplearn, metamodel_report, restitution, sampling_quality,
+    shear_box_check, shear_box_vs_liggghts,
 };
 
 #[derive(Debug, Args)]
@@ -30,6 +30,9 @@ pub enum BenchCommand {
     /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
     /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
     Gp(gp_vs_gplearn::Args),
+    /// The shipped metamodel (docs/metamodel.md): space, campaign cost, validation against seed
+    /// 004 and the noise floor, equations, Gravel 8/16 calibrated and validated in DEM.
+    Metamodel(metamodel_report::Args),
     /// Seed 003 Table 4 on DEM impacts: TMCMC of the three normal-force classes (Tsuji,
     /// Kuwabara-Kono, free exponent) on measured restitution of steel; posteriors, evidences.
     Restitution(restitution::Args),
@@ -42,6 +45,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::ShearBox(b) => shear_box_vs_liggghts::run(b),
         BenchCommand::ShearBoxCheck(b) => shear_box_check::run(b),
         BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
+        BenchCommand::Metamodel(m) => metamodel_report::run(m),
         BenchCommand::Restitution(r) => restitution::run(r),
     }
 }

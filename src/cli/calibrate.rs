@@ -19,6 +19,10 @@ pub struct CalibrateArgs {
     /// `--bayes` to compare them as model classes by their evidence.
     #[arg(long, default_values = ["models/shear_box.json"])]
     pub model: Vec<PathBuf>,
+    /// Parameters the material file fixes that this run searches instead, comma-separated (e.g.
+    /// `mu_r_pp,mu_r_pw`): to see what the measurements alone can and cannot decide.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub free: Vec<String>,
     /// L-BFGS starts (Sobol points of the search box).
     #[arg(long, default_value_t = 64)]
     pub starts: usize,
@@ -54,7 +58,23 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
         inputs.extend(a.model.iter().map(|m| ("--model", m.as_path())));
         refuse_overwriting_inputs("--out", out, &inputs)?;
     }
-    let material = Material::from_file(&a.material)?;
+    let mut material = Material::from_file(&a.material)?;
+    for name in &a.free {
+        let before = material.fixed.len();
+        material.fixed.retain(|(n, _)| n != name);
+        if material.fixed.len() == before {
+            anyhow::bail!(
+                "--free {name}: {} does not fix {name} (it fixes: {})",
+                a.material.display(),
+                material
+                    .fixed
+                    .iter()
+                    .map(|(n, _)| n.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
     if a.starts == 0 || a.starts > MAX_STARTS {
         anyhow::bail!(
             "--starts {}: expected 1 to {MAX_STARTS} starting points",

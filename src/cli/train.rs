@@ -60,6 +60,10 @@ pub struct TrainArgs {
     /// Stop after the simulate stage.
     #[arg(long)]
     pub no_fit: bool,
+    /// Skip the simulate stage and fit on the rows the tables hold now (a campaign still running,
+    /// e.g. in the background or as shards): a provisional model; it records how many rows it saw.
+    #[arg(long, conflicts_with_all = ["no_fit", "shard"])]
+    pub partial: bool,
     #[arg(long, default_value_t = 5000)]
     pub population: usize,
     #[arg(long, default_value_t = 20)]
@@ -172,6 +176,23 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
     }
     let mut incomplete = Vec::new();
     for (design, table, s, what) in &tables {
+        if a.partial {
+            if !table.exists() {
+                anyhow::bail!("--partial: {} holds no runs yet", table.display());
+            }
+            // Over the whole design: a table written by shards records its own shard only.
+            let st = crate::campaign::status(table, None)?;
+            let rows = crate::sampling::design::Design::read(design, Some(&space))?.len();
+            let missing = rows.saturating_sub(st.done + st.failed);
+            eprintln!(
+                "[2/3 simulate] {} ({what}): skipped (--partial), {missing} rows not yet simulated",
+                table.display()
+            );
+            if missing > 0 {
+                incomplete.push(format!("{}: {missing} rows missing", table.display()));
+            }
+            continue;
+        }
         let p = plan(experiment.as_ref(), design, *s, &settings, shard)?;
         let r = run_campaign(
             experiment.as_ref(),
@@ -247,7 +268,12 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
     if a.no_fit {
         return Ok(());
     }
-    if !incomplete.is_empty() {
+    if !incomplete.is_empty() && a.partial {
+        eprintln!(
+            "[3/3 fit] provisional: {}; train again without --partial to finish them",
+            incomplete.join("; ")
+        );
+    } else if !incomplete.is_empty() {
         anyhow::bail!(
             "not fitting: {}; run train again to finish them",
             incomplete.join("; ")
@@ -322,6 +348,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
             r.name,
             r.grouped
                 .as_ref()
+                .filter(|g| g.equation != r.equation)
                 .map(|g| format!("{} with {} = {}", r.equation, g.fitted, g.equation))
                 .unwrap_or_else(|| r.equation.clone()),
             r.size,

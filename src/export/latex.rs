@@ -110,7 +110,14 @@ fn latex(e: &Expr, names: &[String]) -> (String, u8) {
                     let Expr::Const(v) = **b else { unreachable!() };
                     (format!("{} - {}", la.0, constant(-v)), 1)
                 }
+                // `a + -b` reads as `a - b`; a term of precedence 3 starts with its sign.
+                Node::Add if lb.1 == 3 && lb.0.starts_with('-') => {
+                    (format!("{} - {}", la.0, &lb.0[1..]), 1)
+                }
                 Node::Add => (format!("{} + {}", la.0, wrap(lb, 2)), 1),
+                Node::Sub if lb.1 == 3 && lb.0.starts_with('-') => {
+                    (format!("{} + {}", la.0, &lb.0[1..]), 1)
+                }
                 Node::Sub => (format!("{} - {}", la.0, wrap(lb, 2)), 1),
                 _ => product(e, names),
             }
@@ -141,8 +148,9 @@ fn gather<'a>(
     }
 }
 
-/// Factors with equal ones written as powers: `r \, r` -> `r^{2}`.
-fn factors(list: &[&Expr], names: &[String]) -> String {
+/// Factors with equal ones written as powers: `r \, r` -> `r^{2}`. A sum is parenthesised
+/// unless it stands alone (`alone`: the whole numerator or denominator of a fraction).
+fn factors(list: &[&Expr], names: &[String], alone: bool) -> String {
     let mut seen: Vec<(&Expr, usize)> = Vec::new();
     for f in list {
         match seen.iter_mut().find(|(g, _)| g == f) {
@@ -153,7 +161,7 @@ fn factors(list: &[&Expr], names: &[String]) -> String {
     seen.iter()
         .map(|(f, k)| {
             let (s, p) = latex(f, names);
-            let s = if p < 5 && (*k > 1 || seen.len() > 1) {
+            let s = if p < 5 && (*k > 1 || seen.len() > 1 || !alone) {
                 format!("\\left({s}\\right)")
             } else {
                 s
@@ -173,17 +181,19 @@ fn factors(list: &[&Expr], names: &[String]) -> String {
 fn product(e: &Expr, names: &[String]) -> (String, u8) {
     let (mut coef, mut num, mut den) = (1.0, Vec::new(), Vec::new());
     gather(e, false, &mut coef, &mut num, &mut den);
+    let (sign, c) = if coef < 0.0 { ("-", -coef) } else { ("", coef) };
+    // A lone numerator is its own term only without a coefficient or sign in front of it.
+    let bare = den.is_empty() && c == 1.0 && sign.is_empty();
     let top = if num.is_empty() {
         "1".to_string()
     } else {
-        factors(&num, names)
+        factors(&num, names, !den.is_empty() || bare)
     };
     let body = if den.is_empty() {
         top
     } else {
-        format!("\\frac{{{top}}}{{{}}}", factors(&den, names))
+        format!("\\frac{{{top}}}{{{}}}", factors(&den, names, true))
     };
-    let (sign, c) = if coef < 0.0 { ("-", -coef) } else { ("", coef) };
     let prec = if sign.is_empty() { 2 } else { 3 };
     if c == 1.0 {
         if num.is_empty() && den.is_empty() {
@@ -196,7 +206,11 @@ fn product(e: &Expr, names: &[String]) -> (String, u8) {
         (format!("{sign}{}", constant(c)), prec)
     } else {
         let body = if num.is_empty() && !den.is_empty() {
-            format!("\\frac{{{}}}{{{}}}", constant(c), factors(&den, names))
+            format!(
+                "\\frac{{{}}}{{{}}}",
+                constant(c),
+                factors(&den, names, true)
+            )
         } else {
             format!("{} \\, {body}", constant(c))
         };
@@ -247,6 +261,7 @@ pub fn document(m: &Metamodel) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use Expr::{Binary, Const, Var};
 
     #[test]
     fn names_follow_the_field() {
@@ -264,5 +279,49 @@ mod tests {
         assert_eq!(constant(1234.5678), "1235");
         assert_eq!(constant(6.02e23), "6.020 \\times 10^{23}");
         assert_eq!(constant(-1.5e-5), "-1.500 \\times 10^{-5}");
+    }
+
+    fn tex(e: Expr) -> String {
+        let names = ["x", "y", "z"].map(String::from);
+        latex(&e, &names).0
+    }
+
+    fn b(f: Node, a: Expr, c: Expr) -> Expr {
+        Binary(f, Box::new(a), Box::new(c))
+    }
+
+    #[test]
+    fn a_sum_times_a_constant_keeps_its_parentheses() {
+        // (x + y) * 3: once printed as `3 \, x + y`, which is 3x + y.
+        let sum = || b(Node::Add, Var(0), Var(1));
+        assert_eq!(
+            tex(b(Node::Mul, sum(), Const(3.0))),
+            "3 \\, \\left(x + y\\right)"
+        );
+        assert_eq!(
+            tex(b(Node::Mul, sum(), Const(-3.0))),
+            "-3 \\, \\left(x + y\\right)"
+        );
+        // A sum alone over a denominator needs none.
+        assert_eq!(tex(b(Node::Div, sum(), Var(2))), "\\frac{x + y}{z}");
+        assert_eq!(
+            tex(b(Node::Div, sum(), Const(2.0))),
+            "0.5 \\, \\left(x + y\\right)"
+        );
+        // (x + y / (z * -2)) * 4 + 1: the coefficient multiplies both terms of the sum.
+        let inner = b(
+            Node::Add,
+            Var(0),
+            b(Node::Div, Var(1), b(Node::Mul, Var(2), Const(-2.0))),
+        );
+        assert_eq!(
+            tex(b(Node::Add, b(Node::Mul, inner, Const(4.0)), Const(1.0))),
+            "4 \\, \\left(x - 0.5 \\, \\frac{y}{z}\\right) + 1"
+        );
+        // x - (-2 y) reads x + 2 y.
+        assert_eq!(
+            tex(b(Node::Sub, Var(0), b(Node::Mul, Var(1), Const(-2.0)))),
+            "x + 2 \\, y"
+        );
     }
 }

@@ -8,12 +8,15 @@
 //! - [`shear_box_fill`], [`shear_box_check`]: the shear box against a LIGGGHTS deck that fills
 //!   itself; seed 004's validation point, box scale, noise and whole-run cost (docs/shear_box.md).
 //! - [`gp_vs_gplearn`]: symbolic regression against gplearn on Feynman equations.
+//! - [`metamodel_report`]: the shipped metamodel, its cost and validation, the gravel calibrated
+//!   on it (docs/metamodel.md).
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
 //! - [`reference`]: the reference codes (`--vs`).
 
 pub mod dem_scene;
 pub mod dem_throughput;
 pub mod gp_vs_gplearn;
+pub mod metamodel_report;
 pub mod reference;
 pub mod restitution;
 pub mod sampling_quality;
