@@ -68,6 +68,14 @@ pub struct TrainArgs {
     pub population: usize,
     #[arg(long, default_value_t = 20)]
     pub generations: usize,
+    /// Penalty per node on the normalised error 1 - R^2 of the fit. Keep it below the noise's
+    /// share of the variance: a node must pay for itself (shear box: noise about 0.1 % of the
+    /// bulk density's variance, so 1e-4 rather than `fit`'s generic 1e-3).
+    #[arg(long, default_value_t = 1e-4)]
+    pub parsimony: f64,
+    /// Longest tree (nodes) of the fit.
+    #[arg(long, default_value_t = 64)]
+    pub max_length: usize,
     /// Wall-clock limit per response of the fit, e.g. 10m (results then depend on machine speed).
     #[arg(long, value_parser = crate::cli::fit::parse_duration)]
     pub time_limit: Option<f64>,
@@ -286,6 +294,8 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         generations: a.generations,
         time_limit: a.time_limit,
         seed: a.seed,
+        parsimony: a.parsimony,
+        max_length: a.max_length,
         ..crate::gp::Config::default()
     };
     let opts = FitOptions {

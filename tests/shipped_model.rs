@@ -1,0 +1,32 @@
+//! The shipped metamodel on a fresh clone: the README's first command, `mbgc calibrate --material
+//! examples/gravel.toml`, loads `models/shear_box.json` by default and calibrates seed 004's
+//! Gravel 8/16 in a physical place.
+
+mod common;
+
+use common::ok;
+
+#[test]
+fn the_shipped_model_calibrates_the_gravel_example() {
+    let model = mbgc::metamodel::Metamodel::load(std::path::Path::new("models/shear_box.json"))
+        .expect("the shipped model loads");
+    for r in ["shear_angle", "bulk_density"] {
+        let m = model.response(r).unwrap_or_else(|| panic!("no {r} equation"));
+        assert!(m.validation.is_some(), "{r}: no validation metrics");
+    }
+    let json = ok(&["calibrate", "--material", "examples/gravel.toml", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let best = &v["solutions"][0];
+    let p = |n: &str| best["params"][n].as_f64().unwrap_or(f64::NAN);
+    let y = |n: &str| best["predicted"][n].as_f64().unwrap_or(f64::NAN);
+    // Two free parameters for two measurements: met exactly.
+    assert!((y("shear_angle") - 35.53).abs() < 0.05, "{best}");
+    assert!((y("bulk_density") - 1478.8).abs() < 0.5, "{best}");
+    // Gravel's particle density is about 2600-2700 kg/m3; a calibration far from it would say
+    // that the model or the experiment is off.
+    assert!((2300.0..3000.0).contains(&p("rho_p")), "{best}");
+    assert!((0.05..1.0).contains(&p("mu_pp")), "{best}");
+    // The material's fixed values are used as given.
+    assert_eq!(p("E_p"), 4e7);
+    assert_eq!(p("mu_r_pp"), 0.8);
+}
