@@ -75,6 +75,29 @@ pub fn quantile(values: &[f64], p: f64) -> f64 {
     quantile_sorted(&v, p)
 }
 
+/// `v` rounded to four significant digits for reading: the digits, and the power of ten they
+/// are to be multiplied by when `v` is outside [1e-3, 1e4) (`None` inside, where plain decimals
+/// read best). Trailing zeros are dropped: 1.4999999999999991 -> "1.5".
+pub fn four_significant(v: f64) -> (String, Option<i32>) {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() {
+        return (format!("{v}"), None);
+    }
+    if (1e-3..1e4).contains(&a) {
+        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.digits$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
+        (s, None)
+    } else {
+        let e = a.log10().floor() as i32;
+        (format!("{:.3}", v / 10f64.powi(e)), Some(e))
+    }
+}
+
 /// Mean and sample standard deviation (n - 1); the deviation is 0 for one value, both NaN for
 /// none.
 pub fn mean_sd(v: &[f64]) -> (f64, f64) {

@@ -54,7 +54,10 @@ impl Monomial {
             String::new()
         } else {
             // Four significant digits: the text is for reading, the exact value is `coefficient`.
-            format!("{} ", crate::export::latex::constant(self.coefficient))
+            match crate::numeric::four_significant(self.coefficient) {
+                (m, None) => format!("{m} "),
+                (m, Some(e)) => format!("{m}e{e} "),
+            }
         };
         s.push_str(&if num.is_empty() {
             "1".into()

@@ -57,22 +57,9 @@ pub fn symbol(name: &str) -> String {
 
 /// Four significant digits; powers of ten outside [1e-3, 1e4).
 pub fn constant(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let a = v.abs();
-    if (1e-3..1e4).contains(&a) {
-        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
-        let s = format!("{v:.digits$}");
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        }
-    } else {
-        let e = a.log10().floor() as i32;
-        let m = v / 10f64.powi(e);
-        format!("{m:.3} \\times 10^{{{e}}}")
+    match crate::numeric::four_significant(v) {
+        (m, None) => m,
+        (m, Some(e)) => format!("{m} \\times 10^{{{e}}}"),
     }
 }
 

@@ -77,11 +77,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let space = Space::from_file(&dir.join(&record.space))?;
     let train = TableSummary::read(&paths.table)?;
     let valid = TableSummary::read(&paths.validation_table)?;
-    let check_noise = NoiseFloor::read(&a.noise)?;
-    let replicates = paths
+    let replicate_table = paths
         .validation_table
         .with_file_name(format!("{}_replicates.csv", a.name));
-    let noise = replicate_noise(&paths.validation_table, &replicates)?;
+    let check_noise = NoiseFloor::read(&a.noise)?;
+    let noise = replicate_noise(&paths.validation_table, &replicate_table)?;
     let mut w = String::new();
 
     let _ = writeln!(
@@ -128,12 +128,19 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
 
     space_section(&mut w, &space, &record);
-    cost_section(&mut w, &train, &valid);
+    let mut tables = vec![&train, &valid];
+    let reps = if replicate_table.exists() {
+        Some(TableSummary::read(&replicate_table)?)
+    } else {
+        None
+    };
+    tables.extend(reps.as_ref());
+    cost_section(&mut w, &tables);
     validation_section(
         &mut w,
         &model,
         &check_noise,
-        noise.as_ref().map(|n| (n, replicates.as_path())),
+        noise.as_ref().map(|n| (n, replicate_table.as_path())),
         &valid,
         &space,
     )?;
@@ -237,15 +244,11 @@ impl TableSummary {
 }
 
 fn quantile(v: &[f64], q: f64) -> f64 {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if s.is_empty() {
-        return f64::NAN;
-    }
-    s.sort_by(f64::total_cmp);
-    s[((s.len() - 1) as f64 * q).round() as usize]
+    let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    crate::numeric::quantile(&finite, q)
 }
 
-fn cost_section(w: &mut String, train: &TableSummary, valid: &TableSummary) {
+fn cost_section(w: &mut String, tables: &[&TableSummary]) {
     let _ = writeln!(
         w,
         "\n## Cost\n\nWall time of each run as the campaign table records it (one run per core, \
@@ -256,7 +259,7 @@ fn cost_section(w: &mut String, train: &TableSummary, valid: &TableSummary) {
          | table | runs | failed | without a shear angle | not at rest | core-hours | median s | \
          max s | particles (min-max) |\n|---|---|---|---|---|---|---|---|---|"
     );
-    for t in [train, valid] {
+    for t in tables {
         let _ = writeln!(
             w,
             "| `{}` | {} | {} | {} | {} | {:.2} | {:.0} | {:.0} | {:.0}-{:.0} |",
@@ -272,7 +275,7 @@ fn cost_section(w: &mut String, train: &TableSummary, valid: &TableSummary) {
             quantile(&t.particles, 1.0),
         );
     }
-    let total = train.core_hours() + valid.core_hours();
+    let total: f64 = tables.iter().map(|t| t.core_hours()).sum();
     let _ = writeln!(
         w,
         "\nTogether {total:.2} core-hours of the budget of {BUDGET_CORE_H} ({:.0} %).",
@@ -610,6 +613,23 @@ fn equation_section(w: &mut String, model: &Metamodel) {
     );
 }
 
+/// The same parameter names with values equal to 1e-12 (serde_json's default float parsing may
+/// differ from the written value in the last bit).
+fn same_parameters(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    match (a.as_object(), b.as_object()) {
+        (Some(a), Some(b)) => {
+            a.len() == b.len()
+                && a.iter().all(
+                    |(k, x)| match (x.as_f64(), b.get(k).and_then(|y| y.as_f64())) {
+                        (Some(x), Some(y)) => (x - y).abs() <= 1e-12 * x.abs().max(y.abs()),
+                        _ => false,
+                    },
+                )
+        }
+        _ => false,
+    }
+}
+
 /// Command output without its `wrote <temporary file>` lines.
 fn without_wrote(text: &str) -> String {
     text.lines()
@@ -712,7 +732,9 @@ fn gravel_section(
         )?;
         Some(v)
     } else {
-        kept.filter(|k| k["parameters"] == current && k["box_scale"] == box_scale.as_str())
+        kept.filter(|k| {
+            same_parameters(&k["parameters"], &current) && k["box_scale"] == box_scale.as_str()
+        })
     };
     let _ = writeln!(w, "\n### Validated in DEM\n");
     match result {
