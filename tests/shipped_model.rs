@@ -11,7 +11,9 @@ fn the_shipped_model_calibrates_the_gravel_example() {
     let model = mbgc::metamodel::Metamodel::load(std::path::Path::new("models/shear_box.json"))
         .expect("the shipped model loads");
     for r in ["shear_angle", "bulk_density"] {
-        let m = model.response(r).unwrap_or_else(|| panic!("no {r} equation"));
+        let m = model
+            .response(r)
+            .unwrap_or_else(|| panic!("no {r} equation"));
         assert!(m.validation.is_some(), "{r}: no validation metrics");
     }
     let json = ok(&["calibrate", "--material", "examples/gravel.toml", "--json"]);
