@@ -186,6 +186,41 @@ fn space_section(w: &mut String, space: &Space, record: &TrainRecord) {
     }
 }
 
+/// A CSV table read whole, with its columns found by name.
+struct Csv {
+    path: PathBuf,
+    header: csv::StringRecord,
+    records: Vec<csv::StringRecord>,
+}
+
+impl Csv {
+    fn read(path: &Path) -> anyhow::Result<Csv> {
+        let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
+        let header = r.headers()?.clone();
+        let records = r
+            .records()
+            .collect::<Result<Vec<_>, _>>()
+            .with_context(|| path.display().to_string())?;
+        Ok(Csv {
+            path: path.to_path_buf(),
+            header,
+            records,
+        })
+    }
+
+    fn col(&self, name: &str) -> anyhow::Result<usize> {
+        self.header
+            .iter()
+            .position(|c| c == name)
+            .with_context(|| format!("{}: no column {name}", self.path.display()))
+    }
+}
+
+/// A cell as a number; NaN when it is not one (a run that measured nothing).
+fn num(rec: &csv::StringRecord, i: usize) -> f64 {
+    rec[i].parse().unwrap_or(f64::NAN)
+}
+
 /// What one campaign table holds.
 struct TableSummary {
     path: PathBuf,
@@ -199,13 +234,8 @@ struct TableSummary {
 
 impl TableSummary {
     fn read(path: &Path) -> anyhow::Result<TableSummary> {
-        let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
-        let h = r.headers()?.clone();
-        let col = |name: &str| {
-            h.iter()
-                .position(|c| c == name)
-                .with_context(|| format!("{}: no column {name}", path.display()))
-        };
+        let t = Csv::read(path)?;
+        let col = |name: &str| t.col(name);
         let (status, angle, settled, wall, parts) = (
             col("status")?,
             col("shear_angle")?,
@@ -222,18 +252,16 @@ impl TableSummary {
             wall_s: Vec::new(),
             particles: Vec::new(),
         };
-        let num = |rec: &csv::StringRecord, i: usize| rec[i].parse::<f64>().unwrap_or(f64::NAN);
-        for rec in r.records() {
-            let rec = rec?;
+        for rec in &t.records {
             s.rows += 1;
-            s.wall_s.push(num(&rec, wall));
+            s.wall_s.push(num(rec, wall));
             if &rec[status] != "done" {
                 s.failed += 1;
                 continue;
             }
-            s.no_angle += usize::from(num(&rec, angle).is_nan());
+            s.no_angle += usize::from(num(rec, angle).is_nan());
             s.unsettled += usize::from(&rec[settled] != "1" && &rec[settled] != "true");
-            s.particles.push(num(&rec, parts));
+            s.particles.push(num(rec, parts));
         }
         Ok(s)
     }
@@ -370,13 +398,8 @@ fn replicate_noise(validation: &Path, replicates: &Path) -> anyhow::Result<Optio
         return Ok(None);
     }
     let read = |p: &Path| -> anyhow::Result<Vec<(String, f64, f64)>> {
-        let mut r = csv::Reader::from_path(p).with_context(|| p.display().to_string())?;
-        let h = r.headers()?.clone();
-        let col = |n: &str| {
-            h.iter()
-                .position(|c| c == n)
-                .with_context(|| format!("{}: no column {n}", p.display()))
-        };
+        let t = Csv::read(p)?;
+        let col = |n: &str| t.col(n);
         let (row, st, a, b) = (
             col("row")?,
             col("status")?,
@@ -384,12 +407,8 @@ fn replicate_noise(validation: &Path, replicates: &Path) -> anyhow::Result<Optio
             col("bulk_density")?,
         );
         let mut out = Vec::new();
-        for rec in r.records() {
-            let rec = rec?;
-            if &rec[st] == "done" {
-                let f = |i: usize| rec[i].parse::<f64>().unwrap_or(f64::NAN);
-                out.push((rec[row].to_string(), f(a), f(b)));
-            }
+        for rec in t.records.iter().filter(|r| &r[st] == "done") {
+            out.push((rec[row].to_string(), num(rec, a), num(rec, b)));
         }
         Ok(out)
     };
@@ -421,13 +440,8 @@ fn validation_pairs(
     table: &Path,
     response: &str,
 ) -> anyhow::Result<(Vec<Vec<f64>>, Vec<f64>)> {
-    let mut r = csv::Reader::from_path(table).with_context(|| table.display().to_string())?;
-    let h = r.headers()?.clone();
-    let idx = |name: &str| {
-        h.iter()
-            .position(|c| c == name)
-            .with_context(|| format!("{}: no column {name}", table.display()))
-    };
+    let t = Csv::read(table)?;
+    let idx = |name: &str| t.col(name);
     let inputs: Vec<usize> = model
         .input_names()
         .iter()
@@ -435,18 +449,12 @@ fn validation_pairs(
         .collect::<anyhow::Result<_>>()?;
     let (status, y) = (idx("status")?, idx(response)?);
     let (mut xs, mut ys) = (Vec::new(), Vec::new());
-    for rec in r.records() {
-        let rec = rec?;
-        let v: f64 = rec[y].parse().unwrap_or(f64::NAN);
+    for rec in &t.records {
+        let v = num(rec, y);
         if &rec[status] != "done" || !v.is_finite() {
             continue;
         }
-        xs.push(
-            inputs
-                .iter()
-                .map(|&i| rec[i].parse::<f64>().unwrap_or(f64::NAN))
-                .collect(),
-        );
+        xs.push(inputs.iter().map(|&i| num(rec, i)).collect());
         ys.push(v);
     }
     Ok((xs, ys))
