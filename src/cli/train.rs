@@ -66,7 +66,10 @@ pub struct TrainArgs {
     pub partial: bool,
     #[arg(long, default_value_t = 5000)]
     pub population: usize,
-    #[arg(long, default_value_t = 20)]
+    /// Generations of the fit: more than `fit`'s gplearn-like 20, since a trained model is made
+    /// once and used many times (300 took about 3 min on 2 cores for the shear box's 2 responses
+    /// at 240 rows).
+    #[arg(long, default_value_t = 300)]
     pub generations: usize,
     /// Penalty per node on the normalised error 1 - R^2 of the fit. Keep it below the noise's
     /// share of the variance: a node must pay for itself (shear box: noise about 0.1 % of the
