@@ -260,3 +260,51 @@ fn same_seed_same_equation_on_any_thread_count() {
         "another seed should search differently"
     );
 }
+
+/// Restarts merge their fronts: at every size, the merged front is at least as accurate as the
+/// front of each restart alone (same seeds), and a second call gives the same equation.
+#[test]
+fn restarts_merge_fronts_that_dominate_each_single_search() {
+    let case = Case {
+        name: "noisy",
+        vars: &["a", "b"],
+        range: (0.1, 2.0),
+        f: |v| (v[0] * 1.7).tanh() * v[1].sqrt() + 0.3 * v[0] * v[1],
+    };
+    let (x, mut y) = sample(&case, 120, case.range, 11);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for v in &mut y {
+        *v += rng.random_range(-0.05..0.05);
+    }
+    let train = Dataset::new(x, y);
+    let cfg = |seed: u64, restarts: usize| Config {
+        population: 400,
+        generations: 8,
+        seed,
+        restarts,
+        ..Config::default()
+    };
+    let merged = gp::fit(&train, &cfg(3, 3), |_| {}).unwrap();
+    // Each front member beats every smaller one.
+    for w in merged.front.windows(2) {
+        assert!(w[0].size < w[1].size && w[1].train_nmse < w[0].train_nmse);
+    }
+    for seed in 3..6 {
+        let single = gp::fit(&train, &cfg(seed, 1), |_| {}).unwrap();
+        for e in &single.front {
+            let covered = merged
+                .front
+                .iter()
+                .any(|m| m.size <= e.size && m.train_nmse <= e.train_nmse);
+            assert!(
+                covered,
+                "seed {seed}: size {} nmse {:.3e} lost",
+                e.size, e.train_nmse
+            );
+        }
+    }
+    let again = gp::fit(&train, &cfg(3, 3), |_| {}).unwrap();
+    assert_eq!(again.best().program, merged.best().program);
+    let bad = gp::fit(&train, &cfg(3, 0), |_| {});
+    assert!(bad.unwrap_err().contains("restarts"));
+}

@@ -49,6 +49,10 @@ pub struct FitArgs {
     pub parsimony: f64,
     #[arg(long, default_value_t = 4)]
     pub islands: usize,
+    /// Independent searches (seeds seed, seed + 1, ...) whose Pareto fronts are merged before the
+    /// equation is picked; the time limit applies to each.
+    #[arg(long, default_value_t = 1)]
+    pub restarts: usize,
     #[arg(long, default_value_t = 20)]
     pub tournament: usize,
     /// Longest tree (nodes) a child may have.
@@ -153,6 +157,7 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         linear_scaling: !a.no_linear_scaling,
         time_limit: a.time_limit,
         seed: a.seed,
+        restarts: a.restarts,
         ..Config::default()
     };
     let figures = if a.no_figures {

@@ -58,6 +58,15 @@ pub struct Config {
     /// Wall-clock limit in seconds (makes the result depend on machine speed).
     pub time_limit: Option<f64>,
     pub seed: u64,
+    /// Independent searches (seeds `seed`, `seed + 1`, ...) whose Pareto fronts are merged
+    /// before the equation is picked: one search's result varies with its seed, and the merged
+    /// front is at least as good as each one at every size.
+    #[serde(default = "one")]
+    pub restarts: usize,
+}
+
+fn one() -> usize {
+    1
 }
 
 impl Default for Config {
@@ -89,6 +98,7 @@ impl Default for Config {
             stop_patience: 3,
             time_limit: None,
             seed: 1,
+            restarts: 1,
         }
     }
 }
@@ -129,6 +139,9 @@ impl Config {
         }
         if self.init_depth.0 > self.init_depth.1 {
             return Err("init_depth: expected min <= max".into());
+        }
+        if self.restarts == 0 {
+            return Err("restarts: expected at least 1".into());
         }
         if self.max_length < 1 {
             return Err("max_length: expected at least 1".into());
@@ -311,8 +324,59 @@ fn stride_subset(data: &Dataset, max_rows: usize) -> Dataset {
     data.subset(&idx)
 }
 
-/// Runs the search on `train` and returns the Pareto front with the chosen equation.
+/// Runs the search on `train` (`cfg.restarts` times, fronts merged) and returns the Pareto front
+/// with the chosen equation.
 pub fn fit(
+    train: &Dataset,
+    cfg: &Config,
+    mut progress: impl FnMut(&Progress),
+) -> Result<FitResult, String> {
+    cfg.check()?;
+    let mut entries = Vec::new();
+    let (mut generations, mut node_evals, mut seconds) = (0, 0, 0.0);
+    for k in 0..cfg.restarts {
+        let one = Config {
+            seed: cfg.seed.wrapping_add(k as u64),
+            restarts: 1,
+            ..cfg.clone()
+        };
+        let r = fit_once(train, &one, &mut progress)?;
+        generations = generations.max(r.generations);
+        node_evals += r.node_evals;
+        seconds += r.seconds;
+        entries.extend(r.front);
+    }
+    let front = pareto(entries)?;
+    Ok(FitResult {
+        chosen: select::pick(&front),
+        front,
+        generations,
+        node_evals,
+        seconds,
+    })
+}
+
+/// The non-dominated entries, smallest first: each is more accurate than every smaller one.
+fn pareto(mut entries: Vec<FrontEntry>) -> Result<Vec<FrontEntry>, String> {
+    entries.sort_by(|a, b| {
+        a.size
+            .cmp(&b.size)
+            .then(a.train_nmse.total_cmp(&b.train_nmse))
+    });
+    let mut front: Vec<FrontEntry> = Vec::new();
+    for e in entries {
+        if e.train_nmse.is_finite() && front.last().is_none_or(|b| e.train_nmse < b.train_nmse) {
+            front.push(e);
+        }
+    }
+    if front.is_empty() {
+        return Err("no valid equation was found (every tree hit an invalid domain)".into());
+    }
+    Ok(front)
+}
+
+/// One search with `cfg.seed`.
+fn fit_once(
     train: &Dataset,
     cfg: &Config,
     mut progress: impl FnMut(&Progress),
@@ -530,20 +594,7 @@ pub fn fit(
         node_evals += e;
         entries.push(entry);
     }
-    entries.sort_by(|a, b| {
-        a.size
-            .cmp(&b.size)
-            .then(a.train_nmse.total_cmp(&b.train_nmse))
-    });
-    let mut front: Vec<FrontEntry> = Vec::new();
-    for e in entries {
-        if e.train_nmse.is_finite() && front.last().is_none_or(|b| e.train_nmse < b.train_nmse) {
-            front.push(e);
-        }
-    }
-    if front.is_empty() {
-        return Err("no valid equation was found (every tree hit an invalid domain)".into());
-    }
+    let front = pareto(entries)?;
     let chosen = select::pick(&front);
     Ok(FitResult {
         front,

@@ -90,7 +90,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
          --report {}` from the shipped files (add `--validate` to rerun the DEM validation of \
          the gravel, minutes). Made by\n\n```\nmbgc train --space {} --experiment {} --n {} \
          --validation {} --seed {} --population {} --generations {} --parsimony {} \
-         --max-length {}{}\n```\n\n(mbgc {}, model class `{}`, box scale k = {}, \
+         --max-length {} --restarts {}{}\n```\n\n(mbgc {}, model class `{}`, box scale k = {}, \
          training design {} with seed {}, validation design {} with seed {}).",
         paths.model.display(),
         a.report.display(),
@@ -103,6 +103,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         model.settings.generations,
         model.settings.parsimony,
         model.settings.max_length,
+        model.settings.restarts,
         if model.data.rows + model.data.no_value_rows + model.data.skipped_rows < record.n {
             " --partial"
         } else {
