@@ -308,3 +308,39 @@ fn restarts_merge_fronts_that_dominate_each_single_search() {
     let bad = gp::fit(&train, &cfg(3, 0), |_| {});
     assert!(bad.unwrap_err().contains("restarts"));
 }
+
+#[test]
+fn cross_validated_selection_picks_the_member_with_the_smallest_held_out_error() {
+    let case = Case {
+        name: "noisy",
+        vars: &["a", "b"],
+        range: (0.1, 2.0),
+        f: |v| (v[0] * 1.7).tanh() * v[1].sqrt() + 0.3 * v[0] * v[1],
+    };
+    let (x, mut y) = sample(&case, 120, case.range, 11);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for v in &mut y {
+        *v += rng.random_range(-0.05..0.05);
+    }
+    let train = Dataset::new(x, y);
+    let cfg = |selection| Config {
+        population: 400,
+        generations: 8,
+        seed: 3,
+        restarts: 2,
+        selection,
+        ..Config::default()
+    };
+    let knee = gp::fit(&train, &cfg(gp::select::Selection::Best), |_| {}).unwrap();
+    assert!(knee.cv_nmse.is_none());
+    let cv = gp::fit(&train, &cfg(gp::select::Selection::CrossValidation), |_| {}).unwrap();
+    // Same search, same front; only the pick differs.
+    assert_eq!(knee.front.len(), cv.front.len());
+    let errors = cv.cv_nmse.as_ref().unwrap();
+    assert_eq!(errors.len(), cv.front.len());
+    let min = errors.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert_eq!(errors[cv.chosen], min);
+    assert!(errors.iter().take(cv.chosen).all(|&e| e > min));
+    // Held-out rows are harder than the rows a member was fitted to.
+    assert!(min > cv.front[cv.chosen].train_nmse);
+}

@@ -9,6 +9,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::gp::select::Selection;
 use crate::gp::Config;
 use crate::metamodel::{fit_table, FitOptions};
 
@@ -53,6 +54,11 @@ pub struct FitArgs {
     /// equation is picked; the time limit applies to each.
     #[arg(long, default_value_t = 1)]
     pub restarts: usize,
+    /// How the equation is picked from the Pareto front: `best` (PySR's knee: the steepest
+    /// error drop per node, for discovering a law) or `cv` (the smallest 5-fold cross-validated
+    /// error, constants re-tuned per fold: for accuracy at new points).
+    #[arg(long, default_value = "best", value_parser = parse_selection)]
+    pub select: Selection,
     #[arg(long, default_value_t = 20)]
     pub tournament: usize,
     /// Longest tree (nodes) a child may have.
@@ -158,6 +164,7 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         time_limit: a.time_limit,
         seed: a.seed,
         restarts: a.restarts,
+        selection: a.select,
         ..Config::default()
     };
     let figures = if a.no_figures {
@@ -259,4 +266,13 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
             "seconds": r.seconds,
         })).collect::<Vec<_>>(),
     }))
+}
+
+/// `--select`: `best` or `cv`.
+pub fn parse_selection(s: &str) -> Result<Selection, String> {
+    match s {
+        "best" => Ok(Selection::Best),
+        "cv" => Ok(Selection::CrossValidation),
+        _ => Err(format!("expected `best` or `cv`, got `{s}`")),
+    }
 }

@@ -84,6 +84,11 @@ pub struct TrainArgs {
     /// angle at 297 rows: validation RMSE 1.68 to 1.75 deg over two seeds).
     #[arg(long, default_value_t = 4)]
     pub restarts: usize,
+    /// How the equation is picked from the Pareto front: `cv` (the smallest 5-fold
+    /// cross-validated error: the model is inverted at new points, so accuracy there decides) or
+    /// `best` (PySR's knee, smaller equations).
+    #[arg(long, default_value = "cv", value_parser = crate::cli::fit::parse_selection)]
+    pub select: crate::gp::select::Selection,
     /// Wall-clock limit per response of the fit, e.g. 10m (results then depend on machine speed).
     #[arg(long, value_parser = crate::cli::fit::parse_duration)]
     pub time_limit: Option<f64>,
@@ -305,6 +310,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         parsimony: a.parsimony,
         max_length: a.max_length,
         restarts: a.restarts,
+        selection: a.select,
         ..crate::gp::Config::default()
     };
     let opts = FitOptions {

@@ -8,7 +8,7 @@ use super::expr::Expr;
 pub use super::front::FrontEntry;
 use super::node::{parse_function_set, Node, SEED004_FUNCTIONS};
 use super::program::{self, Alphabet, Program};
-use super::select;
+use super::select::{self, Selection};
 use crate::numeric::splitmix64;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -63,6 +63,9 @@ pub struct Config {
     /// front is at least as good as each one at every size.
     #[serde(default = "one")]
     pub restarts: usize,
+    /// The rule that picks the returned equation from the merged front.
+    #[serde(default)]
+    pub selection: Selection,
 }
 
 fn one() -> usize {
@@ -99,6 +102,7 @@ impl Default for Config {
             time_limit: None,
             seed: 1,
             restarts: 1,
+            selection: Selection::Best,
         }
     }
 }
@@ -180,8 +184,10 @@ pub struct Progress {
 pub struct FitResult {
     /// Non-dominated (size, error) trees, smallest first.
     pub front: Vec<FrontEntry>,
-    /// Index in `front` of the returned equation (see [`select::pick`]).
+    /// Index in `front` of the returned equation (see [`select`]).
     pub chosen: usize,
+    /// Cross-validated normalised error of each front member (with [`Selection::CrossValidation`]).
+    pub cv_nmse: Option<Vec<f64>>,
     /// Populations evaluated.
     pub generations: usize,
     pub node_evals: u64,
@@ -347,8 +353,16 @@ pub fn fit(
         entries.extend(r.front);
     }
     let front = pareto(entries)?;
+    let (chosen, cv_nmse) = match cfg.selection {
+        Selection::Best => (select::pick(&front), None),
+        Selection::CrossValidation => {
+            let cv = select::cross_validation_errors(&front, train, cfg.linear_scaling, cfg.seed);
+            (select::pick_cross_validated(&cv), Some(cv))
+        }
+    };
     Ok(FitResult {
-        chosen: select::pick(&front),
+        chosen,
+        cv_nmse,
         front,
         generations,
         node_evals,
@@ -595,10 +609,11 @@ fn fit_once(
         entries.push(entry);
     }
     let front = pareto(entries)?;
-    let chosen = select::pick(&front);
+    // `fit` picks from the merged fronts of all restarts.
     Ok(FitResult {
         front,
-        chosen,
+        chosen: 0,
+        cv_nmse: None,
         generations: generation + 1,
         node_evals,
         seconds: start.elapsed().as_secs_f64(),

@@ -411,7 +411,8 @@ pub fn fit_table(
         let front: Vec<FrontMember> = res
             .front
             .iter()
-            .map(|e| {
+            .enumerate()
+            .map(|(i, e)| {
                 let program = compose(&e.program, factor);
                 let test_r2 = (test.rows() > 0)
                     .then(|| {
@@ -423,6 +424,7 @@ pub fn fit_table(
                     size: e.size,
                     train_r2: 1.0 - e.train_nmse,
                     test_r2,
+                    cv_r2: res.cv_nmse.as_ref().map(|cv| 1.0 - cv[i]),
                     equation: text(&program),
                     program,
                 }
@@ -494,12 +496,7 @@ pub fn fit_table(
             train_residual_quantiles: residual_quantiles(&train.y, &train_pred),
             test_residual_quantiles: residual_quantiles(&test.y, &test_pred),
             pareto_front: front,
-            selection_rule: format!(
-                "PySR 'best': among front members with error within {}x of the most accurate, \
-                 the largest -d ln(1 - R^2)/d size (errors floored at {:e})",
-                gp::select::ACCURACY_FACTOR,
-                gp::select::ERROR_FLOOR
-            ),
+            selection_rule: opts.config.selection.describe(),
             generations: res.generations,
             node_evals: res.node_evals,
             seconds: res.seconds,

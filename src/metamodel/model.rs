@@ -151,6 +151,10 @@ pub struct FrontMember {
     pub size: usize,
     pub train_r2: f64,
     pub test_r2: Option<f64>,
+    /// 1 - the cross-validated normalised error, when the selection rule computed it (in the
+    /// fitted response: with a similarity, the dimensionless one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cv_r2: Option<f64>,
     pub equation: String,
     pub program: Vec<Node>,
 }

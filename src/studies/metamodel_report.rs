@@ -90,7 +90,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
          --report {}` from the shipped files (add `--validate` to rerun the DEM validation of \
          the gravel, minutes). Made by\n\n```\nmbgc train --space {} --experiment {} --n {} \
          --validation {} --seed {} --population {} --generations {} --parsimony {} \
-         --max-length {} --restarts {}{}\n```\n\n(mbgc {}, model class `{}`, box scale k = {}, \
+         --max-length {} --restarts {} --select {}{}\n```\n\n(mbgc {}, model class `{}`, box scale k = {}, \
          training design {} with seed {}, validation design {} with seed {}).",
         paths.model.display(),
         a.report.display(),
@@ -104,6 +104,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         model.settings.parsimony,
         model.settings.max_length,
         model.settings.restarts,
+        match model.settings.selection {
+            crate::gp::select::Selection::Best => "best",
+            crate::gp::select::Selection::CrossValidation => "cv",
+        },
         if model.data.rows + model.data.no_value_rows + model.data.skipped_rows < record.n {
             " --partial"
         } else {
@@ -602,7 +606,8 @@ fn equation_section(w: &mut String, model: &Metamodel) {
     );
     let _ = writeln!(
         w,
-        "| response | size (nodes) | uses | ignores |\n|---|---|---|---|"
+        "| response | size (nodes) | training R^2 | 5-fold cross-validated R^2 | uses | ignores \
+         |\n|---|---|---|---|---|---|"
     );
     let names = model.input_names();
     for r in &model.responses {
@@ -611,13 +616,31 @@ fn equation_section(w: &mut String, model: &Metamodel) {
             .filter(|n| !r.uses.contains(n))
             .map(String::as_str)
             .collect();
+        let cv = r
+            .pareto_front
+            .iter()
+            .find(|m| m.size == r.size)
+            .and_then(|m| m.cv_r2)
+            .map_or_else(|| "-".to_string(), |v| format!("{v:.5}"));
         let _ = writeln!(
             w,
-            "| {} | {} | {} | {} |",
+            "| {} | {} | {:.5} | {} | {} | {} |",
             r.name,
             r.size,
+            r.train.r2,
+            cv,
             r.uses.join(", "),
             ignores.join(", ")
+        );
+    }
+    if let Some(r) = model.responses.first() {
+        let _ = writeln!(
+            w,
+            "\nEach equation was picked from its Pareto front by {}. Training and held-out \
+             R^2 are over the training rows, which the FSSF-f design puts on the edges of the \
+             space as much as inside it: the errors there are larger than on the uniform random \
+             validation design.",
+            r.selection_rule
         );
     }
     let _ = writeln!(
