@@ -263,8 +263,8 @@ fn same_seed_same_equation_on_any_thread_count() {
 
 /// Restarts merge their fronts: at every size, the merged front is at least as accurate as the
 /// front of each restart alone (same seeds), and a second call gives the same equation.
-#[test]
-fn restarts_merge_fronts_that_dominate_each_single_search() {
+/// 120 rows of a two-input function with uniform noise of +-0.05.
+fn noisy_data() -> Dataset {
     let case = Case {
         name: "noisy",
         vars: &["a", "b"],
@@ -276,7 +276,12 @@ fn restarts_merge_fronts_that_dominate_each_single_search() {
     for v in &mut y {
         *v += rng.random_range(-0.05..0.05);
     }
-    let train = Dataset::new(x, y);
+    Dataset::new(x, y)
+}
+
+#[test]
+fn restarts_merge_fronts_that_dominate_each_single_search() {
+    let train = noisy_data();
     let cfg = |seed: u64, restarts: usize| Config {
         population: 400,
         generations: 8,
@@ -311,18 +316,7 @@ fn restarts_merge_fronts_that_dominate_each_single_search() {
 
 #[test]
 fn cross_validated_selection_picks_the_member_with_the_smallest_held_out_error() {
-    let case = Case {
-        name: "noisy",
-        vars: &["a", "b"],
-        range: (0.1, 2.0),
-        f: |v| (v[0] * 1.7).tanh() * v[1].sqrt() + 0.3 * v[0] * v[1],
-    };
-    let (x, mut y) = sample(&case, 120, case.range, 11);
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    for v in &mut y {
-        *v += rng.random_range(-0.05..0.05);
-    }
-    let train = Dataset::new(x, y);
+    let train = noisy_data();
     let cfg = |selection| Config {
         population: 400,
         generations: 8,
@@ -343,4 +337,7 @@ fn cross_validated_selection_picks_the_member_with_the_smallest_held_out_error()
     assert!(errors.iter().take(cv.chosen).all(|&e| e > min));
     // Held-out rows are harder than the rows a member was fitted to.
     assert!(min > cv.front[cv.chosen].train_nmse);
+    let few = train.subset(&(0..9).collect::<Vec<_>>());
+    let err = gp::fit(&few, &cfg(gp::select::Selection::CrossValidation), |_| {}).unwrap_err();
+    assert!(err.contains("selection") && err.contains("got 9"), "{err}");
 }

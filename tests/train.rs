@@ -167,7 +167,14 @@ fn partial_fits_on_the_rows_there_are_and_says_so() {
     // A fresh campaign half done: --partial simulates nothing and fits on the 8 rows there are.
     std::fs::remove_dir_all(d.join("training_data")).unwrap();
     ok(d, &[&base[..], &["--shard", "2/2"]].concat());
-    let err = ok(d, &[&base[..], &["--partial"]].concat());
+    // 8 rows are too few for 5-fold cross-validation: refused with the way out named.
+    let o = mbgc(d, &[&base[..], &["--partial"]].concat());
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && text.contains("got 8") && text.contains("--select best"),
+        "{text}"
+    );
+    let err = ok(d, &[&base[..], &["--partial", "--select", "best"]].concat());
     assert!(
         err.contains("skipped (--partial), 8 rows not yet simulated")
             && err.contains("provisional"),

@@ -338,6 +338,15 @@ pub fn fit(
     mut progress: impl FnMut(&Progress),
 ) -> Result<FitResult, String> {
     cfg.check()?;
+    if cfg.selection == Selection::CrossValidation && train.rows() < 2 * select::FOLDS {
+        return Err(format!(
+            "selection: cross-validation needs at least {} training rows ({} folds of 2), got {}; \
+             pick by the knee instead (`--select best`)",
+            2 * select::FOLDS,
+            select::FOLDS,
+            train.rows()
+        ));
+    }
     let mut entries = Vec::new();
     let (mut generations, mut node_evals, mut seconds) = (0, 0, 0.0);
     for k in 0..cfg.restarts {
@@ -389,12 +398,20 @@ fn pareto(mut entries: Vec<FrontEntry>) -> Result<Vec<FrontEntry>, String> {
     Ok(front)
 }
 
+/// What one search returns: its front, before the merge and the pick.
+struct Search {
+    front: Vec<FrontEntry>,
+    generations: usize,
+    node_evals: u64,
+    seconds: f64,
+}
+
 /// One search with `cfg.seed`.
 fn fit_once(
     train: &Dataset,
     cfg: &Config,
     mut progress: impl FnMut(&Progress),
-) -> Result<FitResult, String> {
+) -> Result<Search, String> {
     let functions = cfg.check()?;
     if train.rows() < 2 {
         return Err("the training data has fewer than 2 rows".into());
@@ -609,11 +626,8 @@ fn fit_once(
         entries.push(entry);
     }
     let front = pareto(entries)?;
-    // `fit` picks from the merged fronts of all restarts.
-    Ok(FitResult {
+    Ok(Search {
         front,
-        chosen: 0,
-        cv_nmse: None,
         generations: generation + 1,
         node_evals,
         seconds: start.elapsed().as_secs_f64(),

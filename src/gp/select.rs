@@ -60,8 +60,7 @@ impl Selection {
 /// Held-out normalised error (mean squared error over the variance of `data`) of every member:
 /// `FOLDS`-fold, rows shuffled with `seed`, each member's constants re-tuned on the other folds.
 /// A member that is invalid on any held-out row (a log of a negative at a point it was not fitted
-/// to) gets infinity. Needs at least `2 * FOLDS` rows; with fewer, every member gets its training
-/// error.
+/// to) gets infinity. `data` must have at least `2 * FOLDS` rows (the engine refuses fewer).
 pub fn cross_validation_errors(
     front: &[FrontEntry],
     data: &Dataset,
@@ -69,9 +68,7 @@ pub fn cross_validation_errors(
     seed: u64,
 ) -> Vec<f64> {
     let n = data.rows();
-    if n < 2 * FOLDS {
-        return front.iter().map(|e| e.train_nmse).collect();
-    }
+    assert!(n >= 2 * FOLDS, "cross-validation needs {} rows", 2 * FOLDS);
     let mut order: Vec<usize> = (0..n).collect();
     order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
     let folds: Vec<(Dataset, Dataset)> = (0..FOLDS)
