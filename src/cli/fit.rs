@@ -270,9 +270,5 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
 
 /// `--select`: `best` or `cv`.
 pub fn parse_selection(s: &str) -> Result<Selection, String> {
-    match s {
-        "best" => Ok(Selection::Best),
-        "cv" => Ok(Selection::CrossValidation),
-        _ => Err(format!("expected `best` or `cv`, got `{s}`")),
-    }
+    Selection::from_flag(s)
 }

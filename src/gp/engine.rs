@@ -352,7 +352,6 @@ pub fn fit(
     for k in 0..cfg.restarts {
         let one = Config {
             seed: cfg.seed.wrapping_add(k as u64),
-            restarts: 1,
             ..cfg.clone()
         };
         let r = fit_once(train, &one, &mut progress)?;

@@ -41,6 +41,22 @@ pub enum Selection {
 }
 
 impl Selection {
+    /// The value of `--select` that asks for this rule.
+    pub fn flag(self) -> &'static str {
+        match self {
+            Selection::Best => "best",
+            Selection::CrossValidation => "cv",
+        }
+    }
+
+    /// The rule `--select` names.
+    pub fn from_flag(s: &str) -> Result<Selection, String> {
+        [Selection::Best, Selection::CrossValidation]
+            .into_iter()
+            .find(|r| r.flag() == s)
+            .ok_or_else(|| format!("expected `best` or `cv`, got `{s}`"))
+    }
+
     /// How the model file describes the rule.
     pub fn describe(self) -> String {
         match self {
@@ -97,11 +113,8 @@ pub fn cross_validation_errors(
                 if !sc.is_valid() {
                     return f64::INFINITY;
                 }
-                let (a, b) = if linear_scaling {
-                    (sc.intercept, sc.slope)
-                } else {
-                    (0.0, 1.0)
-                };
+                // Without linear scaling the score's map is the identity.
+                let (a, b) = (sc.intercept, sc.slope);
                 let mut out = vec![0.0; held.rows()];
                 if !eval.eval(&p, &held.x, &mut out) {
                     return f64::INFINITY;

@@ -104,10 +104,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         model.settings.parsimony,
         model.settings.max_length,
         model.settings.restarts,
-        match model.settings.selection {
-            crate::gp::select::Selection::Best => "best",
-            crate::gp::select::Selection::CrossValidation => "cv",
-        },
+        model.settings.selection.flag(),
         if model.data.rows + model.data.no_value_rows + model.data.skipped_rows < record.n {
             " --partial"
         } else {
