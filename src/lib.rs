@@ -9,6 +9,7 @@ pub mod calibrate;
 pub mod campaign;
 pub mod cli;
 pub mod dem;
+pub mod diagnose;
 pub mod error;
 pub mod export;
 pub mod gp;

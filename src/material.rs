@@ -256,7 +256,7 @@ struct MaterialFile {
     deny_unknown_fields,
     expecting = "a table with `sieve = \"file.csv\"` or both `d50_mm` and `sigma_ln`"
 )]
-struct PsdFile {
+pub(crate) struct PsdFile {
     sieve: Option<String>,
     d50_mm: Option<f64>,
     sigma_ln: Option<f64>,
@@ -267,7 +267,7 @@ struct PsdFile {
     deny_unknown_fields,
     expecting = "a table such as { value = 35.5, sd = 0.5 }"
 )]
-struct MeasuredFile {
+pub(crate) struct MeasuredFile {
     value: Option<f64>,
     sd: Option<f64>,
 }
@@ -294,6 +294,106 @@ fn finite(x: f64, file: &str, field: &str) -> Result<f64> {
     }
 }
 
+/// The `[psd]` table as written, checked; `prefix` goes before every field name in errors (a
+/// measurement set's `sample[2].`).
+pub(crate) fn psd_spec(psd: Option<PsdFile>, file: &str, prefix: &str) -> Result<Option<PsdSpec>> {
+    Ok(match psd {
+        None => None,
+        Some(PsdFile {
+            sieve: Some(s),
+            d50_mm: None,
+            sigma_ln: None,
+        }) => Some(PsdSpec::Sieve(PathBuf::from(s))),
+        Some(PsdFile {
+            sieve: None,
+            d50_mm: Some(d),
+            sigma_ln: Some(s),
+        }) => {
+            let d50_mm = finite(d, file, &format!("{prefix}psd.d50_mm"))?;
+            let sigma_ln = finite(s, file, &format!("{prefix}psd.sigma_ln"))?;
+            if d50_mm <= 0.0 {
+                return Err(Error::input(
+                    file,
+                    format!("{prefix}psd.d50_mm"),
+                    "a positive size in mm",
+                ));
+            }
+            if sigma_ln <= 0.0 {
+                return Err(Error::input(
+                    file,
+                    format!("{prefix}psd.sigma_ln"),
+                    "a positive spread",
+                ));
+            }
+            Some(PsdSpec::LogNormal { d50_mm, sigma_ln })
+        }
+        Some(_) => {
+            return Err(Error::input(
+                file,
+                format!("{prefix}psd"),
+                "either `sieve = \"file.csv\"` or both `d50_mm` and `sigma_ln`",
+            ))
+        }
+    })
+}
+
+/// The `[measured]` table as written, checked: at least one response, each with a finite value
+/// and a realistic standard deviation.
+pub(crate) fn measured_values(
+    entries: Entries<MeasuredFile>,
+    file: &str,
+    prefix: &str,
+) -> Result<Vec<Measured>> {
+    let mut measured = Vec::new();
+    for (response, m) in entries.0 {
+        let field = format!("{prefix}measured.{response}");
+        let value = m
+            .value
+            .ok_or_else(|| Error::input(file, &field, "a `value`"))?;
+        let value = finite(value, file, &format!("{field}.value"))?;
+        let sd = m.sd.ok_or_else(|| {
+            Error::input(
+                file,
+                &field,
+                "an `sd` (standard deviation of the measurement)",
+            )
+        })?;
+        let sd = finite(sd, file, &format!("{field}.sd"))?;
+        if sd <= 0.0 {
+            return Err(Error::input(
+                file,
+                format!("{field}.sd"),
+                format!("a standard deviation > 0, got {sd}"),
+            ));
+        }
+        // No bulk-material measurement is known to 1e-9 of its value; such an sd only makes
+        // chi^2 overflow the optimiser.
+        if sd < MIN_RELATIVE_SD * value.abs() {
+            return Err(Error::input(
+                file,
+                format!("{field}.sd"),
+                format!(
+                    "a realistic standard deviation, at least {MIN_RELATIVE_SD:e} of the value \
+                     {value:e}; got {sd:e}"
+                ),
+            ));
+        }
+        measured.push(Measured {
+            response,
+            value,
+            sd,
+        });
+    }
+    if measured.is_empty() {
+        return Err(Error::input(
+            file,
+            format!("{prefix}measured"),
+            "at least one measured response, e.g. shear_angle = { value = 35.5, sd = 0.5 }",
+        ));
+    }
+    Ok(measured)
+}
+
 impl MaterialFile {
     /// Everything serde cannot say: what is missing, out of range or inconsistent.
     fn validate(self, file: &str) -> Result<Material> {
@@ -302,83 +402,8 @@ impl MaterialFile {
                 .file_stem()
                 .map_or("material".into(), |s| s.to_string_lossy().to_string())
         });
-        let psd = match self.psd {
-            None => None,
-            Some(PsdFile {
-                sieve: Some(s),
-                d50_mm: None,
-                sigma_ln: None,
-            }) => Some(PsdSpec::Sieve(PathBuf::from(s))),
-            Some(PsdFile {
-                sieve: None,
-                d50_mm: Some(d),
-                sigma_ln: Some(s),
-            }) => {
-                let d50_mm = finite(d, file, "psd.d50_mm")?;
-                let sigma_ln = finite(s, file, "psd.sigma_ln")?;
-                if d50_mm <= 0.0 {
-                    return Err(Error::input(file, "psd.d50_mm", "a positive size in mm"));
-                }
-                if sigma_ln <= 0.0 {
-                    return Err(Error::input(file, "psd.sigma_ln", "a positive spread"));
-                }
-                Some(PsdSpec::LogNormal { d50_mm, sigma_ln })
-            }
-            Some(_) => {
-                return Err(Error::input(
-                    file,
-                    "psd",
-                    "either `sieve = \"file.csv\"` or both `d50_mm` and `sigma_ln`",
-                ))
-            }
-        };
-        let mut measured = Vec::new();
-        for (response, m) in self.measured.0 {
-            let field = format!("measured.{response}");
-            let value = m
-                .value
-                .ok_or_else(|| Error::input(file, &field, "a `value`"))?;
-            let value = finite(value, file, &format!("{field}.value"))?;
-            let sd = m.sd.ok_or_else(|| {
-                Error::input(
-                    file,
-                    &field,
-                    "an `sd` (standard deviation of the measurement)",
-                )
-            })?;
-            let sd = finite(sd, file, &format!("{field}.sd"))?;
-            if sd <= 0.0 {
-                return Err(Error::input(
-                    file,
-                    format!("{field}.sd"),
-                    format!("a standard deviation > 0, got {sd}"),
-                ));
-            }
-            // No bulk-material measurement is known to 1e-9 of its value; such an sd only makes
-            // chi^2 overflow the optimiser.
-            if sd < MIN_RELATIVE_SD * value.abs() {
-                return Err(Error::input(
-                    file,
-                    format!("{field}.sd"),
-                    format!(
-                        "a realistic standard deviation, at least {MIN_RELATIVE_SD:e} of the value \
-                         {value:e}; got {sd:e}"
-                    ),
-                ));
-            }
-            measured.push(Measured {
-                response,
-                value,
-                sd,
-            });
-        }
-        if measured.is_empty() {
-            return Err(Error::input(
-                file,
-                "measured",
-                "at least one measured response, e.g. shear_angle = { value = 35.5, sd = 0.5 }",
-            ));
-        }
+        let psd = psd_spec(self.psd, file, "")?;
+        let measured = measured_values(self.measured, file, "")?;
         let mut fixed = Vec::new();
         for (k, v) in self.fixed.0 {
             let v = finite(v, file, &format!("fixed.{k}"))?;
@@ -475,13 +500,19 @@ impl Material {
 
     /// `(d50_mm, sigma_ln)` of the log-normal PSD, fitting sieve data if that is what was given.
     pub fn psd_parameters(&self) -> Result<Option<(f64, f64)>> {
-        Ok(match &self.psd {
-            None => None,
-            Some(PsdSpec::LogNormal { d50_mm, sigma_ln }) => Some((*d50_mm, *sigma_ln)),
-            Some(PsdSpec::Sieve(p)) => {
+        self.psd.as_ref().map(PsdSpec::parameters).transpose()
+    }
+}
+
+impl PsdSpec {
+    /// `(d50 in mm, sigma_ln)`: as given, or fitted to the sieve data.
+    pub fn parameters(&self) -> Result<(f64, f64)> {
+        Ok(match self {
+            PsdSpec::LogNormal { d50_mm, sigma_ln } => (*d50_mm, *sigma_ln),
+            PsdSpec::Sieve(p) => {
                 let data = crate::psd::SieveData::read(p)?;
                 let fit = crate::psd::fit_all(&data)?;
-                Some((fit.d50_mm, fit.sigma_ln))
+                (fit.d50_mm, fit.sigma_ln)
             }
         })
     }

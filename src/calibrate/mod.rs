@@ -6,10 +6,12 @@
 //! runs both (and the posterior) for `mbgc calibrate` and returns what it reports.
 
 pub mod bayes;
+pub mod objective;
 pub mod optimize;
 pub mod problem;
 pub mod session;
 pub mod tmcmc;
 
-pub use optimize::{calibrate, Calibration, Optimum};
+pub use objective::Objective;
+pub use optimize::{calibrate, minimize, starts, Calibration, Optimum};
 pub use problem::Problem;

@@ -5,6 +5,7 @@
 //! search is unconstrained in `z`, every `z` is inside the box and a bound is reached at a finite
 //! `z`. Constraints between parameters enter as a quadratic penalty (see [`Problem::objective`]).
 
+use super::objective::Objective;
 use super::problem::Problem;
 use argmin::core::{CostFunction, Executor, Gradient, State};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
@@ -15,18 +16,21 @@ use serde::Serialize;
 
 type Best = std::sync::Arc<std::sync::Mutex<Option<(f64, Vec<f64>)>>>;
 
-struct Transformed<'a, 'm> {
-    p: &'a Problem<'m>,
+struct Transformed<'a, O: Objective + ?Sized> {
+    p: &'a O,
     /// The lowest finite objective evaluated so far and where: argmin returns no state when a
     /// cost or gradient stops the run, and the start must then report where it got to, not where
     /// it began.
     best: Best,
 }
 
-impl Transformed<'_, '_> {
+impl<O: Objective + ?Sized> Transformed<'_, O> {
     fn x(&self, z: &[f64]) -> Vec<f64> {
-        self.p
-            .from_unit(&z.iter().map(|z| 0.5 * (1.0 + z.sin())).collect::<Vec<_>>())
+        let (lo, hi) = (self.p.lower(), self.p.upper());
+        z.iter()
+            .enumerate()
+            .map(|(j, z)| lo[j] + (hi[j] - lo[j]) * 0.5 * (1.0 + z.sin()))
+            .collect()
     }
 }
 
@@ -36,7 +40,7 @@ const OUTSIDE: f64 = 1e30;
 /// finite.
 const HUGE: f64 = 1e100;
 
-impl CostFunction for Transformed<'_, '_> {
+impl<O: Objective + ?Sized> CostFunction for Transformed<'_, O> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, z: &Vec<f64>) -> Result<f64, argmin::core::Error> {
@@ -58,7 +62,7 @@ impl CostFunction for Transformed<'_, '_> {
     }
 }
 
-impl Gradient for Transformed<'_, '_> {
+impl<O: Objective + ?Sized> Gradient for Transformed<'_, O> {
     type Param = Vec<f64>;
     type Gradient = Vec<f64>;
     fn gradient(&self, z: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
@@ -68,7 +72,7 @@ impl Gradient for Transformed<'_, '_> {
         let g: Vec<f64> = g
             .iter()
             .enumerate()
-            .map(|(j, g)| g * (self.p.upper[j] - self.p.lower[j]) * 0.5 * z[j].cos())
+            .map(|(j, g)| g * (self.p.upper()[j] - self.p.lower()[j]) * 0.5 * z[j].cos())
             .collect();
         if g.iter().any(|v| !(v.is_finite() && v.abs() <= HUGE)) {
             return Err(argmin::core::Error::msg(
@@ -91,8 +95,9 @@ pub struct Optimum {
     pub starts: usize,
 }
 
-/// One L-BFGS run from unit coordinates `u0`.
-pub fn local(p: &Problem, u0: &[f64], max_iters: u64) -> Option<Optimum> {
+/// One L-BFGS run of any [`Objective`] from unit coordinates `u0`: where it ended (physical
+/// units), or `None` when the solver could not be set up.
+pub fn minimize<O: Objective + ?Sized>(p: &O, u0: &[f64], max_iters: u64) -> Option<Vec<f64>> {
     let best = Best::default();
     let op = Transformed {
         p,
@@ -122,7 +127,12 @@ pub fn local(p: &Problem, u0: &[f64], max_iters: u64) -> Option<Optimum> {
         p,
         best: Best::default(),
     };
-    let x = op.x(&z);
+    Some(op.x(&z))
+}
+
+/// One L-BFGS run from unit coordinates `u0`.
+pub fn local(p: &Problem, u0: &[f64], max_iters: u64) -> Option<Optimum> {
+    let x = minimize(p, u0, max_iters)?;
     let (chi2_total, _) = p.objective(&x)?;
     let violation = p.violation(&x);
     let residuals = p.residuals(&x);

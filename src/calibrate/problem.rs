@@ -1,6 +1,7 @@
 //! The calibration problem: a metamodel, the material's measurements, what is fixed, the search
 //! box of the free parameters and the constraints between them.
 
+use super::objective::Objective;
 use crate::dem::contact::Pair;
 use crate::error::{Error, Result};
 use crate::material::{Constraint, Material};
@@ -29,6 +30,11 @@ pub struct Problem<'m> {
     pub constraints: Vec<(Constraint, Vec<(usize, f64)>)>,
     /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
     pub notes: Vec<String>,
+}
+
+/// Whether a value given in a file is the constant a model was trained at (to rounding).
+pub fn same_value(constant: f64, given: f64) -> bool {
+    (constant - given).abs() <= 1e-9 * constant.abs().max(given.abs())
 }
 
 /// Penalty weight of a constraint violation (in parameter units, squared).
@@ -153,6 +159,20 @@ impl<'m> Problem<'m> {
             }
         };
         for (name, v) in &material.fixed {
+            if let Some(c) = model.constants.iter().find(|c| c.name == *name) {
+                if !same_value(c.value, *v) {
+                    return Err(Error::input(
+                        file,
+                        format!("fixed.{name}"),
+                        format!(
+                            "{}, the value the metamodel's campaign held it at (got {v}): the \
+                             model describes no other",
+                            c.value
+                        ),
+                    ));
+                }
+                continue;
+            }
             let k = index(name, format!("fixed.{name}"))?;
             in_domain(k, *v, format!("fixed.{name}"))?;
             fixed[k] = Some(*v);
@@ -205,6 +225,14 @@ impl<'m> Problem<'m> {
                         ),
                     ));
                 }
+            }
+        }
+        for c in &model.constants {
+            if !material.fixed.iter().any(|(n, _)| *n == c.name) {
+                notes.push(format!(
+                    "{} = {} as the metamodel's campaign held it",
+                    c.name, c.value
+                ));
             }
         }
         if !model.groups.is_empty() {
@@ -400,5 +428,17 @@ impl<'m> Problem<'m> {
             .zip(&self.targets)
             .map(|(p, t)| (p - t.value) / t.sd)
             .collect()
+    }
+}
+
+impl Objective for Problem<'_> {
+    fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+    fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+    fn objective(&self, x: &[f64]) -> Option<(f64, Vec<f64>)> {
+        Problem::objective(self, x)
     }
 }

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod bench;
 pub mod calibrate;
 pub mod campaign;
+pub mod diagnose;
 pub mod effects;
 pub mod export;
 pub mod fit;
@@ -54,6 +55,8 @@ pub enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// Rerun the DEM experiment at calibrated parameters and compare with the measurements.
     Validate(validate::ValidateArgs),
+    /// Compare a measurement set with the model: where it fails, which effect is missing.
+    Diagnose(diagnose::DiagnoseArgs),
     /// Benchmarks and reproduction reports.
     Bench(bench::BenchArgs),
 }
@@ -72,6 +75,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Export(a) => export::run(&a),
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Validate(a) => validate::run(&a),
+        Command::Diagnose(a) => diagnose::run(&a),
         Command::Bench(a) => bench::run(&a),
     }
 }

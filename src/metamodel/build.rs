@@ -1,8 +1,8 @@
 //! Fitting a metamodel to a table: split, scale, one GP run per response, metrics, figures.
 
 use super::model::{
-    residual_quantiles, DataSource, FrontMember, GroupDomain, GroupedEquation, Input, Metamodel,
-    Metrics, ResponseModel, Transform, FORMAT, VERSION,
+    residual_quantiles, Constant, DataSource, FrontMember, GroupDomain, GroupedEquation, Input,
+    Metamodel, Metrics, ResponseModel, Transform, FORMAT, VERSION,
 };
 use super::table::{read_columns_skipping_nan, Columns};
 use crate::dem::contact::{ModelClass, Pair};
@@ -504,6 +504,27 @@ pub fn fit_table(
             validation: validation_set.map(|(d, pred)| Metrics::of(&d.y, &pred)),
         });
     }
+    // What the campaign held fixed and is not an input: the model holds only there.
+    let sidecar = crate::campaign::status::Meta::read(&opts.data)?;
+    let mut constants: Vec<Constant> = Vec::new();
+    if let Some(path) = &opts.space {
+        for p in &Space::from_file(path)?.parameters {
+            if let (Some(v), false) = (p.fixed, opts.inputs.contains(&p.name)) {
+                constants.push(Constant {
+                    name: p.name.clone(),
+                    value: v,
+                });
+            }
+        }
+    }
+    for (name, v) in sidecar.iter().flat_map(|m| m.set.iter()) {
+        if !opts.inputs.contains(name) && !constants.iter().any(|c| c.name == *name) {
+            constants.push(Constant {
+                name: name.clone(),
+                value: *v,
+            });
+        }
+    }
     let model = Metamodel {
         model_class: class.map(|c| c.to_string()),
         format: FORMAT.into(),
@@ -524,6 +545,8 @@ pub fn fit_table(
             no_value_rows: cols.no_value,
         },
         groups,
+        experiment: sidecar.as_ref().map(|m| m.experiment.clone()),
+        constants,
     };
     Ok(FitReport { model, figures })
 }

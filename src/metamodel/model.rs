@@ -240,6 +240,21 @@ pub struct Metamodel {
     /// besides the inputs' own); empty for a fit in the inputs themselves.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub groups: Vec<GroupDomain>,
+    /// The experiment the training runs measured (`shear-box`), from the campaign table's
+    /// sidecar; null when the data did not say.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub experiment: Option<String>,
+    /// Parameters the campaign held at one value that are not inputs (a local space's known
+    /// material values): the model describes runs at these values only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constants: Vec<Constant>,
+}
+
+/// A parameter held at one value in every training run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Constant {
+    pub name: String,
+    pub value: f64,
 }
 
 impl Metamodel {

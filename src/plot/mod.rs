@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 
 pub mod boxplot;
 pub mod corner;
+pub mod diagnosis;
 pub mod parity;
 pub mod psd;
 

@@ -15,6 +15,7 @@ pub const ROLLING_FRICTION: ParamSpec = ParamSpec {
     range: (0.0, 10.0),
     default: None,
     variable: true,
+    off: Some(0.0),
     what: "rolling friction coefficient (torque cap mu_r R* F_n)",
 };
 

@@ -15,6 +15,7 @@ pub const RESTITUTION: ParamSpec = ParamSpec {
     range: (0.05, 1.0),
     default: None,
     variable: true,
+    off: None,
     what: "coefficient of restitution",
 };
 

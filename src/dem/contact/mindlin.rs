@@ -16,6 +16,7 @@ pub const FRICTION: ParamSpec = ParamSpec {
     range: (0.0, 10.0),
     default: None,
     variable: true,
+    off: None,
     what: "Coulomb sliding friction coefficient",
 };
 
@@ -25,6 +26,7 @@ pub const STIFFNESS: ParamSpec = ParamSpec {
     range: (1e-12, 1e15),
     default: None,
     variable: true,
+    off: None,
     what: "constant tangential spring stiffness",
 };
 

@@ -14,6 +14,7 @@ pub const GAMMA_N: ParamSpec = ParamSpec {
     range: (0.0, 1e12),
     default: None,
     variable: true,
+    off: None,
     what: "normal damping constant of the power-law dashpot",
 };
 
@@ -23,6 +24,7 @@ pub const ALPHA_N: ParamSpec = ParamSpec {
     range: (0.0, 2.0),
     default: None,
     variable: true,
+    off: None,
     what: "exponent of the overlap in the power-law dashpot",
 };
 

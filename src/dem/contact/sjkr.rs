@@ -12,6 +12,7 @@ pub const ENERGY_DENSITY: ParamSpec = ParamSpec {
     range: (0.0, 1e9),
     default: None,
     variable: true,
+    off: Some(0.0),
     what: "cohesion energy density (attraction = ced x contact area)",
 };
 

@@ -69,6 +69,11 @@ pub struct ParamSpec {
     /// Whether a metamodel may take it as an input; a structural constant (an exponent that
     /// selects a model) is fixed in a space instead.
     pub variable: bool,
+    /// The value at which the effect does nothing (a run of a class with it repeats the class
+    /// without it: a rolling friction or a cohesion of 0). `None`: the effect cannot be switched
+    /// off by a value (the normal force). A metamodel of a class with the effect then also
+    /// describes the class without it, on this face of its space (`mbgc diagnose`).
+    pub off: Option<f64>,
     pub what: &'static str,
 }
 
