@@ -32,3 +32,25 @@ fn the_shipped_model_calibrates_the_gravel_example() {
     assert_eq!(p("E_p"), 4e7);
     assert_eq!(p("mu_r_pp"), 0.8);
 }
+
+/// `mbgc diagnose` on the shipped model and the shipped measurement set with a hidden rolling
+/// resistance (DEM data): the JSON report has the documented keys, the class without rolling
+/// resistance fails, and rolling resistance (EPSD2) is ranked first.
+#[test]
+fn diagnose_names_the_hidden_rolling_resistance_from_the_shipped_example() {
+    let json = ok(&[
+        "diagnose",
+        "--measurements",
+        "examples/measurements/hidden_rolling.toml",
+        "--samples",
+        "500",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(v["chi2_dof"].as_f64().unwrap() > 5.0, "{v}");
+    assert_eq!(v["residuals"].as_array().unwrap().len(), 8);
+    let best = &v["ranking"][0];
+    assert_eq!(best["effect"], "epsd2", "{v}");
+    assert!(best["chi2_dof_after"].as_f64().unwrap() < 0.2 * v["chi2_dof"].as_f64().unwrap());
+    assert!(best["log_bayes_factor"].as_f64().unwrap() > 2.3);
+}

@@ -3,8 +3,8 @@
 use clap::{Args, Subcommand};
 
 use crate::studies::{
-    dem_throughput, gp_vs_gplearn, metamodel_report, restitution, sampling_quality,
-    shear_box_check, shear_box_vs_liggghts,
+    dem_throughput, diagnose_report, gp_vs_gplearn, metamodel_report, restitution,
+    sampling_quality, shear_box_check, shear_box_vs_liggghts,
 };
 
 #[derive(Debug, Args)]
@@ -36,6 +36,10 @@ pub enum BenchCommand {
     /// Seed 003 Table 4 on DEM impacts: TMCMC of the three normal-force classes (Tsuji,
     /// Kuwabara-Kono, free exponent) on measured restitution of steel; posteriors, evidences.
     Restitution(restitution::Args),
+    /// docs/diagnose.md: hidden cohesion, hidden rolling resistance and a control, each
+    /// diagnosed from its measurement file to the error ladder, the strength checked against
+    /// the truth.
+    Diagnose(diagnose_report::Args),
 }
 
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
@@ -47,5 +51,6 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
         BenchCommand::Metamodel(m) => metamodel_report::run(m),
         BenchCommand::Restitution(r) => restitution::run(r),
+        BenchCommand::Diagnose(d) => diagnose_report::run(d),
     }
 }

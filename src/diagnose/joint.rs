@@ -136,9 +136,10 @@ impl<'s> Joint<'s> {
         let mut notes = Vec::new();
         let mut used_fixed: Vec<String> = Vec::new();
         for (si, s) in set.samples.iter().enumerate() {
-            // The model with the fewest effects to switch off, first given first.
+            // The models that can stand for the class, fewest effects to switch off first (first
+            // given first among equals); the first whose domain holds the sample's known values.
             let mut reasons = Vec::new();
-            let mut choice: Option<(usize, Vec<&'static EffectSpec>)> = None;
+            let mut ordered: Vec<(usize, Vec<&'static EffectSpec>)> = Vec::new();
             for (mi, m) in surrogates.iter().enumerate() {
                 let why = if m.experiment.as_deref().is_some_and(|e| e != s.experiment) {
                     Err(format!(
@@ -155,14 +156,177 @@ impl<'s> Joint<'s> {
                     extra_effects(&m.class, &class)
                 };
                 match why {
-                    Ok(extra) if choice.as_ref().is_none_or(|(_, e)| extra.len() < e.len()) => {
-                        choice = Some((mi, extra))
-                    }
-                    Ok(_) => {}
+                    Ok(extra) => ordered.push((mi, extra)),
                     Err(w) => reasons.push(format!("{}: {w}", m.label)),
                 }
             }
-            let Some((mi, off)) = choice else {
+            ordered.sort_by_key(|(mi, e)| (e.len(), *mi));
+            let mut chosen: Option<Row> = None;
+            for (mi, off) in ordered {
+                let saved = (
+                    names.clone(),
+                    lower.clone(),
+                    upper.clone(),
+                    notes.clone(),
+                    used_fixed.clone(),
+                );
+                let attempt = (|| -> Result<Row, String> {
+                    let m = &surrogates[mi];
+                    notes.push(format!(
+                        "sample \"{}\": {}{}",
+                        s.name,
+                        m.label,
+                        if off.is_empty() {
+                            String::new()
+                        } else {
+                            format!(
+                                " with {} off",
+                                off.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
+                            )
+                        }
+                    ));
+                    // Known values, and where they come from (for messages).
+                    let mut known: Vec<(String, f64, String)> = Vec::new();
+                    for e in &off {
+                        for p in e.params {
+                            for n in p.names {
+                                known.push((
+                                    n.to_string(),
+                                    p.off.unwrap_or(0.0),
+                                    format!("{} off", e.name),
+                                ));
+                            }
+                        }
+                    }
+                    if let Some(c) = candidate {
+                        for (n, v) in &c.fixed {
+                            known.push((
+                                n.clone(),
+                                *v,
+                                format!("candidates.{}.fixed", c.effect.name),
+                            ));
+                        }
+                    }
+                    for (n, v) in &set.fixed {
+                        known.push((n.clone(), *v, "fixed".into()));
+                    }
+                    for (n, v) in &s.fixed {
+                        known.push((n.clone(), *v, format!("{}.fixed", s.field)));
+                    }
+                    if let Some(psd) = &s.psd {
+                        let (d50, sigma) = psd.parameters().map_err(|e| e.to_string())?;
+                        known.push(("d50".into(), d50, format!("{}.psd", s.field)));
+                        known.push(("sigma_ln".into(), sigma, format!("{}.psd", s.field)));
+                    }
+                    for (c, v) in &m.constants {
+                        match known.iter().find(|(n, _, _)| n == c) {
+                            Some((_, w, from)) if !same_value(*v, *w) => {
+                                return Err(format!(
+                                    "{} holds {c} at {v} but {from} gives {w} (sample \"{}\")",
+                                    m.label, s.name
+                                ))
+                            }
+                            Some(_) => {}
+                            None => {
+                                return Err(format!(
+                                "{} holds {c} at {v}, which the set searches (sample \"{}\"); fix \
+                                 {c} = {v} in the set to compare with this model",
+                                m.label, s.name
+                            ))
+                            }
+                        }
+                    }
+                    let mut x = vec![f64::NAN; m.inputs.len()];
+                    let mut slots = Vec::new();
+                    for (k, input) in m.inputs.iter().enumerate() {
+                        let d = m.domains[k];
+                        if let Some((_, v, from)) = known.iter().find(|(n, _, _)| n == input) {
+                            let mut v = *v;
+                            if !(v >= d[0] && v <= d[1]) {
+                                let tol = OFF_TOLERANCE * (d[1] - d[0]);
+                                if from.ends_with(" off") && v >= d[0] - tol && v <= d[1] + tol {
+                                    let edge = v.clamp(d[0], d[1]);
+                                    let note = format!(
+                                    "{input} = {v} ({from}) read at the edge {edge:.4} of {}'s domain",
+                                    m.label
+                                );
+                                    if !notes.contains(&note) {
+                                        notes.push(note);
+                                    }
+                                    v = edge;
+                                } else {
+                                    return Err(format!(
+                                    "sample \"{}\": {input} = {v} (from {from}) lies outside {}'s \
+                                     domain [{}, {}]; outside it the equations extrapolate",
+                                    s.name, m.label, d[0], d[1]
+                                ));
+                                }
+                            }
+                            x[k] = v;
+                            if from == "fixed" && !used_fixed.contains(input) {
+                                used_fixed.push(input.clone());
+                            }
+                            continue;
+                        }
+                        let per_sample = set.per_sample.contains(input);
+                        let name = if per_sample {
+                            format!("{input} [{}]", s.name)
+                        } else {
+                            input.clone()
+                        };
+                        let range = if effect.is_some_and(|e| owns(e, input)) {
+                            candidate.and_then(|c| {
+                                c.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b)
+                            })
+                        } else {
+                            set.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b)
+                        };
+                        let (lo, hi) = match range {
+                        Some([lo, hi]) if lo >= d[0] && hi <= d[1] => (lo, hi),
+                        Some([lo, hi]) => return Err(format!(
+                            "the range [{lo}, {hi}] of {input} reaches outside {}'s domain [{}, {}]",
+                            m.label, d[0], d[1]
+                        )),
+                        None => (d[0], d[1]),
+                    };
+                        let j = match names.iter().position(|n| *n == name) {
+                            Some(j) => {
+                                lower[j] = lower[j].max(lo);
+                                upper[j] = upper[j].min(hi);
+                                if lower[j] >= upper[j] {
+                                    return Err(format!(
+                                        "{name}: the domains of the models used do not overlap"
+                                    ));
+                                }
+                                j
+                            }
+                            None => {
+                                names.push(name);
+                                lower.push(lo);
+                                upper.push(hi);
+                                names.len() - 1
+                            }
+                        };
+                        slots.push((k, j));
+                    }
+                    Ok(Row {
+                        model: mi,
+                        x,
+                        slots,
+                    })
+                })();
+                match attempt {
+                    Ok(row) => {
+                        chosen = Some(row);
+                        break;
+                    }
+                    Err(w) => {
+                        (names, lower, upper, notes, used_fixed) = saved;
+                        reasons.push(format!("{}: {w}", surrogates[mi].label));
+                    }
+                }
+            }
+            let Some(row) = chosen else {
                 return Err(format!(
                     "no model describes {class} for sample \"{}\" ({}): {}",
                     s.name,
@@ -174,139 +338,7 @@ impl<'s> Joint<'s> {
                     }
                 ));
             };
-            let m = &surrogates[mi];
-            notes.push(format!(
-                "sample \"{}\": {}{}",
-                s.name,
-                m.label,
-                if off.is_empty() {
-                    String::new()
-                } else {
-                    format!(
-                        " with {} off",
-                        off.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
-                    )
-                }
-            ));
-            // Known values, and where they come from (for messages).
-            let mut known: Vec<(String, f64, String)> = Vec::new();
-            for e in &off {
-                for p in e.params {
-                    for n in p.names {
-                        known.push((
-                            n.to_string(),
-                            p.off.unwrap_or(0.0),
-                            format!("{} off", e.name),
-                        ));
-                    }
-                }
-            }
-            if let Some(c) = candidate {
-                for (n, v) in &c.fixed {
-                    known.push((n.clone(), *v, format!("candidates.{}.fixed", c.effect.name)));
-                }
-            }
-            for (n, v) in &set.fixed {
-                known.push((n.clone(), *v, "fixed".into()));
-            }
-            for (n, v) in &s.fixed {
-                known.push((n.clone(), *v, format!("{}.fixed", s.field)));
-            }
-            if let Some(psd) = &s.psd {
-                let (d50, sigma) = psd.parameters().map_err(|e| e.to_string())?;
-                known.push(("d50".into(), d50, format!("{}.psd", s.field)));
-                known.push(("sigma_ln".into(), sigma, format!("{}.psd", s.field)));
-            }
-            for (c, v) in &m.constants {
-                match known.iter().find(|(n, _, _)| n == c) {
-                    Some((_, w, from)) if !same_value(*v, *w) => {
-                        return Err(format!(
-                            "{} holds {c} at {v} but {from} gives {w} (sample \"{}\")",
-                            m.label, s.name
-                        ))
-                    }
-                    Some(_) => {}
-                    None => {
-                        return Err(format!(
-                            "{} holds {c} at {v}, which the set searches (sample \"{}\"); fix \
-                             {c} = {v} in the set to compare with this model",
-                            m.label, s.name
-                        ))
-                    }
-                }
-            }
-            let mut x = vec![f64::NAN; m.inputs.len()];
-            let mut slots = Vec::new();
-            for (k, input) in m.inputs.iter().enumerate() {
-                let d = m.domains[k];
-                if let Some((_, v, from)) = known.iter().find(|(n, _, _)| n == input) {
-                    let mut v = *v;
-                    if !(v >= d[0] && v <= d[1]) {
-                        let tol = OFF_TOLERANCE * (d[1] - d[0]);
-                        if from.ends_with(" off") && v >= d[0] - tol && v <= d[1] + tol {
-                            let edge = v.clamp(d[0], d[1]);
-                            let note = format!(
-                                "{input} = {v} ({from}) read at the edge {edge:.4} of {}'s domain",
-                                m.label
-                            );
-                            if !notes.contains(&note) {
-                                notes.push(note);
-                            }
-                            v = edge;
-                        } else {
-                            return Err(format!(
-                                "sample \"{}\": {input} = {v} (from {from}) lies outside {}'s \
-                                 domain [{}, {}]; outside it the equations extrapolate",
-                                s.name, m.label, d[0], d[1]
-                            ));
-                        }
-                    }
-                    x[k] = v;
-                    if from == "fixed" && !used_fixed.contains(input) {
-                        used_fixed.push(input.clone());
-                    }
-                    continue;
-                }
-                let per_sample = set.per_sample.contains(input);
-                let name = if per_sample {
-                    format!("{input} [{}]", s.name)
-                } else {
-                    input.clone()
-                };
-                let range = if effect.is_some_and(|e| owns(e, input)) {
-                    candidate
-                        .and_then(|c| c.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b))
-                } else {
-                    set.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b)
-                };
-                let (lo, hi) = match range {
-                    Some([lo, hi]) if lo >= d[0] && hi <= d[1] => (lo, hi),
-                    Some([lo, hi]) => return Err(format!(
-                        "the range [{lo}, {hi}] of {input} reaches outside {}'s domain [{}, {}]",
-                        m.label, d[0], d[1]
-                    )),
-                    None => (d[0], d[1]),
-                };
-                let j = match names.iter().position(|n| *n == name) {
-                    Some(j) => {
-                        lower[j] = lower[j].max(lo);
-                        upper[j] = upper[j].min(hi);
-                        if lower[j] >= upper[j] {
-                            return Err(format!(
-                                "{name}: the domains of the models used do not overlap"
-                            ));
-                        }
-                        j
-                    }
-                    None => {
-                        names.push(name);
-                        lower.push(lo);
-                        upper.push(hi);
-                        names.len() - 1
-                    }
-                };
-                slots.push((k, j));
-            }
+            let m = &surrogates[row.model];
             for r in &s.measured {
                 let model_response = m.response(&r.response).unwrap_or(0);
                 let model_error = set
@@ -323,11 +355,7 @@ impl<'s> Joint<'s> {
                     model_error,
                 });
             }
-            rows.push(Row {
-                model: mi,
-                x,
-                slots,
-            });
+            rows.push(row);
         }
         for (n, _) in &set.fixed {
             let constant = rows

@@ -8,6 +8,7 @@
 pub mod diagnosis;
 pub mod joint;
 pub mod measurements;
+pub mod report;
 pub mod structure;
 pub mod surrogate;
 

@@ -15,6 +15,7 @@
 
 pub mod dem_scene;
 pub mod dem_throughput;
+pub mod diagnose_report;
 pub mod gp_vs_gplearn;
 pub mod metamodel_report;
 pub mod reference;
