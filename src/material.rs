@@ -282,7 +282,7 @@ struct ConstraintsFile {
     expr: Vec<String>,
 }
 
-fn finite(x: f64, file: &str, field: &str) -> Result<f64> {
+pub(crate) fn finite(x: f64, file: &str, field: &str) -> Result<f64> {
     if x.is_finite() {
         Ok(x)
     } else {

@@ -28,7 +28,9 @@ use std::path::Path;
 
 use crate::dem::contact::{all_effects, EffectSpec, ModelClass, Pair};
 use crate::error::{from_toml, read_to_string, Entries, Error, Result};
-use crate::material::{measured_values, psd_spec, Measured, MeasuredFile, PsdFile, PsdSpec};
+use crate::material::{
+    finite, measured_values, psd_spec, Measured, MeasuredFile, PsdFile, PsdSpec,
+};
 use crate::model_table::{refuse_inactive_parameters, ModelTable};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -108,18 +110,6 @@ struct CandidateFile {
     fixed: Entries<f64>,
     #[serde(default)]
     bounds: Entries<Vec<f64>>,
-}
-
-fn finite(x: f64, file: &str, field: &str) -> Result<f64> {
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(Error::input(
-            file,
-            field,
-            format!("a finite number, got {x}"),
-        ))
-    }
 }
 
 fn values(entries: Entries<f64>, file: &str, table: &str) -> Result<Vec<(String, f64)>> {
