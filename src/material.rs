@@ -282,6 +282,26 @@ struct ConstraintsFile {
     expr: Vec<String>,
 }
 
+/// A `[min, max]` range as written: two finite numbers, min < max.
+pub(crate) fn min_max(v: Vec<f64>, file: &str, field: &str) -> Result<[f64; 2]> {
+    let [lo, hi] = <[f64; 2]>::try_from(v).map_err(|v| {
+        Error::input(
+            file,
+            field,
+            format!("[min, max], got a list of {}", v.len()),
+        )
+    })?;
+    let (lo, hi) = (finite(lo, file, field)?, finite(hi, file, field)?);
+    if lo >= hi {
+        return Err(Error::input(
+            file,
+            field,
+            format!("min < max, got [{lo}, {hi}]"),
+        ));
+    }
+    Ok([lo, hi])
+}
+
 pub(crate) fn finite(x: f64, file: &str, field: &str) -> Result<f64> {
     if x.is_finite() {
         Ok(x)
@@ -412,21 +432,7 @@ impl MaterialFile {
         let mut bounds = Vec::new();
         for (k, v) in self.bounds.0 {
             let field = format!("bounds.{k}");
-            let [lo, hi] = <[f64; 2]>::try_from(v).map_err(|v| {
-                Error::input(
-                    file,
-                    &field,
-                    format!("[min, max], got a list of {}", v.len()),
-                )
-            })?;
-            let (lo, hi) = (finite(lo, file, &field)?, finite(hi, file, &field)?);
-            if lo >= hi {
-                return Err(Error::input(
-                    file,
-                    &field,
-                    format!("min < max, got [{lo}, {hi}]"),
-                ));
-            }
+            let [lo, hi] = min_max(v, file, &field)?;
             if fixed.iter().any(|(n, _)| *n == k) {
                 return Err(Error::input(
                     file,

@@ -29,7 +29,7 @@ use std::path::Path;
 use crate::dem::contact::{all_effects, EffectSpec, ModelClass, Pair};
 use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 use crate::material::{
-    finite, measured_values, psd_spec, Measured, MeasuredFile, PsdFile, PsdSpec,
+    finite, measured_values, min_max, psd_spec, Measured, MeasuredFile, PsdFile, PsdSpec,
 };
 use crate::model_table::{refuse_inactive_parameters, ModelTable};
 
@@ -123,22 +123,7 @@ fn values(entries: Entries<f64>, file: &str, table: &str) -> Result<Vec<(String,
 fn ranges(entries: Entries<Vec<f64>>, file: &str, table: &str) -> Result<Vec<(String, [f64; 2])>> {
     let mut out = Vec::new();
     for (k, v) in entries.0 {
-        let field = format!("{table}.{k}");
-        let [lo, hi] = <[f64; 2]>::try_from(v).map_err(|v| {
-            Error::input(
-                file,
-                &field,
-                format!("[min, max], got a list of {}", v.len()),
-            )
-        })?;
-        let (lo, hi) = (finite(lo, file, &field)?, finite(hi, file, &field)?);
-        if lo >= hi {
-            return Err(Error::input(
-                file,
-                &field,
-                format!("min < max, got [{lo}, {hi}]"),
-            ));
-        }
+        let [lo, hi] = min_max(v, file, &format!("{table}.{k}"))?;
         out.push((k, [lo, hi]));
     }
     Ok(out)
