@@ -188,3 +188,163 @@ fn partial_fits_on_the_rows_there_are_and_says_so() {
     let o = mbgc(d, &[&base[..], &["--partial", "--no-fit"]].concat());
     assert!(!o.status.success());
 }
+
+/// The wall impact (a few milliseconds a run) with sliding friction, then with EPSD2 rolling
+/// friction added by `--extends`.
+fn impact_space(class: &str, extra: &str) -> String {
+    format!(
+        "name = \"impact\"\n[model]\nclass = \"{class}\"\n[parameters]\n\
+         E_p = {{ min = 1e6, max = 1e8, fixed = 5e6 }}\n\
+         nu_p = {{ min = 0.1, max = 0.5, fixed = 0.3 }}\n\
+         rho_p = {{ min = 1000, max = 3000, fixed = 2600 }}\n\
+         d50 = {{ min = 1, max = 10, fixed = 4 }}\n\
+         E_w = {{ min = 1e6, max = 1e8, fixed = 5e6 }}\n\
+         impact_speed = {{ min = 0.5, max = 2, fixed = 1 }}\n\
+         impact_angle = {{ min = 10, max = 60 }}\n\
+         e_pw = {{ min = 0.3, max = 0.9, fixed = 0.5 }}\n\
+         mu_pw = {{ min = 0.1, max = 0.5 }}\n{extra}"
+    )
+}
+
+#[test]
+fn extends_copies_the_old_runs_onto_the_effect_off_face_and_runs_only_new_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("base.toml"), impact_space("hertz,mindlin", "")).unwrap();
+    let with =
+        |range: &str| impact_space("hertz,mindlin,epsd2", &format!("mu_r_pw = {{ {range} }}\n"));
+    std::fs::write(d.join("rolling.toml"), with("min = 0, max = 0.3")).unwrap();
+    std::fs::write(d.join("away.toml"), with("min = 0.05, max = 0.3")).unwrap();
+    let base = [
+        "train",
+        "--space",
+        "base.toml",
+        "--experiment",
+        "wall-impact",
+        "--name",
+        "base",
+        "--n",
+        "12",
+        "--validation",
+        "4",
+        "--threads",
+        "1",
+        "--no-fit",
+    ];
+    ok(d, &base);
+    let ext = |space: &'static str, n: &'static str, seed: &'static str| {
+        vec![
+            "train",
+            "--space",
+            space,
+            "--experiment",
+            "wall-impact",
+            "--name",
+            "rolling",
+            "--extends",
+            "base",
+            "--n",
+            n,
+            "--validation",
+            "6",
+            "--seed",
+            seed,
+            "--threads",
+            "1",
+            "--no-fit",
+        ]
+    };
+    // Refused: the added parameter's range misses the value that switches it off, a changed
+    // seed, no new row.
+    for (args, want) in [
+        (ext("away.toml", "20", "1"), "parameters.mu_r_pw"),
+        (ext("rolling.toml", "20", "2"), "--seed"),
+        (ext("rolling.toml", "12", "1"), "--n 12"),
+        (ext("base.toml", "20", "1"), "adds no effect"),
+    ] {
+        let o = mbgc(d, &args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{args:?}: {e}");
+        assert!(!d.join("training_data/rolling.csv").exists(), "{args:?}");
+    }
+    let err = ok(d, &ext("rolling.toml", "20", "1"));
+    assert!(
+        err.contains("copied 12 runs") && err.contains("copied 4 runs"),
+        "{err}"
+    );
+    assert!(err.contains("12 already done, ran 8"), "{err}");
+    assert!(err.contains("4 already done, ran 2"), "{err}");
+    // The old design rows come first, unchanged, at mu_r_pw = 0.
+    let old = std::fs::read_to_string(d.join("sampling/base.csv")).unwrap();
+    let new = std::fs::read_to_string(d.join("sampling/rolling.csv")).unwrap();
+    let new: Vec<&str> = new.lines().collect();
+    assert_eq!(new.len(), 21);
+    assert!(new[0].ends_with(",mu_r_pw"), "{}", new[0]);
+    for (o, n) in old.lines().skip(1).zip(&new[1..13]) {
+        assert_eq!(format!("{o},0.0"), *n);
+    }
+    assert!(new[13..].iter().any(|l| !l.ends_with(",0.0")));
+    // The copied lines say so; a fresh run of the same rows with rolling friction at 0 gives the
+    // same responses (the wall impact has no cohesion, so bit for bit).
+    ok(
+        d,
+        &[
+            "simulate",
+            "--design",
+            "sampling/rolling.csv",
+            "--experiment",
+            "wall-impact",
+            "--model-class",
+            "hertz,mindlin,epsd2",
+            "--out",
+            "fresh.csv",
+            "--seed",
+            "1",
+            "--threads",
+            "1",
+        ],
+    );
+    let table = |p: &str| {
+        let mut r = csv::Reader::from_path(d.join(p)).unwrap();
+        let h = r.headers().unwrap().clone();
+        let mut rows: Vec<std::collections::HashMap<String, String>> = r
+            .records()
+            .map(|x| {
+                let x = x.unwrap();
+                h.iter()
+                    .map(String::from)
+                    .zip(x.iter().map(String::from))
+                    .collect()
+            })
+            .collect();
+        rows.sort_by_key(|m| m["row"].parse::<usize>().unwrap());
+        rows
+    };
+    let (copied, fresh) = (table("training_data/rolling.csv"), table("fresh.csv"));
+    assert_eq!(copied.len(), 20);
+    for (c, f) in copied.iter().zip(&fresh) {
+        assert_eq!(c["run_id"], f["run_id"]);
+        assert_eq!(c["model_class"], "hertz+mindlin+epsd2");
+        for r in ["cnr", "ctr"] {
+            assert_eq!(c[r], f[r], "row {} {r}", c["row"]);
+        }
+        let row: usize = c["row"].parse().unwrap();
+        assert_eq!(
+            c["warnings"].contains("copied from training_data/base.csv"),
+            row < 12,
+            "{c:?}"
+        );
+    }
+    // Again: nothing runs, nothing is copied twice.
+    let err = ok(d, &ext("rolling.toml", "20", "1"));
+    assert!(
+        err.contains("20 already done, ran 0") && !err.contains("copied"),
+        "{err}"
+    );
+    let rec: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(d.join("training_data/rolling.train.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(rec["extends"]["from"], "base");
+    assert_eq!(rec["extends"]["added"][0], "epsd2");
+}

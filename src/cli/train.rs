@@ -14,7 +14,10 @@ use crate::error::write_atomic;
 use crate::export::{export, Format};
 use crate::metamodel::{fit_table, FitOptions};
 use crate::space::Space;
-use crate::train::{ensure_design, fit_inputs, plan, samplers, seeds, TrainPaths, TrainRecord};
+use crate::train::extend::{self, Extension};
+use crate::train::{
+    ensure_design, fit_inputs, plan, samplers, seeds, ExtendsRecord, TrainPaths, TrainRecord,
+};
 
 #[derive(Debug, Args)]
 pub struct TrainArgs {
@@ -57,6 +60,12 @@ pub struct TrainArgs {
     /// Fit in the raw inputs even where the experiment has dimensionless groups.
     #[arg(long)]
     pub no_similarity: bool,
+    /// Add effects to the model trained under this name (same --out-dir and --seed): --space is
+    /// its space plus the added effects' parameters, each with a range holding the value that
+    /// switches it off. Its runs become the new design's first rows on that face and are copied,
+    /// not rerun; only the new rows are simulated. --name must differ.
+    #[arg(long, value_name = "NAME", conflicts_with = "shard")]
+    pub extends: Option<String>,
     /// Stop after the simulate stage.
     #[arg(long)]
     pub no_fit: bool,
@@ -150,8 +159,16 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         a.responses.clone()
     };
 
-    // Stage 1: the designs.
+    // Stage 0 of an extension: the old designs projected onto the new space's effect-off face.
     let (seed, vseed) = seeds(a.seed);
+    let extension = match &a.extends {
+        None => None,
+        Some(from) => Some(prepare_extension(
+            a, &dir, from, &name, &space, class, &settings,
+        )?),
+    };
+
+    // Stage 1: the designs.
     let (fssf, random) = samplers();
     let (before, after) = ensure_design(&paths.design, &space, fssf.as_ref(), a.n, seed)?;
     eprintln!(
@@ -215,6 +232,23 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
             continue;
         }
         let p = plan(experiment.as_ref(), design, *s, &settings, shard)?;
+        if let Some((from, ext)) = &extension {
+            let old = TrainPaths::new(&dir, from);
+            let old_table = if *what == "training" {
+                old.table
+            } else {
+                old.validation_table
+            };
+            if !table.exists() && old_table.exists() {
+                let n = extend::copy_table(&old_table, &p, table, ext)?;
+                eprintln!(
+                    "[2/3 simulate] {} ({what}): copied {n} runs of {} (without {})",
+                    table.display(),
+                    old_table.display(),
+                    ext.added.join(", ")
+                );
+            }
+        }
         let r = run_campaign(
             experiment.as_ref(),
             &p,
@@ -274,6 +308,11 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
             .flat_map(|s| &s.groups)
             .map(|g| format!("{} = {}", g.name, g.monomial.text()))
             .collect(),
+        extends: extension.as_ref().map(|(from, e)| ExtendsRecord {
+            from: from.clone(),
+            added: e.added.clone(),
+            off_face: e.off_face.clone(),
+        }),
     };
     write_atomic(
         &paths.record,
@@ -387,4 +426,107 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         paths.figures.display()
     );
     Ok(())
+}
+
+/// Checks an extension against the old train's record and, on the first call, writes the new
+/// designs' first rows: the old designs on the added effects' off face.
+fn prepare_extension(
+    a: &TrainArgs,
+    dir: &Path,
+    from: &str,
+    name: &str,
+    space: &Space,
+    class: Option<ModelClass>,
+    settings: &ExperimentSettings,
+) -> anyhow::Result<(String, Extension)> {
+    if from == name {
+        anyhow::bail!("--extends {from}: --name must differ from the model it extends");
+    }
+    let old = TrainPaths::new(dir, from);
+    let text = std::fs::read_to_string(&old.record).with_context(|| {
+        format!(
+            "--extends {from}: reading {} (written by `mbgc train --name {from}`)",
+            old.record.display()
+        )
+    })?;
+    let record: TrainRecord = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a train record", old.record.display()))?;
+    if record.experiment != a.experiment {
+        anyhow::bail!(
+            "--extends {from}: {from} was trained on {}, not {}",
+            record.experiment,
+            a.experiment
+        );
+    }
+    if record.seed != a.seed {
+        anyhow::bail!(
+            "--seed {}: {from} was trained with --seed {}; an extension keeps it, so that the \
+             copied runs are the rows the new campaign would run",
+            a.seed,
+            record.seed
+        );
+    }
+    let box_scale = a
+        .box_scale
+        .or_else(|| (a.experiment == "shear-box").then_some(10.0));
+    if record.box_scale != box_scale {
+        anyhow::bail!(
+            "--box-scale: {from} was run with {:?}, this train asks for {box_scale:?}",
+            record.box_scale
+        );
+    }
+    let old_space = Space::from_file(Path::new(&record.space))
+        .with_context(|| format!("the space of {from} (from {})", old.record.display()))?;
+    let old_class = match &record.model_class {
+        Some(c) => ModelClass::parse(c)?,
+        None => anyhow::bail!("--extends {from}: its record names no model class"),
+    };
+    let new_class = class.unwrap_or_default();
+    let experiment = experiment_by_name(&a.experiment, settings)?;
+    let ext = extend::check(
+        &old_space,
+        &old_class,
+        space,
+        &new_class,
+        experiment.pairs(),
+    )?;
+    let paths = TrainPaths::new(dir, name);
+    for (old_design, new_design, n, what) in [
+        (&old.design, &paths.design, a.n, "--n"),
+        (
+            &old.validation_design,
+            &paths.validation_design,
+            a.validation,
+            "--validation",
+        ),
+    ] {
+        if new_design.exists() || !old_design.exists() {
+            continue;
+        }
+        let d = extend::project_design(old_design, &old_space, space, &ext)?;
+        if n <= d.len() {
+            anyhow::bail!(
+                "{what} {n}: {from} has {} such runs already; an extension adds runs (pass more \
+                 than {})",
+                d.len(),
+                d.len()
+            );
+        }
+        if let Some(parent) = new_design.parent() {
+            std::fs::create_dir_all(parent).with_context(|| parent.display().to_string())?;
+        }
+        d.write(new_design)?;
+        eprintln!(
+            "[0/3 extend] {}: the {} rows of {} with {}",
+            new_design.display(),
+            d.len(),
+            old_design.display(),
+            ext.off_face
+                .iter()
+                .map(|(n, v)| format!("{n} = {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok((from.to_string(), ext))
 }

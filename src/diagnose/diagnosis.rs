@@ -82,6 +82,9 @@ pub struct ClassFit {
     pub class: String,
     /// The effect added to the set's class (None: the set's class itself).
     pub effect: Option<String>,
+    /// Which model each sample uses, and what was decided on the user's behalf.
+    pub notes: Vec<String>,
+    /// The models used, each once.
     pub models: Vec<String>,
     pub parameters: Vec<Parameter>,
     pub chi2: f64,
@@ -263,7 +266,8 @@ fn class_fit(set: &MeasurementSet, j: &Joint, opts: &Options) -> Result<ClassFit
     Ok(ClassFit {
         class: j.class.to_string(),
         effect: j.effect.map(|e| e.name.to_string()),
-        models: j.notes.clone(),
+        notes: j.notes.clone(),
+        models: j.models(),
         parameters,
         chi2,
         dof,

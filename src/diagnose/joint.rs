@@ -59,6 +59,20 @@ pub struct Joint<'s> {
     pub notes: Vec<String>,
 }
 
+impl Joint<'_> {
+    /// The models the samples use, each once, in sample order.
+    pub fn models(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for r in &self.rows {
+            let label = &self.surrogates[r.model].label;
+            if !out.contains(label) {
+                out.push(label.clone());
+            }
+        }
+        out
+    }
+}
+
 /// Weight of a derived group outside its fitted range (ln units squared).
 const PENALTY: f64 = 1e6;
 

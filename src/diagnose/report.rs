@@ -35,7 +35,7 @@ pub fn markdown(d: &Diagnosis) -> String {
         d.measurements,
         d.class
     );
-    for m in &b.models {
+    for m in &b.notes {
         line!(out, "  {m}");
     }
     line!(
@@ -146,7 +146,7 @@ pub fn markdown(d: &Diagnosis) -> String {
         out,
         "\nError ladder (RMS of z per sample; RMSE per response):"
     );
-    let mut head = String::from("| class | chi^2/dof |");
+    let mut head = String::from("| class | model | chi^2/dof |");
     for s in &b.samples {
         head += &format!(" {} |", s.sample);
     }
@@ -156,10 +156,15 @@ pub fn markdown(d: &Diagnosis) -> String {
     line!(
         out,
         "{head}\n|{}",
-        "---|".repeat(2 + b.samples.len() + b.rmse.len())
+        "---|".repeat(3 + b.samples.len() + b.rmse.len())
     );
     for c in std::iter::once(b).chain(&d.extended) {
-        let mut row = format!("| {} | {} |", c.class, num(c.chi2_dof));
+        let mut row = format!(
+            "| {} | {} | {} |",
+            c.class,
+            c.models.join(", "),
+            num(c.chi2_dof)
+        );
         for s in &c.samples {
             row += &format!(" {:.2} |", s.rms_z);
         }

@@ -1,7 +1,8 @@
-//! `mbgc bench diagnose`: `docs/diagnose.md`, the diagnosis of three synthetic measurement sets
-//! made with mbgc's own DEM (a hidden cohesion, a hidden rolling resistance, and a control with
-//! no hidden effect), each from the measurement file to the error ladder, with figures and a
-//! check of the recovered strength against the truth the data were made with.
+//! `mbgc bench diagnose`: `docs/diagnose.md`, the diagnosis of four synthetic measurement sets
+//! made with mbgc's own DEM (a hidden cohesion, a hidden rolling resistance, a control with no
+//! hidden effect, and the hidden cohesion again with the rolling friction unknown), each from the
+//! measurement file to the error ladder across model versions, with figures and a check of the
+//! recovered strength against the truth the data were made with.
 
 use std::path::PathBuf;
 
@@ -13,12 +14,6 @@ use crate::error::write_atomic;
 
 #[derive(Debug, ClapArgs)]
 pub struct Args {
-    /// Models every case is diagnosed with.
-    #[arg(
-        long,
-        default_values = ["models/shear_box.json", "models/shear_box_cohesion_local.json"]
-    )]
-    pub model: Vec<PathBuf>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     #[arg(long, default_value_t = 4000)]
@@ -35,32 +30,49 @@ struct Case {
     title: &'static str,
     /// The hidden effect, its parameter and the value the DEM runs used.
     truth: Option<(&'static str, &'static str, f64)>,
+    /// The base model first, then the models of the classes with a candidate effect.
+    models: &'static [&'static str],
 }
 
-const CASES: [Case; 3] = [
+/// The local models of the cohesion walk-through: version 1 (no cohesion) and version 2, made
+/// from it by `mbgc train --extends diagnose_local` (README, "Adding an effect").
+const LOCAL: &[&str] = &[
+    "models/diagnose_local.json",
+    "models/diagnose_local_sjkr.json",
+];
+const GLOBAL: &[&str] = &[
+    "models/shear_box.json",
+    "models/shear_box_cohesion_local.json",
+];
+
+const CASES: [Case; 4] = [
     Case {
         file: "examples/measurements/hidden_cohesion.toml",
         title: "Hidden cohesion in four sieve fractions",
         truth: Some(("sjkr", "ced_pp", 1.5e4)),
+        models: LOCAL,
     },
     Case {
         file: "examples/measurements/hidden_rolling.toml",
         title: "Hidden rolling resistance",
         truth: Some(("epsd2", "mu_r_pp", 0.3)),
+        models: GLOBAL,
     },
     Case {
         file: "examples/measurements/control.toml",
         title: "Control: no hidden effect",
         truth: None,
+        models: LOCAL,
+    },
+    Case {
+        file: "examples/measurements/hidden_cohesion_rolling_unknown.toml",
+        title: "Hidden cohesion, rolling friction unknown",
+        truth: Some(("sjkr", "ced_pp", 1.5e4)),
+        models: GLOBAL,
     },
 ];
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let models = a
-        .model
-        .iter()
-        .map(|p| Surrogate::from_metamodel(p))
-        .collect::<crate::error::Result<Vec<_>>>()?;
     let opts = Options {
         samples: a.samples,
         seed: a.seed,
@@ -73,6 +85,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let base_dir = a.report.parent().unwrap_or(std::path::Path::new("."));
     for (k, c) in CASES.iter().enumerate() {
         let set = MeasurementSet::from_file(std::path::Path::new(c.file))?;
+        let models = c
+            .models
+            .iter()
+            .map(|p| Surrogate::from_metamodel(std::path::Path::new(p)))
+            .collect::<crate::error::Result<Vec<_>>>()?;
         let d = diagnose(&set, &models, &opts)?;
         eprintln!("{}: {}", c.title, d.verdict);
         let dir = a.figures.join(format!("case{}", k + 1));
@@ -137,10 +154,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             d.verdict.split(':').next().unwrap_or("")
         );
         body += &format!(
-            "\n## {}. {}\n\nMeasurement file: `{}`.\n\n",
+            "\n## {}. {}\n\nMeasurement file: `{}`. Models: {}.\n\n",
             k + 1,
             c.title,
-            c.file
+            c.file,
+            c.models
+                .iter()
+                .map(|m| format!("`{m}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
         body += &markdown(&d);
         body += "\nFigures:\n\n";
@@ -154,18 +176,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     let text = format!(
-        "# Diagnosing a missing effect: three synthetic cases\n\n\
+        "# Diagnosing a missing effect: four synthetic cases\n\n\
          Regenerate with\n\n```\ncargo run --release -- bench diagnose --report {}\n```\n\n\
-         (seconds: no DEM; {} TMCMC samples per stage, seed {}, models {}).\n\n{}\n\n\
+         (seconds: no DEM; {} TMCMC samples per stage, seed {}).\n\n{}\n\n\
          ## Summary\n\n{summary}\n{body}",
         a.report.display(),
         a.samples,
         a.seed,
-        a.model
-            .iter()
-            .map(|p| format!("`{}`", p.display()))
-            .collect::<Vec<_>>()
-            .join(", "),
         HOW
     );
     write_atomic(&a.report, text.as_bytes())?;
@@ -179,9 +196,19 @@ tables in `docs/data/diagnose/`: a material of spheres with E = 5 MPa, nu 0.3, e
 mu_pw 0.3 and rho_p 2600 kg/m3, and the hidden effect switched on in the runs but not in the class \
 the file compares with. The measured values carry one run's noise; their sd is the replicate \
 noise of one run (1.06 deg and 3.8 kg/m3, docs/metamodel.md). The model error is each model's \
-validation RMSE (it holds one run's noise as well, so the chi^2 is conservative). The cohesion \
-candidate is evaluated on a local model of the class with cohesion \
-(`models/shear_box_cohesion_local.json`, space `examples/space_cohesion_local.toml`: mu_pp, \
-mu_r_pp, ced_pp and d50 varied, the material's known values fixed, which the model file \
-records); rolling resistance on the shipped global model. A model of a class with an extra \
-effect serves the class without it where that effect is off (rolling friction or cohesion 0).";
+validation RMSE (it holds one run's noise as well, so the chi^2 is conservative). A model of a \
+class with an extra effect serves the class without it where that effect is off (rolling \
+friction or cohesion 0).\n\n\
+The models. Cases 1 and 3 (rolling friction known, 0.3) use two versions of a local model around \
+the material, its known values fixed (recorded in the model files): version 1, \
+`models/diagnose_local.json`, the class without cohesion (`mbgc train --space \
+examples/space_diagnose_local.toml --experiment shear-box --name diagnose_local --n 16 \
+--validation 6 --max-length 16 --parsimony 0.01`: mu_pp and d50 varied, 22 runs), and version 2, \
+`models/diagnose_local_sjkr.json`, made from it after case 1's diagnosis by adding the named \
+effect (`mbgc train --space examples/space_diagnose_local_sjkr.toml --name diagnose_local_sjkr \
+--extends diagnose_local --n 40 --validation 10 ...`): the space gains ced_pp in [0, 3e4] J/m3, \
+version 1's 22 runs are copied onto its ced_pp = 0 face, and only the 28 new rows of the \
+sequentially extended design were simulated. Cases 2 and 4 (rolling friction searched) use the \
+shipped global model for the class with rolling friction and a local model of the class with \
+cohesion and rolling friction (`models/shear_box_cohesion_local.json`, space \
+`examples/space_cohesion_local.toml`: mu_pp, mu_r_pp, ced_pp and d50 varied).";

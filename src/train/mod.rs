@@ -9,6 +9,8 @@
 //! tables), `training_data/<name>.train.json` (what produced them), `models/<name>.json` with
 //! `.rs` and `.tex` exports and `models/<name>_figures/`.
 
+pub mod extend;
+
 use std::path::{Path, PathBuf};
 
 use crate::campaign::{ExperimentSettings, Plan, Shard};
@@ -140,6 +142,19 @@ pub struct TrainRecord {
     pub responses: Vec<String>,
     pub inputs: Vec<String>,
     pub groups: Vec<String>,
+    /// The trained model this one extends with effects (`--extends`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extends: Option<ExtendsRecord>,
+}
+
+/// What an extension added to which model, and where the copied runs lie.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct ExtendsRecord {
+    /// The name of the extended train.
+    pub from: String,
+    pub added: Vec<String>,
+    /// Each added parameter at the value where the old runs lie.
+    pub off_face: Vec<(String, f64)>,
 }
 
 #[cfg(test)]
