@@ -358,7 +358,14 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
     });
     // Without degrees of freedom (p NaN) the chi^2 test cannot reject.
     let consistent = not_rejected(base.p_value, opts.alpha) && base.structured.is_empty();
-    let verdict = verdict(&base, consistent, ranked.first().map(|r| &r.0), opts.alpha);
+    let untested: Vec<&str> = unavailable.iter().map(|u| u.effect.as_str()).collect();
+    let verdict = verdict(
+        &base,
+        consistent,
+        ranked.first().map(|r| &r.0),
+        &untested,
+        opts.alpha,
+    );
     Ok(Diagnosis {
         set: set.name.clone(),
         class: set.class.to_string(),
@@ -383,7 +390,13 @@ fn not_rejected(p: f64, alpha: f64) -> bool {
     p.is_nan() || p >= alpha
 }
 
-fn verdict(base: &ClassFit, consistent: bool, best: Option<&Ranked>, alpha: f64) -> String {
+fn verdict(
+    base: &ClassFit,
+    consistent: bool,
+    best: Option<&Ranked>,
+    untested: &[&str],
+    alpha: f64,
+) -> String {
     let strong = best.filter(|b| b.log_bayes_factor > STRONG);
     match (consistent, strong) {
         (true, None) => format!(
@@ -405,13 +418,46 @@ fn verdict(base: &ClassFit, consistent: bool, best: Option<&Ranked>, alpha: f64)
             b.log_bayes_factor,
             if b.structure_left { ", structure left in the residuals" } else { "" }
         ),
+        // The misfit is real and a candidate removes it, but the data cannot yet tell the
+        // extended class from the base decisively: say so rather than "none explains it".
         (false, None) => {
-            format!(
-            "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}) and none of the candidates explains it",
-            base.chi2_dof,
-            base.p_value,
-            if base.structured.is_empty() { "" } else { ", structured residuals" }
-        )
+            match best.filter(|b| {
+                b.log_bayes_factor > 0.0
+                    && not_rejected(b.p_value_after, alpha)
+                    && !b.structure_left
+            }) {
+                Some(b) => format!(
+                "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}); {} removes the misfit (chi^2/dof \
+                 -> {:.2}, no structure left) but the evidence for it is weak (ln Bayes factor \
+                 {:.1}, below ln 10): more samples or repeats would decide",
+                base.chi2_dof,
+                base.p_value,
+                if base.structured.is_empty() { "" } else { ", structured residuals" },
+                b.effect,
+                b.chi2_dof_after,
+                b.log_bayes_factor
+            ),
+                None => format!(
+                    "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}) and none of the evaluated \
+                 candidates explains it{}",
+                    base.chi2_dof,
+                    base.p_value,
+                    if base.structured.is_empty() {
+                        ""
+                    } else {
+                        ", structured residuals"
+                    },
+                    if untested.is_empty() {
+                        String::new()
+                    } else {
+                        format!(
+                            "; not evaluated for want of a model: {} (add one with `mbgc train \
+                         --extends`)",
+                            untested.join(", ")
+                        )
+                    }
+                ),
+            }
         }
     }
 }
