@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::campaign::{
     experiment_by_name, run_campaign, CampaignOptions, ExperimentSettings, Shard,
 };
-use crate::dem::contact::ModelClass;
+use crate::dem::contact::{ModelClass, Pair};
 use crate::error::write_atomic;
 use crate::export::{export, Format};
 use crate::metamodel::{fit_table, FitOptions};
@@ -164,7 +164,13 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
     let extension = match &a.extends {
         None => None,
         Some(from) => Some(prepare_extension(
-            a, &dir, from, &name, &space, class, &settings,
+            a,
+            &dir,
+            from,
+            &name,
+            &space,
+            class,
+            experiment.pairs(),
         )?),
     };
 
@@ -437,7 +443,7 @@ fn prepare_extension(
     name: &str,
     space: &Space,
     class: Option<ModelClass>,
-    settings: &ExperimentSettings,
+    pairs: &[Pair],
 ) -> anyhow::Result<(String, Extension)> {
     if from == name {
         anyhow::bail!("--extends {from}: --name must differ from the model it extends");
@@ -482,14 +488,7 @@ fn prepare_extension(
         None => anyhow::bail!("--extends {from}: its record names no model class"),
     };
     let new_class = class.unwrap_or_default();
-    let experiment = experiment_by_name(&a.experiment, settings)?;
-    let ext = extend::check(
-        &old_space,
-        &old_class,
-        space,
-        &new_class,
-        experiment.pairs(),
-    )?;
+    let ext = extend::check(&old_space, &old_class, space, &new_class, pairs)?;
     let paths = TrainPaths::new(dir, name);
     for (old_design, new_design, n, what) in [
         (&old.design, &paths.design, a.n, "--n"),
