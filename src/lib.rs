@@ -22,6 +22,7 @@ pub mod outputs;
 pub mod plot;
 pub mod psd;
 pub mod sampling;
+pub mod sensitivity;
 pub mod similarity;
 pub mod space;
 pub mod studies;

@@ -36,6 +36,13 @@
 //! - diagnostics: `discharged_mass` (kg), `discharged_fraction`, `flow_R2` (of the flow-rate fit),
 //!   `bulk_density` (kg/m^3, settled fill), `beverloo_ratio` (flow_rate over
 //!   [`beverloo_flow_rate`] with the measured bulk density and d50).
+//! - the flow rate against time: `flow_rate_t1` .. `flow_rate_t8` (kg/s), the mean rate in
+//!   consecutive bins of `flow_bin_width` seconds from the opening of the shutter. The width is
+//!   [`FLOW_BIN_WIDTH`] of the [`nominal_discharge_time`], which does not depend on friction or
+//!   restitution, so every run of a campaign over those is binned at the same times; eight bins
+//!   reach 1.2 nominal times, into the decline that follows the steady flow.
+//! - the four sector angles of each surface, `repose_angle_top_1` .. `repose_angle_bottom_4`
+//!   (seed 000 keeps its four orthoslice angles as replicates for the lack-of-fit test).
 //!
 //! The `scale` setting (default 1) multiplies every length of the apparatus (and the fill mass
 //! by scale^3, so the fill height stays the same fraction of the container); the particles keep
@@ -109,6 +116,12 @@ pub const GRAVITY: f64 = 9.81;
 /// d50 = 3 mm: a 20 mm fill gives 0.0247 kg/s in 10-50 % against 0.0248 for a 46 mm fill, while
 /// its 20-80 % slope is 25 % lower.
 pub const FLOW_WINDOW: (f64, f64) = (0.1, 0.5);
+/// Flow rate against time: the mean rate in [`FLOW_BINS`] consecutive bins, each
+/// [`FLOW_BIN_WIDTH`] nominal discharge times wide ([`nominal_discharge_time`]).
+pub const FLOW_BINS: usize = 8;
+pub const FLOW_BIN_WIDTH: f64 = 0.15;
+/// Packing fraction of the nominal discharge time: a typical settled random packing.
+pub const NOMINAL_PACKING: f64 = 0.6;
 /// Time step as a fraction of the Rayleigh time of the smallest particle.
 pub const DT_FRACTION: f64 = 0.2;
 /// Most particles a run may hold.
@@ -122,6 +135,80 @@ pub fn beverloo_flow_rate(bulk_density: f64, orifice_diameter: f64, particle_dia
     let free = (orifice_diameter - BEVERLOO_K * particle_diameter).max(0.0);
     BEVERLOO_C * bulk_density * GRAVITY.sqrt() * free.powf(2.5)
 }
+
+/// The time Beverloo's rate takes to discharge `fill_mass` at a packing of [`NOMINAL_PACKING`],
+/// s. It depends on the fill, the apparatus and the particles' size and density only, not on
+/// friction or restitution, so the flow-rate bins of a campaign over those sit at the same
+/// times in every run (seed 000 compares the flow rate of its 36 runs at t = 1, 2, 3, 4 s).
+pub fn nominal_discharge_time(
+    fill_mass: f64,
+    rho_p: f64,
+    orifice_diameter: f64,
+    particle_diameter: f64,
+) -> f64 {
+    fill_mass / beverloo_flow_rate(NOMINAL_PACKING * rho_p, orifice_diameter, particle_diameter)
+}
+
+/// Mean flow rate (kg/s) in the bins [(k - 1) w, k w], k = 1..=bins, of the discharge series
+/// (mass interpolated linearly between samples). A bin that starts after a finished discharge
+/// (`finished`) has rate 0; one that runs past the end of an unfinished series is NaN.
+pub fn binned_flow_rates(
+    series: &DischargeSeries,
+    width: f64,
+    bins: usize,
+    finished: bool,
+) -> Vec<f64> {
+    let end = series.time_s.last().copied().unwrap_or(0.0);
+    let mass_at = |t: f64| -> f64 {
+        let ts = &series.time_s;
+        let ms = &series.mass_kg;
+        if ts.is_empty() {
+            return 0.0;
+        }
+        if t >= end {
+            return ms[ms.len() - 1];
+        }
+        let k = ts.partition_point(|&x| x <= t).max(1);
+        let (t0, t1) = (ts[k - 1], ts[k]);
+        let f = if t1 > t0 { (t - t0) / (t1 - t0) } else { 0.0 };
+        ms[k - 1] + f * (ms[k] - ms[k - 1])
+    };
+    (1..=bins)
+        .map(|k| {
+            let (a, b) = ((k - 1) as f64 * width, k as f64 * width);
+            if b > end && !finished {
+                f64::NAN
+            } else {
+                (mass_at(b) - mass_at(a)) / width
+            }
+        })
+        .collect()
+}
+
+/// Response names of the flow-rate bins ([`FLOW_BINS`] of them).
+pub const FLOW_BIN_NAMES: [&str; FLOW_BINS] = [
+    "flow_rate_t1",
+    "flow_rate_t2",
+    "flow_rate_t3",
+    "flow_rate_t4",
+    "flow_rate_t5",
+    "flow_rate_t6",
+    "flow_rate_t7",
+    "flow_rate_t8",
+];
+
+/// Response names of the per-sector angles (sectors around +x, +y, -x, -y): seed 000's four
+/// orthoslice angles per surface, kept so that a fit can use them as replicates.
+pub const SECTOR_ANGLE_NAMES: [&str; 8] = [
+    "repose_angle_top_1",
+    "repose_angle_top_2",
+    "repose_angle_top_3",
+    "repose_angle_top_4",
+    "repose_angle_bottom_1",
+    "repose_angle_bottom_2",
+    "repose_angle_bottom_3",
+    "repose_angle_bottom_4",
+];
 
 /// The apparatus at a given scale, m.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -828,7 +915,7 @@ impl Hopper {
                 ));
             }
         }
-        let responses = vec![
+        let mut responses = vec![
             ("flow_rate".to_string(), flow_rate),
             ("repose_angle_top".into(), top),
             ("repose_angle_bottom".into(), bottom),
@@ -838,6 +925,18 @@ impl Hopper {
             ("bulk_density".into(), bulk_density),
             ("beverloo_ratio".into(), flow_rate / w_bev),
         ];
+        let t_unit = FLOW_BIN_WIDTH
+            * nominal_discharge_time(s.fill_mass, s.rho, 2.0 * geo.orifice_radius, s.d50);
+        let bins = binned_flow_rates(&series, t_unit, FLOW_BINS, settled);
+        responses.push(("flow_bin_width".into(), t_unit));
+        responses.extend(FLOW_BIN_NAMES.iter().map(|n| n.to_string()).zip(bins));
+        let sectors = top_angles.iter().chain(&bottom_angles).copied();
+        responses.extend(
+            SECTOR_ANGLE_NAMES
+                .iter()
+                .map(|n| n.to_string())
+                .zip(sectors),
+        );
         let outcome = Outcome {
             responses,
             diagnostics: Diagnostics {
@@ -890,7 +989,7 @@ impl Experiment for Hopper {
     }
 
     fn responses(&self) -> Vec<&'static str> {
-        vec![
+        let mut r = vec![
             "flow_rate",
             "repose_angle_top",
             "repose_angle_bottom",
@@ -899,7 +998,11 @@ impl Experiment for Hopper {
             "flow_R2",
             "bulk_density",
             "beverloo_ratio",
-        ]
+            "flow_bin_width",
+        ];
+        r.extend(FLOW_BIN_NAMES);
+        r.extend(SECTOR_ANGLE_NAMES);
+        r
     }
 
     fn check(&self, p: &ParamSet) -> Result<()> {
@@ -1054,6 +1157,30 @@ mod tests {
         for v in a {
             assert!((v - 40.0).abs() < 1.5, "{a:?}");
         }
+    }
+
+    #[test]
+    fn binned_flow_rates_follow_a_piecewise_linear_discharge() {
+        // 0.02 kg/s for 1 s, then 0.01 kg/s until 1.5 s, then nothing.
+        let time_s: Vec<f64> = (0..=150).map(|k| k as f64 * 0.01).collect();
+        let mass_kg: Vec<f64> = time_s
+            .iter()
+            .map(|&t| {
+                if t <= 1.0 {
+                    0.02 * t
+                } else {
+                    0.02 + 0.01 * (t - 1.0)
+                }
+            })
+            .collect();
+        let s = DischargeSeries { time_s, mass_kg };
+        let r = binned_flow_rates(&s, 0.5, 4, true);
+        let want = [0.02, 0.02, 0.01, 0.0];
+        for (a, b) in r.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "{r:?}");
+        }
+        let cut = binned_flow_rates(&s, 0.5, 4, false);
+        assert!(cut[3].is_nan() && (cut[2] - 0.01).abs() < 1e-12, "{cut:?}");
     }
 
     #[test]
