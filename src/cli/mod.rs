@@ -14,6 +14,7 @@ pub mod output;
 pub mod predict;
 pub mod psd;
 pub mod sample;
+pub mod sensitivity;
 pub mod simulate;
 pub mod train;
 pub mod validate;
@@ -57,6 +58,9 @@ pub enum Command {
     Validate(validate::ValidateArgs),
     /// Compare a measurement set with the model: where it fails, which effect is missing.
     Diagnose(diagnose::DiagnoseArgs),
+    /// Which inputs matter for which response: power laws, PCA and norms of contact-law
+    /// sensitivities (seed 000's three levels), Sobol indices and local sensitivities of a model.
+    Sensitivity(sensitivity::SensitivityArgs),
     /// Benchmarks and reproduction reports.
     Bench(bench::BenchArgs),
 }
@@ -76,6 +80,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Validate(a) => validate::run(&a),
         Command::Diagnose(a) => diagnose::run(&a),
+        Command::Sensitivity(a) => sensitivity::run(&a),
         Command::Bench(a) => bench::run(&a),
     }
 }

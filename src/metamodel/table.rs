@@ -34,6 +34,21 @@ pub fn read_columns_skipping_nan(
     names: &[String],
     first_response: usize,
 ) -> Result<Columns> {
+    read(path, names, first_response, false)
+}
+
+/// As [`read_columns_skipping_nan`], but a done row keeps a `NaN` in the columns
+/// `names[first_response..]` as NaN (for replicate columns, where one missing measurement
+/// should not drop its row's others).
+pub fn read_columns_keeping_nan(
+    path: &Path,
+    names: &[String],
+    first_response: usize,
+) -> Result<Columns> {
+    read(path, names, first_response, true)
+}
+
+fn read(path: &Path, names: &[String], first_response: usize, keep_nan: bool) -> Result<Columns> {
     let file = path.display().to_string();
     let (mut rdr, header) = csv_open(path)?;
     let mut idx = Vec::with_capacity(names.len());
@@ -78,6 +93,7 @@ pub fn read_columns_skipping_nan(
             }
         }
         if status.is_some()
+            && !keep_nan
             && idx[first_response.min(idx.len())..]
                 .iter()
                 .any(|&i| rec.get(i) == Some("NaN"))
@@ -87,6 +103,10 @@ pub fn read_columns_skipping_nan(
         }
         for (k, &i) in idx.iter().enumerate() {
             let field = rec.get(i).unwrap_or("");
+            if keep_nan && status.is_some() && k >= first_response && field == "NaN" {
+                values[k].push(f64::NAN);
+                continue;
+            }
             values[k].push(csv_number(&file, line, &names[k], field)?);
         }
         records.push(rec.iter().map(str::to_string).collect());

@@ -10,6 +10,7 @@ pub mod corner;
 pub mod diagnosis;
 pub mod parity;
 pub mod psd;
+pub mod sensitivity;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {

@@ -37,7 +37,51 @@ pub struct Properties {
     pub density: f64,
 }
 
+/// Names of the properties a table or the command line gives: the four [`PARAMETERS`] and
+/// `nu_p`, `rho_p`, `d50` (mm).
+pub const PROPERTY_NAMES: [&str; 7] = ["E_p", "nu_p", "e_pp", "mu_pp", "mu_r_pp", "rho_p", "d50"];
+
 impl Properties {
+    /// From named values (`d50` in mm); the error names the missing one and `source`.
+    pub fn from_named(
+        get: impl Fn(&str) -> Option<f64>,
+        source: &str,
+    ) -> crate::error::Result<Properties> {
+        let v = |n: &str| {
+            get(n).ok_or_else(|| {
+                crate::error::Error::invalid(format!(
+                    "{source}: no value of {n}; the contact-law sensitivities need {} (a column \
+                     or --set {n}=...)",
+                    PROPERTY_NAMES.join(", ")
+                ))
+            })
+        };
+        let p = Properties {
+            youngs_modulus: v("E_p")?,
+            poisson: v("nu_p")?,
+            restitution: v("e_pp")?,
+            mu_s: v("mu_pp")?,
+            mu_r: v("mu_r_pp")?,
+            radius: 0.5e-3 * v("d50")?,
+            density: v("rho_p")?,
+        };
+        let ok = p.youngs_modulus > 0.0
+            && (-1.0..0.5).contains(&p.poisson)
+            && p.restitution > 0.0
+            && p.restitution <= 1.0
+            && p.mu_s >= 0.0
+            && p.mu_r >= 0.0
+            && p.radius > 0.0
+            && p.density > 0.0;
+        if !ok {
+            return Err(crate::error::Error::invalid(format!(
+                "{source}: properties out of range ({p:?}); expected E_p > 0, -1 < nu_p < 0.5, \
+                 0 < e_pp <= 1, mu_pp, mu_r_pp >= 0, d50 > 0, rho_p > 0"
+            )));
+        }
+        Ok(p)
+    }
+
     /// The four parameters in [`PARAMETERS`] order.
     pub fn values(&self) -> [f64; 4] {
         [self.youngs_modulus, self.restitution, self.mu_s, self.mu_r]

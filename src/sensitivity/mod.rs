@@ -12,6 +12,7 @@
 //!   [`local`] sensitivities at a calibrated point.
 
 pub mod contact_derivatives;
+pub mod design_pca;
 pub mod flow_curve;
 pub mod least_squares;
 pub mod local;

@@ -26,6 +26,34 @@ impl Equation {
     }
 }
 
+/// How a derivative enters the matrix.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scaling {
+    /// p d f / d p: the change of f per relative change of p (dimensionless in p), comparable
+    /// across parameters of different units.
+    Relative,
+    /// d f / d p as it stands: its size depends on p's unit (a modulus in Pa gives tiny
+    /// derivatives), so columns compare only for parameters of one unit.
+    Absolute,
+}
+
+impl Scaling {
+    pub fn name(self) -> &'static str {
+        match self {
+            Scaling::Relative => "relative",
+            Scaling::Absolute => "absolute",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Scaling> {
+        match s {
+            "relative" => Some(Scaling::Relative),
+            "absolute" => Some(Scaling::Absolute),
+            _ => None,
+        }
+    }
+}
+
 /// Levels of the contact state; every combination is one row.
 #[derive(Debug, Clone)]
 pub struct Grid {
@@ -82,22 +110,30 @@ impl Grid {
     }
 }
 
-/// Scaled sensitivities p_k d f / d p_k at one state, in [`PARAMETERS`] order.
-pub fn scaled_row(p: &Properties, s: &State, eq: Equation) -> [f64; 4] {
+/// Sensitivities at one state, in [`PARAMETERS`] order.
+pub fn row(p: &Properties, s: &State, eq: Equation, scaling: Scaling) -> [f64; 4] {
     let r = evaluate(p, s);
     let d = match eq {
         Equation::Translational => r.d_force,
         Equation::Rotational => r.d_torque,
     };
     let v = p.values();
-    std::array::from_fn(|k| v[k] * d[k])
+    match scaling {
+        Scaling::Relative => std::array::from_fn(|k| v[k] * d[k]),
+        Scaling::Absolute => d,
+    }
+}
+
+/// Scaled sensitivities p_k d f / d p_k at one state, in [`PARAMETERS`] order.
+pub fn scaled_row(p: &Properties, s: &State, eq: Equation) -> [f64; 4] {
+    row(p, s, eq, Scaling::Relative)
 }
 
 /// The matrix over the grid's states at one parameter point: `[state][parameter]`.
-pub fn over_grid(p: &Properties, grid: &Grid, eq: Equation) -> Vec<[f64; 4]> {
+pub fn over_grid(p: &Properties, grid: &Grid, eq: Equation, scaling: Scaling) -> Vec<[f64; 4]> {
     grid.states(2.0 * p.radius)
         .iter()
-        .map(|s| scaled_row(p, s, eq))
+        .map(|s| row(p, s, eq, scaling))
         .collect()
 }
 
