@@ -4,7 +4,7 @@ use clap::{Args, Subcommand};
 
 use crate::studies::{
     dem_throughput, diagnose_report, gp_vs_gplearn, metamodel_report, restitution,
-    sampling_quality, shear_box_check, shear_box_vs_liggghts,
+    sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
 };
 
 #[derive(Debug, Args)]
@@ -40,6 +40,9 @@ pub enum BenchCommand {
     /// diagnosed from its measurement file to the error ladder, the strength checked against
     /// the truth.
     Diagnose(diagnose_report::Args),
+    /// docs/sensitivity.md: seed 000's power laws, PCA and sensitivity matrix on the hopper's
+    /// 36-run design (from its campaign table), each finding checked; Sobol indices of a model.
+    Sensitivity(sensitivity_report::Args),
 }
 
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
@@ -52,5 +55,6 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Metamodel(m) => metamodel_report::run(m),
         BenchCommand::Restitution(r) => restitution::run(r),
         BenchCommand::Diagnose(d) => diagnose_report::run(d),
+        BenchCommand::Sensitivity(s) => sensitivity_report::run(s),
     }
 }

@@ -17,6 +17,7 @@ use crate::plot::sensitivity::{bars, heat_map, Bar, BarSeries};
 use crate::say;
 use crate::sensitivity::contact_derivatives::{Properties, State, PARAMETERS, PROPERTY_NAMES};
 use crate::sensitivity::design_pca::{design_pca, varied};
+use crate::sensitivity::figures::{exponent_bars, loading_bars};
 use crate::sensitivity::norms::summarise;
 use crate::sensitivity::pca::Pca;
 use crate::sensitivity::sensitivity_matrix::{over_grid, Equation, Grid, Scaling};
@@ -221,7 +222,7 @@ struct PowerLawReport {
 
 fn power_law_cmd(a: &PowerLawArgs) -> anyhow::Result<()> {
     let out = Output::new(a.json);
-    for n in a.target.iter().filter(|t| a.inputs.contains(t)) {
+    if let Some(n) = a.target.iter().find(|t| a.inputs.contains(t)) {
         anyhow::bail!("--target {n}: also an input");
     }
     let mut names = a.inputs.clone();
@@ -325,33 +326,6 @@ fn power_law_cmd(a: &PowerLawArgs) -> anyhow::Result<()> {
             Err(why) => serde_json::json!({ "tested": false, "reason": why }),
         },
     })
-}
-
-/// Bars of a power law's exponents with their intervals.
-pub fn exponent_bars(
-    path: &Path,
-    name: &str,
-    fit: &power_law::PowerLawFit,
-) -> crate::error::Result<()> {
-    let cats: Vec<String> = fit.exponents.iter().map(|(n, _)| n.clone()).collect();
-    let s = BarSeries {
-        label: name.to_string(),
-        bars: fit
-            .exponents
-            .iter()
-            .map(|(_, e)| Bar {
-                value: e.value,
-                ci95: Some(e.ci95),
-            })
-            .collect(),
-    };
-    bars(
-        path,
-        &format!("{name}: power-law exponents, 95 % intervals"),
-        "exponent",
-        &cats,
-        &[s],
-    )
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -568,29 +542,6 @@ fn pca_cmd(a: &PcaArgs) -> anyhow::Result<()> {
         translational: it.next().expect("two equations"),
         rotational: it.next().expect("two equations"),
     })
-}
-
-/// Loadings of the components that explain at least 5 % (at most 3), one series each.
-pub fn loading_bars(path: &Path, title: &str, p: &Pca) -> crate::error::Result<()> {
-    let series: Vec<BarSeries> = p
-        .components
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.explained >= 0.05)
-        .take(3)
-        .map(|(i, c)| BarSeries {
-            label: format!("PC{} ({:.0} %)", i + 1, 100.0 * c.explained),
-            bars: c
-                .loadings
-                .iter()
-                .map(|(_, v)| Bar {
-                    value: *v,
-                    ci95: None,
-                })
-                .collect(),
-        })
-        .collect();
-    bars(path, title, "loading", &p.columns, &series)
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -13,6 +13,7 @@
 
 pub mod contact_derivatives;
 pub mod design_pca;
+pub mod figures;
 pub mod flow_curve;
 pub mod least_squares;
 pub mod local;

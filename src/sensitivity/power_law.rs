@@ -266,7 +266,8 @@ mod tests {
                         .map(|_| {
                             // Box-Muller normal.
                             let (u, v): (f64, f64) = (rng.random(), rng.random());
-                            let z = (-2.0 * (1.0 - u).ln()).sqrt() * (6.283185307 * v).cos();
+                            let z =
+                                (-2.0 * (1.0 - u).ln()).sqrt() * (std::f64::consts::TAU * v).cos();
                             base * (0.05 * z).exp()
                         })
                         .collect();

@@ -37,8 +37,11 @@ pub struct Indices {
     pub dropped: usize,
 }
 
+/// Rows of points, `[row][input]`.
+pub type Rows = Vec<Vec<f64>>;
+
 /// The base matrices A and B (`[row][input]`, in the unit cube).
-pub fn base_matrices(k: usize, n: usize, seed: u64) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>)> {
+pub fn base_matrices(k: usize, n: usize, seed: u64) -> Result<(Rows, Rows)> {
     if k == 0 || 2 * k > MAX_DIM {
         return Err(Error::invalid(format!(
             "sobol indices: {k} inputs; expected 1 to {}",

@@ -11,6 +11,8 @@
 //! - [`metamodel_report`]: the shipped metamodel, its cost and validation, the gravel calibrated
 //!   on it (docs/metamodel.md).
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
+//! - [`sensitivity_report`]: seed 000's three-level sensitivity analysis on the hopper
+//!   (docs/sensitivity.md).
 //! - [`reference`]: the reference codes (`--vs`).
 
 pub mod dem_scene;
@@ -21,6 +23,7 @@ pub mod metamodel_report;
 pub mod reference;
 pub mod restitution;
 pub mod sampling_quality;
+pub mod sensitivity_report;
 pub mod shear_box_check;
 pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;

@@ -1,0 +1,57 @@
+//! Figures of the sensitivity results: exponent bars with intervals and PCA loadings.
+
+use std::path::Path;
+
+use super::pca::Pca;
+use super::power_law;
+use crate::plot::sensitivity::{bars, Bar, BarSeries};
+
+/// Bars of a power law's exponents with their intervals.
+pub fn exponent_bars(
+    path: &Path,
+    name: &str,
+    fit: &power_law::PowerLawFit,
+) -> crate::error::Result<()> {
+    let cats: Vec<String> = fit.exponents.iter().map(|(n, _)| n.clone()).collect();
+    let s = BarSeries {
+        label: name.to_string(),
+        bars: fit
+            .exponents
+            .iter()
+            .map(|(_, e)| Bar {
+                value: e.value,
+                ci95: Some(e.ci95),
+            })
+            .collect(),
+    };
+    bars(
+        path,
+        &format!("{name}: power-law exponents, 95 % intervals"),
+        "exponent",
+        &cats,
+        &[s],
+    )
+}
+
+/// Loadings of the components that explain at least 5 % (at most 3), one series each.
+pub fn loading_bars(path: &Path, title: &str, p: &Pca) -> crate::error::Result<()> {
+    let series: Vec<BarSeries> = p
+        .components
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.explained >= 0.05)
+        .take(3)
+        .map(|(i, c)| BarSeries {
+            label: format!("PC{} ({:.0} %)", i + 1, 100.0 * c.explained),
+            bars: c
+                .loadings
+                .iter()
+                .map(|(_, v)| Bar {
+                    value: *v,
+                    ci95: None,
+                })
+                .collect(),
+        })
+        .collect();
+    bars(path, title, "loading", &p.columns, &series)
+}
