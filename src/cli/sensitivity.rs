@@ -9,7 +9,6 @@ use serde::Serialize;
 
 use crate::cli::output::Output;
 use crate::dem::experiments::hopper::FLOW_BIN_NAMES;
-use crate::error::Error;
 use crate::metamodel::table::read_columns_keeping_nan;
 use crate::metamodel::{Metamodel, Transform};
 use crate::plot::parity::{parity, Split};
@@ -699,16 +698,6 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
 // ---------------------------------------------------------------------------------------------
 // sobol
 
-/// Physical value of an input from a unit-cube coordinate over its domain (log-uniform for an
-/// input the model reads through a log).
-fn from_unit(inp: &crate::metamodel::Input, u: f64) -> f64 {
-    let [lo, hi] = inp.domain;
-    match inp.transform {
-        Transform::Log { .. } if lo > 0.0 => (lo.ln() + u * (hi.ln() - lo.ln())).exp(),
-        _ => lo + u * (hi - lo),
-    }
-}
-
 #[derive(Serialize)]
 struct SobolInput {
     first: f64,
@@ -741,18 +730,6 @@ fn sobol_cmd(a: &SobolArgs) -> anyhow::Result<()> {
         a.responses.clone()
     };
     let k = model.inputs.len();
-    let (ua, ub) = sobol::base_matrices(k, a.samples, a.seed)?;
-    let phys = |rows: &[Vec<f64>]| -> Vec<Vec<f64>> {
-        (0..k)
-            .map(|j| {
-                rows.iter()
-                    .map(|r| from_unit(&model.inputs[j], r[j]))
-                    .collect()
-            })
-            .collect()
-    };
-    let (xa, xb) = (phys(&ua), phys(&ub));
-    let xab: Vec<Vec<Vec<f64>>> = (0..k).map(|i| phys(&sobol::mixed(&ua, &ub, i))).collect();
     let names = model.input_names();
     say!(out, "Sobol indices of {} over its domain: N = {} base points, {} evaluations per response, {} bootstrap resamples (seed {})", a.model.display(), a.samples, a.samples * (k + 2), a.bootstrap, a.seed);
     for inp in &model.inputs {
@@ -771,15 +748,9 @@ fn sobol_cmd(a: &SobolArgs) -> anyhow::Result<()> {
     }
     let mut report = serde_json::Map::new();
     let mut series = Vec::new();
-    for name in &responses {
-        let rm = model.response(name).ok_or_else(|| {
-            Error::invalid(format!("--responses {name}: not in {}", a.model.display()))
-        })?;
-        let ya = model.predict(rm, &xa);
-        let yb = model.predict(rm, &xb);
-        let yab: Vec<Vec<f64>> = xab.iter().map(|x| model.predict(rm, x)).collect();
-        let s = sobol::estimate(&ya, &yb, &yab, a.bootstrap, a.seed)
-            .map_err(|e| anyhow::anyhow!("response {name}: {e}"))?;
+    let all = sobol::model_indices(&model, &responses, a.samples, a.seed, a.bootstrap)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.model.display()))?;
+    for (name, s) in &all {
         say!(
             out,
             "{name}: mean {:.4}, variance {:.4e}{}",

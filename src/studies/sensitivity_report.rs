@@ -12,7 +12,7 @@ use clap::Args as ClapArgs;
 use crate::dem::experiments::hopper::{FLOW_BIN_NAMES, SECTOR_ANGLE_NAMES};
 use crate::error::write_atomic;
 use crate::metamodel::table::read_columns_keeping_nan;
-use crate::metamodel::{Metamodel, Transform};
+use crate::metamodel::Metamodel;
 use crate::plot::parity::{parity, Split};
 use crate::plot::sensitivity::{bars, heat_map, Bar, BarSeries};
 use crate::sensitivity::contact_derivatives::{Properties, PARAMETERS};
@@ -615,39 +615,14 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 
 fn sobol_section(model_path: &Path, seed: u64, figure: &Path) -> anyhow::Result<String> {
     let model = Metamodel::load(model_path)?;
-    let k = model.inputs.len();
     let n = 4096;
-    let (ua, ub) = sobol::base_matrices(k, n, seed)?;
-    let phys = |rows: &[Vec<f64>]| -> Vec<Vec<f64>> {
-        (0..k)
-            .map(|j| {
-                let inp = &model.inputs[j];
-                rows.iter()
-                    .map(|r| {
-                        let [lo, hi] = inp.domain;
-                        match inp.transform {
-                            Transform::Log { .. } if lo > 0.0 => {
-                                (lo.ln() + r[j] * (hi.ln() - lo.ln())).exp()
-                            }
-                            _ => lo + r[j] * (hi - lo),
-                        }
-                    })
-                    .collect()
-            })
-            .collect()
-    };
-    let (xa, xb) = (phys(&ua), phys(&ub));
+    let names: Vec<String> = model.responses.iter().map(|r| r.name.clone()).collect();
+    let all = sobol::model_indices(&model, &names, n, seed, 500)?;
     let mut s = String::new();
     writeln!(s, "`mbgc sensitivity sobol --model {} --samples {n} --seed {seed}` (uniform over the model's domain; Saltelli first order, Jansen total, 500 bootstrap resamples). Seed 000 ranks parameters by exponents of one design; the indices rank them by the share of the response's variance over the whole calibration space, interactions included.\n", model_path.display())?;
     writeln!(s, "| response | input | first | total |")?;
     writeln!(s, "|---|---|---|---|")?;
-    for rm in &model.responses {
-        let ya = model.predict(rm, &xa);
-        let yb = model.predict(rm, &xb);
-        let yab: Vec<Vec<f64>> = (0..k)
-            .map(|i| model.predict(rm, &phys(&sobol::mixed(&ua, &ub, i))))
-            .collect();
-        let idx = sobol::estimate(&ya, &yb, &yab, 500, seed)?;
+    for (rname, idx) in &all {
         for (inp, x) in model.inputs.iter().zip(&idx.inputs) {
             if x.total < 0.005 {
                 continue;
@@ -655,7 +630,7 @@ fn sobol_section(model_path: &Path, seed: u64, figure: &Path) -> anyhow::Result<
             writeln!(
                 s,
                 "| {} | {} | {:.3} [{:.3}, {:.3}] | {:.3} [{:.3}, {:.3}] |",
-                rm.name,
+                rname,
                 inp.name,
                 x.first,
                 x.first_ci95[0],
@@ -665,7 +640,7 @@ fn sobol_section(model_path: &Path, seed: u64, figure: &Path) -> anyhow::Result<
                 x.total_ci95[1]
             )?;
         }
-        if rm.name == "shear_angle" {
+        if rname == "shear_angle" {
             let names: Vec<String> = model.input_names();
             let series = [
                 BarSeries {
