@@ -1,5 +1,8 @@
-//! The columns of a campaign table: `run_id,row,status,seed,model_class`, the inputs, the responses, then
-//! the diagnostics. The plan names them before anything runs; the table writes and reads them.
+//! The columns of a campaign table: `run_id,row,status,seed,model_class`, `backend` when the
+//! runs are not the embedded engine's, the inputs, the responses, then the diagnostics. The plan
+//! names them before anything runs; the table writes and reads them.
+
+use super::backend::Backend;
 
 pub const FIXED_COLUMNS: [&str; 5] = ["run_id", "row", "status", "seed", "model_class"];
 /// Where the model class is among [`FIXED_COLUMNS`].
@@ -18,10 +21,15 @@ pub const WALL_TIME_COLUMN: &str = "wall_time_s";
 pub const DONE: &str = "done";
 pub const FAILED: &str = "failed";
 
-pub fn columns(inputs: &[String], responses: &[String]) -> Vec<String> {
+/// The column naming the backend, after the fixed ones, in tables of an external backend only
+/// (tables without it are the embedded engine's, as every table written before it existed).
+pub const BACKEND_COLUMN: &str = "backend";
+
+pub fn columns(inputs: &[String], responses: &[String], backend: Backend) -> Vec<String> {
     FIXED_COLUMNS
         .iter()
         .map(|s| s.to_string())
+        .chain(backend.is_recorded().then(|| BACKEND_COLUMN.to_string()))
         .chain(inputs.iter().cloned())
         .chain(responses.iter().cloned())
         .chain(DIAGNOSTIC_COLUMNS.iter().map(|s| s.to_string()))
@@ -40,6 +48,18 @@ pub fn is_campaign_header(header: &[String]) -> bool {
             .iter()
             .zip(DIAGNOSTIC_COLUMNS)
             .all(|(a, b)| a == b)
+}
+
+/// The identity columns a header starts with: the fixed ones, and `backend` if it has it.
+pub fn identity_len(header: &[String]) -> usize {
+    let n = FIXED_COLUMNS.len();
+    n + usize::from(header.get(n).is_some_and(|h| h == BACKEND_COLUMN))
+}
+
+/// The backend of a table's lines, from its header and a line.
+pub fn backend_of(header: &[String], record: &csv::StringRecord) -> Option<String> {
+    (identity_len(header) > FIXED_COLUMNS.len())
+        .then(|| record.get(FIXED_COLUMNS.len()).unwrap_or("").to_string())
 }
 
 /// Whether a header is a campaign table's from before model classes (no `model_class` column).

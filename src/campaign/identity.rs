@@ -10,8 +10,9 @@ use crate::numeric::{splitmix64, Fnv1a};
 /// value (so `0.0` and `-0.0` differ, and a value re-read from a CSV matches only if it is the same
 /// number), the row seed, and the settings that can change results (`box_scale`, only when given;
 /// the model class, only when it is not seed 004's default, so that the ids of tables written
-/// before model classes existed, all of the default class, stay valid), printed as 16 lowercase
-/// hex digits.
+/// before model classes existed, all of the default class, stay valid; the backend, only when
+/// it is not the embedded engine, for the same reason; the number of MPI processes, when more
+/// than one), printed as 16 lowercase hex digits.
 pub fn run_id(
     experiment: &str,
     inputs: &ParamSet,
@@ -33,6 +34,16 @@ pub fn run_id(
     if let Some(c) = class.filter(|c| **c != ModelClass::default()) {
         h.str("model_class");
         h.str(&c.label());
+    }
+    if settings.backend.is_recorded() {
+        h.str("backend");
+        h.str(settings.backend.label());
+    }
+    // LIGGGHTS on N processes repeats itself exactly, but not the run on another N: the domain
+    // decomposition changes the order of force sums, and the granular flow amplifies it.
+    if let Some(n) = settings.mpi.filter(|&n| n > 1) {
+        h.str("mpi");
+        h.u64(n as u64);
     }
     format!("{:016x}", h.0)
 }
@@ -103,6 +114,18 @@ mod tests {
             run_id("wall-impact", &inputs(2.0), 7, &s, Some(&cohesive)),
             id
         );
+        let liggghts = ExperimentSettings {
+            backend: crate::campaign::Backend::Liggghts,
+            ..Default::default()
+        };
+        let l1 = run_id("wall-impact", &inputs(2.0), 7, &liggghts, None);
+        assert_ne!(l1, id);
+        let on = |n| ExperimentSettings {
+            mpi: Some(n),
+            ..liggghts
+        };
+        assert_eq!(run_id("wall-impact", &inputs(2.0), 7, &on(1), None), l1);
+        assert_ne!(run_id("wall-impact", &inputs(2.0), 7, &on(2), None), l1);
         assert_ne!(
             run_id("x", &inputs(0.0), 1, &s, None),
             run_id("x", &inputs(-0.0), 1, &s, None)

@@ -131,6 +131,7 @@ impl Plan {
             .collect();
         let reserved = |name: &str| {
             columns::FIXED_COLUMNS.contains(&name)
+                || name == columns::BACKEND_COLUMN
                 || columns::DIAGNOSTIC_COLUMNS.contains(&name)
                 || responses.iter().any(|r| r == name)
         };
@@ -317,7 +318,12 @@ impl Plan {
 
     /// The table header: fixed columns, inputs, responses, diagnostics.
     pub fn columns(&self) -> Vec<String> {
-        columns::columns(&self.inputs, &self.responses)
+        columns::columns(&self.inputs, &self.responses, self.settings.backend)
+    }
+
+    /// The identity columns of this plan's table (fixed ones, and `backend` when recorded).
+    pub fn identity_len(&self) -> usize {
+        columns::identity_len(&self.columns())
     }
 
     /// Rows of this shard (all rows without `--shard`).

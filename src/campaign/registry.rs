@@ -1,11 +1,13 @@
 //! Experiments by command-line name.
 
+use super::backend::Backend;
 use crate::dem::contact::ModelClass;
 use crate::dem::experiments::hopper::Hopper;
 use crate::dem::experiments::shear_box::ShearBox;
 use crate::dem::experiments::wall_impact::WallImpact;
 use crate::dem::experiments::Experiment;
 use crate::error::{Error, Result};
+use crate::liggghts::shear_box_experiment::{DeckMode, LiggghtsShearBox};
 use std::sync::Mutex;
 
 /// Campaign-wide settings that experiments may read when they are built. An experiment that has
@@ -16,17 +18,74 @@ pub struct ExperimentSettings {
     pub box_scale: Option<f64>,
     /// `--model-class`: the effects of the contact law (default: seed 004's class).
     pub model_class: Option<ModelClass>,
+    /// `--backend`: the code that simulates (part of each run's identity).
+    pub backend: Backend,
+    /// `--mpi N`: MPI processes per run of an external backend. Part of each run's identity
+    /// when N > 1: LIGGGHTS repeats a run exactly on the same N, not on another.
+    pub mpi: Option<usize>,
 }
 
 impl ExperimentSettings {
     pub fn validate(&self) -> Result<()> {
-        match self.box_scale {
-            Some(k) if !(k.is_finite() && k > 0.0) => Err(Error::invalid(format!(
-                "--box-scale {k}: expected a positive finite factor"
+        if let Some(k) = self.box_scale {
+            if !(k.is_finite() && k > 0.0) {
+                return Err(Error::invalid(format!(
+                    "--box-scale {k}: expected a positive finite factor"
+                )));
+            }
+        }
+        match (self.mpi, self.backend) {
+            (Some(0), _) => Err(Error::invalid("--mpi 0: expected at least 1 process")),
+            (Some(n), Backend::Embedded) => Err(Error::invalid(format!(
+                "--mpi {n}: the embedded backend does not use MPI (it runs one run per thread, \
+                 --threads), so it would do nothing; use it with --backend liggghts"
             ))),
             _ => Ok(()),
         }
     }
+}
+
+/// The LIGGGHTS form of an experiment, for `mode`; an experiment without a LIGGGHTS deck is
+/// refused by name.
+fn liggghts_experiment(
+    name: &str,
+    s: &ExperimentSettings,
+    mode: DeckMode,
+) -> Result<Box<dyn Experiment>> {
+    match name {
+        "shear-box" => Ok(Box::new(LiggghtsShearBox::new(
+            ShearBox {
+                box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),
+                class: s.model_class.unwrap_or_default(),
+                ..ShearBox::default()
+            },
+            mode,
+        )?)),
+        _ if all().iter().any(|(n, _)| *n == name) => Err(Error::invalid(format!(
+            "--experiment {name} --backend liggghts: mbgc writes LIGGGHTS decks for shear-box \
+             only; run {name} with the embedded backend"
+        ))),
+        _ => Err(Error::invalid(format!(
+            "--experiment {name}: unknown experiment (known: {})",
+            experiment_names().join(", ")
+        ))),
+    }
+}
+
+/// The experiment `name` that reads back runs made from decks written by `--write-decks`
+/// (`mbgc campaign import`).
+pub fn experiment_for_import(
+    name: &str,
+    settings: &ExperimentSettings,
+) -> Result<Box<dyn Experiment>> {
+    settings.validate()?;
+    if settings.backend != Backend::Liggghts {
+        return Err(Error::invalid(format!(
+            "importing runs needs an external backend, found {}",
+            settings.backend
+        )));
+    }
+    liggghts_experiment(name, settings, DeckMode::Import)
 }
 
 /// Refuses `--box-scale` for an experiment that would ignore it.
@@ -122,6 +181,10 @@ pub fn experiment_by_name(
     settings: &ExperimentSettings,
 ) -> Result<Box<dyn Experiment>> {
     settings.validate()?;
+    if settings.backend == Backend::Liggghts {
+        let ranks = settings.mpi.unwrap_or(1);
+        return liggghts_experiment(name, settings, DeckMode::Run { ranks });
+    }
     match all().into_iter().find(|(n, _)| *n == name) {
         Some((_, make)) => {
             let e = make(settings)?;

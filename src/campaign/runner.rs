@@ -18,7 +18,7 @@ use super::columns::{is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::Meta;
-use super::table::{self, csv_line, read_table, DONE, FAILED, FIXED_COLUMNS};
+use super::table::{self, csv_line, read_table, DONE, FAILED};
 use crate::dem::experiments::{Experiment, Outcome, RunOptions};
 use crate::error::{write_atomic, Error, Result};
 
@@ -34,6 +34,26 @@ pub struct CampaignOptions {
     pub progress: bool,
     /// Run again the rows whose earlier run failed (their failed lines are removed first).
     pub retry_failed: bool,
+    /// Each run gets `work_dir/<run_id>/` for an external backend's deck, log and dumps.
+    pub work_dir: Option<PathBuf>,
+    /// Run only these run ids of the shard (`campaign import`: the decks that have results);
+    /// the others are left for a later invocation, neither run nor recorded.
+    pub only: Option<HashSet<String>>,
+}
+
+impl CampaignOptions {
+    /// A campaign into `out` on `threads` threads, nothing else asked for.
+    pub fn new(out: PathBuf, threads: usize) -> Self {
+        CampaignOptions {
+            out,
+            threads,
+            vtk_dir: None,
+            progress: false,
+            retry_failed: false,
+            work_dir: None,
+            only: None,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -80,7 +100,10 @@ pub fn run_campaign(
     // is still appending to.
     let _lock = TableLock::acquire(&opts.out)?;
     let (mut present, truncated_bytes) = prepare_table(plan, &opts.out)?;
-    let selected: Vec<&PlannedRun> = plan.selected().collect();
+    let selected: Vec<&PlannedRun> = plan
+        .selected()
+        .filter(|r| opts.only.as_ref().is_none_or(|ids| ids.contains(&r.run_id)))
+        .collect();
     let failed_ids: HashSet<String> = selected
         .iter()
         .filter(|r| present.get(r.run_id.as_str()) == Some(&true))
@@ -136,7 +159,7 @@ pub fn run_campaign(
                 while !stop.load(Ordering::Relaxed) {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(run) = todo.get(i) else { break };
-                    let (failed, line) = execute(experiment, plan, run, opts.vtk_dir.as_deref());
+                    let (failed, line) = execute(experiment, plan, run, opts);
                     if tx.send((failed, line)).is_err() {
                         break;
                     }
@@ -287,7 +310,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
             // The run id is not recomputed from the line, so a hand-edited input would otherwise
             // pass as this campaign's run.
             for (k, (name, want)) in planned.params.iter().enumerate() {
-                let field = &rec[FIXED_COLUMNS.len() + k];
+                let field = &rec[plan.identity_len() + k];
                 let same = field
                     .parse::<f64>()
                     .is_ok_and(|v| v.to_bits() == want.to_bits());
@@ -304,7 +327,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
             }
             if rec[2] == *DONE {
                 for (k, name) in plan.responses.iter().enumerate() {
-                    let field = &rec[FIXED_COLUMNS.len() + plan.inputs.len() + k];
+                    let field = &rec[plan.identity_len() + plan.inputs.len() + k];
                     if field.parse::<f64>().is_err() {
                         return Err(Error::input(
                             &file,
@@ -364,12 +387,13 @@ fn execute(
     experiment: &dyn Experiment,
     plan: &Plan,
     run: &PlannedRun,
-    vtk_dir: Option<&Path>,
+    campaign: &CampaignOptions,
 ) -> (bool, Result<Vec<u8>>) {
     let opts = RunOptions {
-        vtk_dir: vtk_dir.map(|d| d.join(&run.run_id)),
+        vtk_dir: campaign.vtk_dir.as_ref().map(|d| d.join(&run.run_id)),
         picture: None,
         threads: 1,
+        work_dir: campaign.work_dir.as_ref().map(|d| d.join(&run.run_id)),
     };
     let result: std::result::Result<Outcome, String> = match catch_unwind(AssertUnwindSafe(|| {
         experiment.run(&run.params, run.seed, &opts)
@@ -383,7 +407,13 @@ fn execute(
     };
     (
         result.is_err(),
-        table::run_line(run, &plan.model_class_label(), &plan.responses, &result),
+        table::run_line(
+            run,
+            &plan.model_class_label(),
+            plan.settings.backend,
+            &plan.responses,
+            &result,
+        ),
     )
 }
 
@@ -441,13 +471,7 @@ mod tests {
             shard,
         )
         .unwrap();
-        let opts = CampaignOptions {
-            out: dir.path().join("out.csv"),
-            threads: 2,
-            vtk_dir: None,
-            progress: false,
-            retry_failed: false,
-        };
+        let opts = CampaignOptions::new(dir.path().join("out.csv"), 2);
         (dir, plan, opts)
     }
 

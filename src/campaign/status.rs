@@ -34,6 +34,13 @@ pub struct Meta {
     /// model classes existed lack it: their runs are all of the default class.
     #[serde(default = "default_class_label")]
     pub model_class: String,
+    /// The backend when it is not the embedded engine (absent otherwise, as in every sidecar
+    /// written before backends existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub backend: Option<String>,
+    /// MPI processes per run of an external backend, when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mpi: Option<usize>,
 }
 
 fn default_class_label() -> String {
@@ -59,6 +66,12 @@ impl Meta {
             set: plan.set.iter().cloned().collect(),
             box_scale: plan.settings.box_scale,
             model_class: plan.model_class_label(),
+            backend: plan
+                .settings
+                .backend
+                .is_recorded()
+                .then(|| plan.settings.backend.label().to_string()),
+            mpi: plan.settings.mpi,
         }
     }
 

@@ -9,12 +9,14 @@ use std::path::Path;
 
 use csv::{ByteRecord, StringRecord};
 
+use super::backend::Backend;
 use super::plan::PlannedRun;
 use crate::dem::experiments::Outcome;
 use crate::error::{Error, Result};
 
 pub use super::columns::{
-    columns, is_campaign_header, DIAGNOSTIC_COLUMNS, DONE, FAILED, FIXED_COLUMNS, WALL_TIME_COLUMN,
+    columns, identity_len, is_campaign_header, DIAGNOSTIC_COLUMNS, DONE, FAILED, FIXED_COLUMNS,
+    WALL_TIME_COLUMN,
 };
 
 /// One CSV line, `\n`-terminated, quoted by the csv crate where needed (commas, quotes, newlines).
@@ -42,6 +44,7 @@ fn number(v: f64) -> String {
 pub fn run_line(
     run: &PlannedRun,
     model_class: &str,
+    backend: Backend,
     responses: &[String],
     result: &std::result::Result<Outcome, String>,
 ) -> Result<Vec<u8>> {
@@ -55,6 +58,9 @@ pub fn run_line(
         run.seed.to_string(),
         model_class.to_string(),
     ];
+    if backend.is_recorded() {
+        f.push(backend.label().to_string());
+    }
     f.extend(run.params.iter().map(|(_, v)| number(v)));
     match result {
         Ok(o) => {
@@ -182,7 +188,12 @@ mod tests {
     }
 
     fn lines() -> (Vec<u8>, Vec<u8>, Vec<u8>) {
-        let header = csv_line(columns(&["a".into(), "b".into()], &responses())).unwrap();
+        let header = csv_line(columns(
+            &["a".into(), "b".into()],
+            &responses(),
+            Backend::Embedded,
+        ))
+        .unwrap();
         let ok = Outcome {
             responses: vec![("r1".into(), 1.5), ("r2".into(), f64::NAN)],
             diagnostics: Diagnostics {
@@ -193,10 +204,18 @@ mod tests {
                 warnings: vec!["w1".into(), "w, 2".into()],
             },
         };
-        let done = run_line(&run(), "hertz+mindlin+epsd2", &responses(), &Ok(ok)).unwrap();
+        let done = run_line(
+            &run(),
+            "hertz+mindlin+epsd2",
+            Backend::Embedded,
+            &responses(),
+            &Ok(ok),
+        )
+        .unwrap();
         let failed = run_line(
             &run(),
             "hertz+mindlin+epsd2",
+            Backend::Embedded,
             &responses(),
             &Err("bad, \"very\"\nbad".to_string()),
         )

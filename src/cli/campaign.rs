@@ -1,4 +1,5 @@
-//! `mbgc campaign`: merge campaign tables, report their progress.
+//! `mbgc campaign`: merge campaign tables, report their progress, import runs made elsewhere
+//! from decks mbgc wrote.
 
 use crate::cli::output::Output;
 use crate::say;
@@ -6,7 +7,10 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use crate::campaign::{merge, status};
+use crate::campaign::decks::{ready_runs, stray_dirs, DeckCampaign, DESIGN_FILE};
+use crate::campaign::registry::experiment_for_import;
+use crate::campaign::{merge, run_campaign, status, CampaignOptions};
+use crate::outputs::refuse_overwriting_inputs;
 
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
@@ -20,6 +24,25 @@ pub enum CampaignCommand {
     Merge(MergeArgs),
     /// Count done, failed and remaining runs of a table.
     Status(StatusArgs),
+    /// Read the runs of decks written by `mbgc simulate --backend liggghts --write-decks DIR`
+    /// and run elsewhere into a campaign table; decks not run yet are left for the next import.
+    Import(ImportArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ImportArgs {
+    /// The directory the decks were written to (it holds campaign.json and design.csv).
+    #[arg(long, value_name = "DIR")]
+    pub decks: PathBuf,
+    /// Campaign table; an existing one is resumed (runs already in it are not read again).
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+    /// Threads reading and measuring runs [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Standard output holds one JSON object; the text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -52,7 +75,87 @@ pub fn run(a: &CampaignArgs) -> anyhow::Result<()> {
     match &a.command {
         CampaignCommand::Merge(m) => run_merge(m),
         CampaignCommand::Status(s) => run_status(s),
+        CampaignCommand::Import(i) => run_import(i),
     }
+}
+
+fn run_import(a: &ImportArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
+    let design = a.decks.join(DESIGN_FILE);
+    refuse_overwriting_inputs("--out", &a.out, &[("the decks' design", &design)])?;
+    let campaign = DeckCampaign::read(&a.decks)?;
+    let settings = campaign.settings(&a.decks)?;
+    let experiment = experiment_for_import(&campaign.experiment, &settings)?;
+    let plan = campaign.plan(&a.decks, experiment.as_ref())?;
+    let (ready, missing) = ready_runs(&plan, &a.decks);
+    let stray = stray_dirs(&plan, &a.decks)?;
+    if !stray.is_empty() {
+        eprintln!(
+            "{}: {} directories are no run of this campaign and were not read: {}",
+            a.decks.display(),
+            stray.len(),
+            stray.join(", ")
+        );
+    }
+    let threads = match a.threads {
+        Some(0) => anyhow::bail!("--threads: expected at least 1"),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let s = run_campaign(
+        experiment.as_ref(),
+        &plan,
+        &CampaignOptions {
+            work_dir: Some(a.decks.clone()),
+            only: Some(ready),
+            ..CampaignOptions::new(a.out.clone(), threads)
+        },
+    )?;
+    let shown: Vec<String> = missing.iter().take(10).map(|r| r.to_string()).collect();
+    say!(
+        out,
+        "{}: imported {} runs from {} ({} done, {} failed in LIGGGHTS or unreadable); {} already \
+         in the table; {} of {} decks not run yet{}",
+        a.out.display(),
+        s.done + s.failed,
+        a.decks.display(),
+        s.done,
+        s.failed,
+        s.skipped,
+        missing.len(),
+        plan.selected().count(),
+        if missing.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (rows {}{})",
+                shown.join(", "),
+                if missing.len() > shown.len() {
+                    ", ..."
+                } else {
+                    ""
+                }
+            )
+        }
+    );
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "decks": a.decks,
+        "imported": s.done + s.failed,
+        "done": s.done,
+        "failed": s.failed,
+        "skipped": s.skipped,
+        "not_run": missing,
+    }))?;
+    let failed = s.failed + s.failed_before;
+    if failed > 0 {
+        anyhow::bail!(
+            "{failed} imported runs failed: they have status=failed and their reason in the error \
+             column of {}",
+            a.out.display()
+        );
+    }
+    Ok(())
 }
 
 fn run_merge(a: &MergeArgs) -> anyhow::Result<()> {

@@ -118,6 +118,7 @@ pub fn similarity_of(
     let settings = crate::campaign::ExperimentSettings {
         box_scale: None,
         model_class: class,
+        ..Default::default()
     };
     let e = crate::campaign::experiment_by_name(name, &settings)?;
     e.similarity().ok_or_else(|| {

@@ -16,6 +16,7 @@ pub mod psd;
 pub mod sample;
 pub mod sensitivity;
 pub mod simulate;
+pub mod slurm;
 pub mod train;
 pub mod validate;
 
@@ -40,9 +41,11 @@ pub enum Command {
     Psd(psd::PsdArgs),
     /// Run a calibration experiment for every row of a design (resumable, shardable).
     Simulate(simulate::SimulateArgs),
+    /// Write (and with --submit, submit) a campaign as a Slurm job array and its merge job.
+    Slurm(slurm::SlurmArgs),
     /// The physical effects a model class can switch on, with their parameters.
     Effects(effects::EffectsArgs),
-    /// Campaign tables: merge shards, report progress.
+    /// Campaign tables: merge shards, report progress, import runs made from written decks.
     Campaign(campaign::CampaignArgs),
     /// Fit one equation per response by genetic-programming symbolic regression.
     Fit(fit::FitArgs),
@@ -71,6 +74,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Metrics(a) => metrics::run(&a),
         Command::Psd(a) => psd::run(&a),
         Command::Simulate(a) => simulate::run(&a),
+        Command::Slurm(a) => slurm::run(&a),
         Command::Effects(a) => effects::run(&a),
         Command::Campaign(a) => campaign::run(&a),
         Command::Fit(a) => fit::run(&a),

@@ -10,8 +10,10 @@ use clap::Args;
 
 use crate::dem::contact::ModelClass;
 
+use crate::campaign::decks::write_decks;
 use crate::campaign::{
-    experiment_by_name, parse_set, run_campaign, CampaignOptions, ExperimentSettings, Plan, Shard,
+    experiment_by_name, parse_set, run_campaign, Backend, CampaignOptions, ExperimentSettings,
+    Plan, Shard,
 };
 
 #[derive(Debug, Args)]
@@ -24,8 +26,13 @@ pub struct SimulateArgs {
     #[arg(long, help = experiment_help())]
     pub experiment: String,
     /// Output table; if it exists, the campaign resumes where it stopped.
-    #[arg(long, value_name = "CSV")]
-    pub out: PathBuf,
+    #[arg(
+        long,
+        value_name = "CSV",
+        required_unless_present = "write_decks",
+        conflicts_with = "write_decks"
+    )]
+    pub out: Option<PathBuf>,
     /// Worker threads, one run each [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
@@ -53,9 +60,29 @@ pub struct SimulateArgs {
     /// Run again the rows whose earlier run failed (their failed lines are replaced).
     #[arg(long)]
     pub retry_failed: bool,
+    /// Code that simulates: embedded (mbgc's DEM) or liggghts (LIGGGHTS 3.8 on the `liggghts`
+    /// executable, shear-box only). Recorded in the table's `backend` column and in each run id.
+    #[arg(long, default_value = "embedded", value_parser = parse_backend)]
+    pub backend: Backend,
+    /// MPI processes per LIGGGHTS run (`mpirun -np N`); --threads then defaults to cores / N.
+    #[arg(long, value_name = "N")]
+    pub mpi: Option<usize>,
+    /// Keep each LIGGGHTS run's deck, log and dumps in DIR/<run_id>/ (default: a temporary
+    /// directory, removed after the run).
+    #[arg(long, value_name = "DIR")]
+    pub decks: Option<PathBuf>,
+    /// Write the LIGGGHTS decks into DIR/<run_id>/ without running them (with DIR/run_all.sh);
+    /// `mbgc campaign import --decks DIR` reads the results back. --out is then not written.
+    #[arg(long, value_name = "DIR", conflicts_with = "decks")]
+    pub write_decks: Option<PathBuf>,
     /// Standard output holds one JSON object (the run counts); text goes to standard error.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--backend` as clap reads it.
+pub fn parse_backend(s: &str) -> Result<Backend, String> {
+    Backend::parse(s).map_err(|e| e.to_string())
 }
 
 /// `--model-class` as clap reads it (the message names the option and the known effects).
@@ -73,11 +100,34 @@ pub fn experiment_help() -> String {
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     let out = Output::new(a.json);
-    refuse_overwriting_inputs("--out", &a.out, &[("--design", &a.design)])?;
+    if let Some(o) = &a.out {
+        refuse_overwriting_inputs("--out", o, &[("--design", &a.design)])?;
+    }
     let settings = ExperimentSettings {
         box_scale: a.box_scale,
         model_class: a.model_class,
+        backend: a.backend,
+        mpi: a.mpi,
     };
+    if a.backend == Backend::Embedded {
+        for (option, given) in [
+            ("--decks", a.decks.is_some()),
+            ("--write-decks", a.write_decks.is_some()),
+        ] {
+            if given {
+                anyhow::bail!(
+                    "{option}: the embedded backend writes no decks, so it would do nothing; use \
+                     it with --backend liggghts"
+                );
+            }
+        }
+    }
+    if let (Some(n), Some(_)) = (a.mpi, &a.write_decks) {
+        anyhow::bail!(
+            "--mpi {n}: --write-decks runs nothing, so it would do nothing; choose the processes \
+             when running the decks (run_all.sh N \"mpirun -np {n} liggghts\")"
+        );
+    }
     let experiment = experiment_by_name(&a.experiment, &settings)?;
     let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
     let set = a
@@ -88,7 +138,10 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     let threads = match a.threads {
         Some(0) => anyhow::bail!("--threads: expected at least 1"),
         Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        // Each LIGGGHTS run takes --mpi cores.
+        None => (std::thread::available_parallelism().map_or(1, |n| n.get())
+            / a.mpi.unwrap_or(1).max(1))
+        .max(1),
     };
     let plan = Plan::new(
         experiment.as_ref(),
@@ -98,33 +151,65 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         &settings,
         shard,
     )?;
+    if let Some(dir) = &a.write_decks {
+        let w = write_decks(experiment.as_ref(), &plan, dir)?;
+        say!(
+            out,
+            "{}: {} decks written, {} already there ({} of {} rows{}); run them with {}/{} [N], \
+             then: mbgc campaign import --decks {} --out TABLE.csv",
+            dir.display(),
+            w.written,
+            w.kept,
+            plan.selected().count(),
+            plan.rows.len(),
+            shard.map(|k| format!(", shard {k}")).unwrap_or_default(),
+            dir.display(),
+            crate::campaign::decks::RUN_SCRIPT,
+            dir.display(),
+        );
+        return out.object(&serde_json::json!({
+            "decks": dir,
+            "written": w.written,
+            "kept": w.kept,
+            "rows": plan.selected().count(),
+        }));
+    }
+    let Some(out_path) = a.out.clone() else {
+        anyhow::bail!("--out: expected the campaign table (or --write-decks DIR)");
+    };
+    let a_out = &out_path;
     let s = run_campaign(
         experiment.as_ref(),
         &plan,
         &CampaignOptions {
-            out: a.out.clone(),
-            threads,
             vtk_dir: a.vtk.clone(),
             progress: true,
             retry_failed: a.retry_failed,
+            work_dir: a.decks.clone(),
+            ..CampaignOptions::new(out_path.clone(), threads)
         },
     )?;
     if s.truncated_bytes > 0 {
         eprintln!(
             "{}: removed an incomplete last line ({} bytes, an interrupted write); its run was \
              redone",
-            a.out.display(),
+            a_out.display(),
             s.truncated_bytes
         );
     }
     let ran = s.done + s.failed;
     say!(
         out,
-        "{}: {} ({}) on {} ({} rows{}): {} already in the table, ran {ran} ({} done, {} failed) in \
-         {:.2} s{}",
-        a.out.display(),
+        "{}: {} ({}{}) on {} ({} rows{}): {} already in the table, ran {ran} ({} done, {} failed) \
+         in {:.2} s{}",
+        a_out.display(),
         plan.experiment,
         plan.model_class_label(),
+        if a.backend.is_recorded() {
+            format!(", {}", a.backend)
+        } else {
+            String::new()
+        },
         a.design.display(),
         plan.rows.len(),
         shard
@@ -147,14 +232,15 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     if s.retried > 0 {
         eprintln!(
             "{}: {} failed run(s) of earlier attempts removed and run again",
-            a.out.display(),
+            a_out.display(),
             s.retried
         );
     }
     out.object(&serde_json::json!({
-        "out": a.out,
+        "out": a_out,
         "experiment": plan.experiment,
         "model_class": plan.model_class.map(|c| c.to_string()),
+        "backend": plan.settings.backend.label(),
         "design": a.design,
         "design_rows": plan.rows.len(),
         "shard": shard.map(|k| k.to_string()),
@@ -176,7 +262,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             "{failed} of the {} runs of {} failed ({} in this invocation, {} earlier): they have \
              status=failed and their reason in the error column; rerun with --retry-failed",
             s.planned,
-            a.out.display(),
+            a_out.display(),
             s.failed,
             s.failed_before
         );

@@ -112,6 +112,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
     let settings = ExperimentSettings {
         box_scale: a.box_scale,
         model_class: class,
+        ..Default::default()
     };
     let experiment = experiment_by_name(&a.experiment, &settings)?;
     let name = a
@@ -259,11 +260,8 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
             experiment.as_ref(),
             &p,
             &CampaignOptions {
-                out: (*table).clone(),
-                threads,
-                vtk_dir: None,
                 progress: true,
-                retry_failed: false,
+                ..CampaignOptions::new((*table).clone(), threads)
             },
         )?;
         eprintln!(

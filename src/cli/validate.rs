@@ -192,6 +192,7 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         &ExperimentSettings {
             box_scale: a.box_scale,
             model_class: class,
+            ..Default::default()
         },
     )?;
     // The class the experiment was built with (the default when no source named one).

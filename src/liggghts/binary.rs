@@ -8,6 +8,9 @@ use crate::{Error, Result};
 /// Names LIGGGHTS is installed under: Debian's package, and the default of a source build.
 const BINARY_NAMES: [&str; 2] = ["liggghts", "lmp_auto"];
 
+/// The MPI launcher (Debian: Open MPI's, a dependency of the `liggghts` package).
+pub const MPIRUN: &str = "mpirun";
+
 /// The LIGGGHTS executable on `PATH`, or None when LIGGGHTS is not installed.
 pub fn find_binary() -> Option<PathBuf> {
     let path = std::env::var_os("PATH")?;
@@ -34,21 +37,51 @@ fn is_executable(p: &Path) -> bool {
 /// Runs LIGGGHTS on the input script `input` in `dir` (one process, one thread), writing the log
 /// to `log`; an error quotes the log's ERROR line.
 pub fn run_deck(binary: &Path, dir: &Path, input: &str, log: &str) -> Result<()> {
+    run_deck_on(binary, dir, input, log, 1)
+}
+
+/// [`run_deck`] on `ranks` MPI processes (`mpirun -np ranks`, Open MPI's launcher of Debian's
+/// LIGGGHTS) when `ranks` > 1.
+pub fn run_deck_on(binary: &Path, dir: &Path, input: &str, log: &str, ranks: usize) -> Result<()> {
     // `-screen none` makes LIGGGHTS 3.8 crash in some fixes, so the screen goes to /dev/null and
     // everything is read from the log.
-    let out = Command::new(binary)
-        .args(["-in", input, "-log", log, "-screen", "/dev/null"])
+    let args = ["-in", input, "-log", log, "-screen", "/dev/null"];
+    let mut cmd = if ranks > 1 {
+        let mut c = Command::new(MPIRUN);
+        c.args(["-np", &ranks.to_string()])
+            .arg(binary)
+            .args(args)
+            // Open MPI refuses root unless told twice; containers and CI run as root.
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+        c
+    } else {
+        let mut c = Command::new(binary);
+        c.args(args);
+        c
+    };
+    let out = cmd
         .current_dir(dir)
         .env("OMP_NUM_THREADS", "1")
         .output()
         .map_err(|e| {
-            Error::invalid(format!("cannot start LIGGGHTS ({}): {e}", binary.display()))
+            let what = if ranks > 1 { MPIRUN } else { "LIGGGHTS" };
+            Error::invalid(format!(
+                "cannot start {what} ({}): {e}",
+                if ranks > 1 {
+                    MPIRUN.to_string()
+                } else {
+                    binary.display().to_string()
+                }
+            ))
         })?;
     if out.status.success() {
         return Ok(());
     }
     let log_path = dir.join(log);
-    let log_text = std::fs::read_to_string(&log_path).unwrap_or_default();
+    // LIGGGHTS may print garbage bytes after an error message.
+    let log_text =
+        String::from_utf8_lossy(&std::fs::read(&log_path).unwrap_or_default()).into_owned();
     let error_line = log_text
         .lines()
         .find(|l| l.starts_with("ERROR"))

@@ -6,16 +6,21 @@
 //! - [`binary`]: find and run the executable.
 //! - [`closed_box`]: spheres settling in a closed box of six planes (the throughput scene).
 //! - [`shear_box`]: the shear box replaying a recorded mbgc run.
+//! - [`shear_box_fill`]: the shear box filling itself, mbgc's procedure in LIGGGHTS' own words;
+//!   [`fill_run`] reads such a run back; [`shear_box_experiment`] makes it the shear-box
+//!   experiment of `mbgc simulate --backend liggghts`.
 //! - [`mesh`]: STL walls; [`number`]: numbers as LIGGGHTS reads them; [`parse`]: logs, dumps.
 
 pub mod binary;
 pub mod closed_box;
+pub mod fill_run;
 pub mod mesh;
 pub mod number;
 pub mod parse;
 pub mod shear_box;
+pub mod shear_box_experiment;
 pub mod shear_box_fill;
 
-pub use binary::{find_binary, require_binary, run_deck};
+pub use binary::{find_binary, require_binary, run_deck, run_deck_on};
 pub use closed_box::{LiggghtsCase, LiggghtsResult};
 pub use parse::{parse_dump, parse_dump_rows, parse_log, LogSummary};

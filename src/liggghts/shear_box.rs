@@ -139,17 +139,7 @@ pub fn write_deck(dir: &Path, p: &ParamSet, rec: &RunRecord) -> Result<()> {
         num(rec.skin)
     );
     write_contact_properties(&mut s, p)?;
-    if rec.class.cohesion == CohesionKind::Sjkr {
-        let (ced_pp, ced_pw) = (get("ced_pp")?, get("ced_pw")?);
-        let _ = writeln!(
-            s,
-            "fix m6 all property/global cohesionEnergyDensity peratomtypepair 2 {} {} {} {}",
-            num(ced_pp),
-            num(ced_pw),
-            num(ced_pw),
-            num(ced_pw)
-        );
-    }
+    write_cohesion(&mut s, p, &rec.class)?;
     s.push('\n');
     write_box_physics(&mut s, &models, &settings, rec.dt, l);
     let _ = writeln!(
@@ -209,6 +199,27 @@ pub(crate) fn write_contact_properties(s: &mut String, p: &ParamSet) -> Result<(
             pair(get(pp)?, get(pw)?)
         );
     }
+    Ok(())
+}
+
+/// The cohesion energy densities (fix m6) when the class has SJKR cohesion.
+pub(crate) fn write_cohesion(s: &mut String, p: &ParamSet, class: &ModelClass) -> Result<()> {
+    if class.cohesion != CohesionKind::Sjkr {
+        return Ok(());
+    }
+    let get = |k: &str| {
+        p.get(k)
+            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
+    };
+    let (ced_pp, ced_pw) = (get("ced_pp")?, get("ced_pw")?);
+    let _ = writeln!(
+        s,
+        "fix m6 all property/global cohesionEnergyDensity peratomtypepair 2 {} {} {} {}",
+        num(ced_pp),
+        num(ced_pw),
+        num(ced_pw),
+        num(ced_pw)
+    );
     Ok(())
 }
 

@@ -16,12 +16,21 @@ use std::path::Path;
 
 use super::number::num;
 use super::shear_box::{
-    gran_model, write_box_physics, write_box_walls, write_contact_properties, GranModel,
+    gran_model, write_box_physics, write_box_walls, write_cohesion, write_contact_properties,
+    GranModel,
 };
 use crate::dem::contact::ModelClass;
+use crate::dem::experiments::shear_box::{psd_classes, ShearBox};
 use crate::dem::experiments::ParamSet;
 use crate::dem::vec3::V3;
 use crate::error::{write_atomic, Error, Result};
+use crate::psd::{default_range, Distribution, LogNormal};
+
+const G: f64 = 9.81;
+
+/// Particle templates of equal mass standing for the continuous PSD: the number the comparison
+/// with mbgc's engine was made with (`docs/shear_box.md`), and the backend's.
+pub const CLASSES: usize = 5;
 
 pub const INPUT: &str = "in.shear_box_fill";
 pub const LOG: &str = "log.shear_box_fill";
@@ -60,10 +69,14 @@ pub struct FillDeck {
     pub removal_height: f64,
     /// Any number; made prime for LIGGGHTS.
     pub seed: u64,
+    /// The largest diameter of mbgc's layout: the box is k of them, and the flank is measured
+    /// in columns this wide.
+    pub d_max: f64,
 }
 
-/// The smallest prime above 10 000 + 7919 `seed` (LIGGGHTS refuses other seeds); distinct
-/// seeds give distinct primes for seeds below about 10^6.
+/// A prime LIGGGHTS accepts for `seed`: above 10 000 and below its `INT_MAX`. Seeds below
+/// 250 000 map to the smallest prime above 10 000 + 7919 `seed` (distinct primes for distinct
+/// seeds); larger ones (campaign row seeds are 64-bit) are hashed into [10 000, 2e9) first.
 pub fn prime_seed(seed: u64) -> u64 {
     let is_prime = |n: u64| {
         n > 1
@@ -71,9 +84,22 @@ pub fn prime_seed(seed: u64) -> u64 {
                 .take_while(|d| d * d <= n)
                 .all(|d| !n.is_multiple_of(d))
     };
-    (10_001 + 7919 * seed..)
-        .find(|&n| is_prime(n))
-        .unwrap_or(10_007)
+    let start = if seed < 250_000 {
+        10_001 + 7919 * seed
+    } else {
+        10_001 + crate::numeric::splitmix64(seed) % 1_999_000_000
+    };
+    (start..).find(|&n| is_prime(n)).unwrap_or(10_007)
+}
+
+/// The seed of the deck's `k`-th random stream (0: insertion, 1: the distribution, 2 + j:
+/// template j) for run seed `seed`; k = 0 is `prime_seed(seed)`.
+fn stream_seed(seed: u64, k: u64) -> u64 {
+    if k == 0 {
+        prime_seed(seed)
+    } else {
+        prime_seed(seed.wrapping_mul(31).wrapping_add(k))
+    }
 }
 
 /// Writes the wall meshes and the input script into `dir`.
@@ -107,19 +133,20 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     );
     let _ = writeln!(s, "neighbor {} bin\nneigh_modify delay 0\n", num(d.skin));
     write_contact_properties(&mut s, p)?;
+    write_cohesion(&mut s, p, &d.class)?;
     s.push('\n');
     write_box_physics(&mut s, &models, &settings, d.dt, l);
     // Each template and the distribution need their own prime seed.
     let mut dist = format!(
         "fix pdd all particledistribution/discrete {} {}",
-        prime_seed(d.seed * 31 + 1),
+        stream_seed(d.seed, 1),
         d.classes.len()
     );
     for (k, (diam, frac)) in d.classes.iter().enumerate() {
         let _ = writeln!(
             s,
             "fix pts{k} all particletemplate/sphere {} atom_type 1 density constant {} radius constant {}",
-            prime_seed(d.seed * 31 + 2 + k as u64),
+            stream_seed(d.seed, 2 + k as u64),
             num(rho),
             num(0.5 * diam)
         );
@@ -138,7 +165,7 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
         s,
         "fix ins all insert/pack seed {} distributiontemplate pdd maxattempt 20000 insert_every once \
          overlapcheck yes all_in yes vel constant 0. 0. 0. region column mass_in_region {}",
-        prime_seed(d.seed),
+        stream_seed(d.seed, 0),
         num(d.mass)
     );
     let _ = writeln!(s, "fix integrate all nve/sphere");
@@ -203,7 +230,70 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
     );
     let _ = writeln!(s, "print \"FLOW_END ${{st}} ${{q}}\"");
     s.push_str(&dump(FINAL_DUMP));
+    // After the last dump is complete: a run killed while writing it is not taken as finished.
+    let _ = writeln!(s, "print \"RUN_END\"");
     write_atomic(&dir.join(INPUT), s.as_bytes())
+}
+
+/// The LIGGGHTS deck of the same procedure as `sb` runs it for `p` and `seed`, with the PSD as
+/// `classes` templates of equal mass; `column` overrides the insertion column's z range.
+pub fn fill_deck(
+    sb: &ShearBox,
+    p: &ParamSet,
+    seed: u64,
+    classes: usize,
+    column: Option<(f64, f64)>,
+) -> Result<FillDeck> {
+    let lay = sb.layout(p, seed)?;
+    let get = |k: &str| {
+        p.get(k)
+            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
+    };
+    let rho = get("rho_p")?;
+    let d50 = get("d50")?;
+    let sigma = p.get("sigma_ln").unwrap_or(0.0);
+    let reps: Vec<(f64, f64)> = if sigma < 1e-6 || classes == 0 {
+        vec![(d50 * 1e-3, 1.0)]
+    } else {
+        let dist = Distribution::LogNormal(LogNormal::new(d50, sigma)?);
+        psd_classes(&dist, default_range(&dist), classes)
+            .into_iter()
+            .map(|d| (d * 1e-3, 1.0 / classes as f64))
+            .collect()
+    };
+    // Everything but the particle creation is the run's own schedule.
+    let sc = sb.schedule(&lay, rho, get("E_p")?, get("nu_p")?);
+    let column = column.unwrap_or((0.0, sc.column_top));
+    // A column placed elsewhere than mbgc's needs the walls, domain and fall time to follow it.
+    let col_top = sc.column_top.max(column.1);
+    let fall = (2.0 * col_top / G).sqrt();
+    let (mut domain, dt) = (sc.domain, sc.dt);
+    domain.1[2] += col_top - sc.column_top;
+    let mass: f64 = lay
+        .diameters
+        .iter()
+        .map(|d| rho * std::f64::consts::PI / 6.0 * d.powi(3))
+        .sum();
+    Ok(FillDeck {
+        class: sb.class,
+        size: lay.size,
+        classes: reps,
+        mass,
+        column,
+        domain,
+        dt,
+        skin: sc.skin,
+        chunk: sc.chunk,
+        v_rest: sc.v_rest,
+        fall_steps: (fall / dt) as u64,
+        max_fill_steps: sc.max_fill_steps + ((fall - sc.fall) / dt) as u64,
+        v_move: sc.v_move,
+        min_flow_steps: (sc.min_flow_time / dt) as u64,
+        max_flow_steps: sc.max_flow_steps,
+        removal_height: sc.removal_height,
+        seed,
+        d_max: lay.d_max,
+    })
 }
 
 #[cfg(test)]
@@ -212,7 +302,13 @@ mod tests {
 
     #[test]
     fn seeds_are_distinct_primes_above_ten_thousand() {
-        let s: Vec<u64> = (0..20).map(prime_seed).collect();
+        let big = [u64::MAX, 1 << 63, 8_780_794_297_754_785_331, 250_000];
+        let s: Vec<u64> = (0..20)
+            .map(prime_seed)
+            .chain(big.iter().map(|&b| prime_seed(b)))
+            .chain((0..5).map(|k| stream_seed(u64::MAX, k)))
+            .collect();
+        assert!(s.iter().all(|&p| p < i32::MAX as u64), "{s:?}");
         for (i, a) in s.iter().enumerate() {
             assert!(
                 *a > 10_000

@@ -7,18 +7,17 @@
 use std::path::Path;
 
 use crate::dem::analysis::sphere_box_volume;
-use crate::dem::experiments::shear_box::{measure_flank, psd_classes, RunRecord, ShearBox};
+use crate::dem::experiments::shear_box::{box_bulk_density, measure_flank, RunRecord, ShearBox};
 use crate::dem::experiments::{ParamSet, RunOptions};
 use crate::dem::particles::Particles;
 use crate::dem::vec3::V3;
-use crate::error::{read_to_string, Error, Result};
+use crate::error::{Error, Result};
+use crate::liggghts::fill_run::FillRun;
+pub use crate::liggghts::shear_box_fill::fill_deck;
 use crate::liggghts::shear_box_fill::{
     write_fill_deck, FillDeck, FILLED_DUMP, FINAL_DUMP, INPUT, INSERTED_DUMP, LOG, PRE_STRIKE_DUMP,
 };
-use crate::liggghts::{parse_dump_rows, require_binary, run_deck};
-use crate::psd::{default_range, Distribution, LogNormal};
-
-const G: f64 = 9.81;
+use crate::liggghts::{require_binary, run_deck};
 
 /// One run of either code, measured by the same functions.
 #[derive(Debug, Clone, Default)]
@@ -134,66 +133,6 @@ pub fn run_mbgc(sb: &ShearBox, p: &ParamSet, seed: u64) -> Result<(FillMeasure, 
     Ok((m, rec))
 }
 
-/// The LIGGGHTS deck of the same procedure as `sb` runs it for `p` and `seed`, with the PSD as
-/// `classes` templates of equal mass; `column` overrides the insertion column's z range.
-pub fn fill_deck(
-    sb: &ShearBox,
-    p: &ParamSet,
-    seed: u64,
-    classes: usize,
-    column: Option<(f64, f64)>,
-) -> Result<FillDeck> {
-    let lay = sb.layout(p, seed)?;
-    let get = |k: &str| {
-        p.get(k)
-            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
-    };
-    let rho = get("rho_p")?;
-    let d50 = get("d50")?;
-    let sigma = p.get("sigma_ln").unwrap_or(0.0);
-    let reps: Vec<(f64, f64)> = if sigma < 1e-6 || classes == 0 {
-        vec![(d50 * 1e-3, 1.0)]
-    } else {
-        let dist = Distribution::LogNormal(LogNormal::new(d50, sigma)?);
-        psd_classes(&dist, default_range(&dist), classes)
-            .into_iter()
-            .map(|d| (d * 1e-3, 1.0 / classes as f64))
-            .collect()
-    };
-    // Everything but the particle creation is the run's own schedule.
-    let sc = sb.schedule(&lay, rho, get("E_p")?, get("nu_p")?);
-    let column = column.unwrap_or((0.0, sc.column_top));
-    // A column placed elsewhere than mbgc's needs the walls, domain and fall time to follow it.
-    let col_top = sc.column_top.max(column.1);
-    let fall = (2.0 * col_top / G).sqrt();
-    let (mut domain, dt) = (sc.domain, sc.dt);
-    domain.1[2] += col_top - sc.column_top;
-    let mass: f64 = lay
-        .diameters
-        .iter()
-        .map(|d| rho * std::f64::consts::PI / 6.0 * d.powi(3))
-        .sum();
-    Ok(FillDeck {
-        class: sb.class,
-        size: lay.size,
-        classes: reps,
-        mass,
-        column,
-        domain,
-        dt,
-        skin: sc.skin,
-        chunk: sc.chunk,
-        v_rest: sc.v_rest,
-        fall_steps: (fall / dt) as u64,
-        max_fill_steps: sc.max_fill_steps + ((fall - sc.fall) / dt) as u64,
-        v_move: sc.v_move,
-        min_flow_steps: (sc.min_flow_time / dt) as u64,
-        max_flow_steps: sc.max_flow_steps,
-        removal_height: sc.removal_height,
-        seed,
-    })
-}
-
 /// Runs the deck in `dir` and measures it as mbgc's run is measured.
 pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Result<FillMeasure> {
     let binary = require_binary()?;
@@ -206,60 +145,29 @@ pub fn run_liggghts(dir: &Path, p: &ParamSet, deck: &FillDeck, d_max: f64) -> Re
     }
     write_fill_deck(dir, p, deck)?;
     run_deck(&binary, dir, INPUT, LOG)?;
+    let run = FillRun::read(dir)?;
     let size = deck.size;
-    let [l, w, h] = size;
     let rho = p.get("rho_p").unwrap_or(f64::NAN);
-    let read = |name: &str| -> Result<Spheres> {
-        let f = dir.join(name);
-        Ok(
-            parse_dump_rows(&f.display().to_string(), &read_to_string(&f)?)?
-                .into_iter()
-                .map(|(_, r, x)| (r, x))
-                .collect(),
-        )
-    };
-    let inserted = read(INSERTED_DUMP)?;
-    let filled = read(FILLED_DUMP)?;
-    let fin = read(FINAL_DUMP)?;
     let mut fp = Particles::new();
-    for (r, x) in &fin {
+    for (r, x) in &run.last {
         // Density is irrelevant to the geometric measures.
         let _ = fp.add(*x, *r, 1.0, 0);
     }
     let flank = measure_flank(&fp, size, d_max);
-    let (column_fraction, column_height) = column(&inserted, size);
-    let log = read_to_string(&dir.join(LOG))?;
-    let fill_steps = log
-        .lines()
-        .find_map(|s| s.strip_prefix("FILL_STEPS "))
-        .and_then(|s| s.trim().parse().ok())
-        .unwrap_or(0);
-    // "Loop time of T on P procs for N steps with A atoms": one line per `run` command.
-    let steps = log
-        .lines()
-        .filter(|s| s.starts_with("Loop time of"))
-        .filter_map(|s| {
-            s.split(" for ")
-                .nth(1)?
-                .split_whitespace()
-                .next()?
-                .parse::<u64>()
-                .ok()
-        })
-        .sum();
+    let (column_fraction, column_height) = column(&run.inserted, size);
     let mut m = FillMeasure {
         shear_angle: (-flank.slope).atan().to_degrees(),
-        bulk_density: rho * solid_in(&filled, [0.0; 3], [l, w, h]) / (l * w * h),
+        bulk_density: box_bulk_density(run.filled.iter().copied(), rho, size),
         flank_r2: flank.r2,
-        inserted: inserted.len(),
-        filled: filled.len(),
+        inserted: run.inserted.len(),
+        filled: run.filled.len(),
         column_fraction,
         column_height,
-        fill_steps,
-        steps,
+        fill_steps: run.fill_steps,
+        steps: run.steps,
         ..Default::default()
     };
-    bed(&read(PRE_STRIKE_DUMP)?, size, d_max, rho, &mut m);
+    bed(&run.pre_strike, size, d_max, rho, &mut m);
     Ok(m)
 }
 

@@ -12,7 +12,8 @@
 
 use std::path::Path;
 
-use crate::campaign::table::{columns, csv_line, is_campaign_header, read_table, FIXED_COLUMNS};
+use crate::campaign::columns::backend_of;
+use crate::campaign::table::{csv_line, is_campaign_header, read_table};
 use crate::campaign::{Meta, Plan};
 use crate::dem::contact::{ModelClass, Pair};
 use crate::error::{write_atomic, Error, Result};
@@ -194,7 +195,20 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
             "not a campaign table (run_id,row,status,seed,model_class first)",
         ));
     }
-    let header = columns(&plan.inputs, &plan.responses);
+    if let Some((line, rec)) = t.records.first() {
+        if let Some(b) = backend_of(&t.header, rec).filter(|b| b != plan.settings.backend.label()) {
+            return Err(Error::input(
+                &file,
+                format!("line {line}, column backend"),
+                format!(
+                    "runs of the {b} backend, but the extension runs its new rows with the {} \
+                     backend: one table holds the runs of one code",
+                    plan.settings.backend
+                ),
+            ));
+        }
+    }
+    let header = plan.columns();
     let col = |name: &str| t.header.iter().position(|h| h == name);
     let mut lines = csv_line(&header)?;
     let mut copied = 0;
@@ -259,7 +273,7 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
             };
             f.push(v);
         }
-        for name in header.iter().skip(FIXED_COLUMNS.len() + plan.inputs.len()) {
+        for name in header.iter().skip(plan.identity_len() + plan.inputs.len()) {
             let mut v = col(name).map(|c| rec[c].to_string()).unwrap_or_default();
             if name == "warnings" {
                 let note = format!(

@@ -104,6 +104,10 @@ pub struct RunOptions {
     pub picture: Option<PathBuf>,
     /// Threads inside one run (campaigns usually run one run per thread instead).
     pub threads: usize,
+    /// Where an external backend keeps this run's deck, log and dumps (kept after the run); it
+    /// uses a temporary directory otherwise. mbgc's engine writes no such files, and the
+    /// command line refuses the option for it.
+    pub work_dir: Option<PathBuf>,
 }
 
 pub trait Experiment: Send + Sync {
@@ -142,4 +146,14 @@ pub trait Experiment: Send + Sync {
     fn check(&self, p: &ParamSet) -> Result<()>;
     /// Runs the experiment. Same parameters and seed give the same outcome.
     fn run(&self, p: &ParamSet, seed: u64, opts: &RunOptions) -> Result<Outcome>;
+    /// Writes the input files of one run into `dir` for an external code to run later, when the
+    /// experiment runs in one (`mbgc simulate --write-decks`); an experiment of mbgc's own
+    /// engine has nothing to write and refuses.
+    fn write_deck(&self, _p: &ParamSet, _seed: u64, _dir: &std::path::Path) -> Result<()> {
+        Err(crate::error::Error::invalid(format!(
+            "{} runs in mbgc's own engine: it has no deck to write (--write-decks needs \
+             --backend liggghts)",
+            self.name()
+        )))
+    }
 }

@@ -308,6 +308,23 @@ pub struct Flank {
     pub curvature: f64,
 }
 
+/// The bulk density of the struck-off box of size `size`: the mass of the (radius, centre)
+/// spheres inside it, a sphere cut by a face counting by its part inside, over the box's volume.
+/// Every backend measures its runs with this function.
+pub fn box_bulk_density(spheres: impl IntoIterator<Item = (f64, V3)>, rho: f64, size: V3) -> f64 {
+    let [l, w, h] = size;
+    let mass_in: f64 = spheres
+        .into_iter()
+        .map(|(r, x)| rho * sphere_box_volume(x, r, [0.0; 3], size))
+        .sum();
+    mass_in / (l * w * h)
+}
+
+/// The fraction of the struck-off mass that left the box: `removed` over `left + removed`.
+pub fn outflow_fraction(left: f64, removed: f64) -> f64 {
+    1.0 - left / (left + removed)
+}
+
 /// Top surface of the remaining material in columns of width ~d_max across the box (away from
 /// the side walls), keeping the columns on the slope: below the struck-off rim and above the
 /// floor by a particle.
@@ -644,11 +661,15 @@ impl ShearBox {
         let cut: Vec<bool> = sim.particles.x.iter().map(|x| x[2] > h).collect();
         sim.remove_particles(&cut);
         sim.run(chunk).map_err(blew)?;
-        let in_box = |x: V3, r: f64| sphere_box_volume(x, r, [0.0; 3], [l, w, h]);
-        let mass_in: f64 = (0..sim.particles.len())
-            .map(|i| rho * in_box(sim.particles.x[i], sim.particles.r[i]))
-            .sum();
-        let bulk_density = mass_in / (l * w * h);
+        let bulk_density = box_bulk_density(
+            sim.particles
+                .r
+                .iter()
+                .copied()
+                .zip(sim.particles.x.iter().copied()),
+            rho,
+            lay.size,
+        );
         let n_filled = sim.particles.len();
         if let Some(dir) = &opts.vtk_dir {
             crate::dem::vtk::write_vtk(
@@ -736,7 +757,7 @@ impl ShearBox {
             return Err(Error::invalid("shear box: particle bookkeeping failed"));
         }
         let mass_left: f64 = sim.particles.m.iter().sum();
-        let outflow_fraction = 1.0 - mass_left / (mass_left + left_mass);
+        let outflow_fraction = outflow_fraction(mass_left, left_mass);
         let record = RunRecord {
             class: self.class,
             layout: lay.clone(),

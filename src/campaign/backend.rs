@@ -1,0 +1,69 @@
+//! The simulation backend of a campaign: mbgc's embedded DEM, or LIGGGHTS 3.8 run on decks that
+//! mbgc writes (`--backend liggghts`). The backend is part of a run's identity: the same row run
+//! by two codes is two runs, and a table holds the runs of one backend.
+
+use std::fmt;
+
+use crate::error::{Error, Result};
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Backend {
+    /// mbgc's own DEM engine.
+    #[default]
+    Embedded,
+    /// LIGGGHTS-PUBLIC 3.8 (Debian's `liggghts`), one deck per run.
+    Liggghts,
+}
+
+impl Backend {
+    pub const NAMES: [&'static str; 2] = ["embedded", "liggghts"];
+
+    /// `--backend NAME`.
+    pub fn parse(s: &str) -> Result<Backend> {
+        match s.trim() {
+            "embedded" => Ok(Backend::Embedded),
+            "liggghts" => Ok(Backend::Liggghts),
+            other => Err(Error::invalid(format!(
+                "--backend {other}: unknown backend (known: {})",
+                Self::NAMES.join(", ")
+            ))),
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Backend::Embedded => "embedded",
+            Backend::Liggghts => "liggghts",
+        }
+    }
+
+    /// Whether tables and run ids name the backend. The embedded backend is implied, so that
+    /// tables and run ids written before backends existed stay valid.
+    pub fn is_recorded(self) -> bool {
+        self != Backend::Embedded
+    }
+}
+
+impl fmt::Display for Backend {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_unknown_ones_are_refused_with_the_list() {
+        for n in Backend::NAMES {
+            assert_eq!(Backend::parse(n).unwrap().label(), n);
+        }
+        let e = Backend::parse("lammps").unwrap_err().to_string();
+        assert!(
+            e.contains("--backend lammps") && e.contains("liggghts"),
+            "{e}"
+        );
+        assert!(!Backend::Embedded.is_recorded() && Backend::Liggghts.is_recorded());
+    }
+}
