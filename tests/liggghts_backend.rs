@@ -345,9 +345,66 @@ fn options_the_chosen_backend_would_ignore_are_refused_naming_them() {
             ][..],
             "--mpi 0",
         ),
+        (
+            &[
+                "--experiment",
+                "shear-box",
+                "--backend",
+                "liggghts",
+                "--vtk",
+                "v",
+            ][..],
+            "--vtk v",
+        ),
     ] {
         let e = base(extra);
         assert!(e.contains(says), "{extra:?}: {e}");
     }
     assert!(!out.exists(), "nothing was written");
+}
+
+#[test]
+fn liggghts_on_two_mpi_processes_repeats_itself_and_a_table_holds_one_process_count() {
+    if !liggghts_here() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = design(dir.path(), &[(0.3, 0.2), (0.6, 0.4)]);
+    let (a, b) = (dir.path().join("a.csv"), dir.path().join("b.csv"));
+    for t in [&a, &b] {
+        simulate(&d, t, &["--backend", "liggghts", "--mpi", "2"]);
+    }
+    let strip = |t: &Path| {
+        let (h, rows) = read(t);
+        let wall = h.iter().position(|c| c == "wall_time_s").unwrap();
+        rows.iter()
+            .map(|r| {
+                let mut r = r.clone();
+                r.remove(&h[wall]);
+                r
+            })
+            .collect::<Vec<_>>()
+    };
+    let (ra, rb) = (strip(&a), strip(&b));
+    assert_eq!(ra, rb, "the same runs on the same number of processes");
+    assert!(ra.iter().all(|r| r["status"] == "done"));
+    let meta = std::fs::read_to_string(dir.path().join("a.csv.meta.json")).unwrap();
+    assert!(meta.contains("\"mpi\": 2"), "{meta}");
+    // Resuming on one process would mix trajectories of two process counts in one table.
+    let mut args = vec![
+        "simulate",
+        "--design",
+        s(&d),
+        "--experiment",
+        "shear-box",
+        "--box-scale",
+        "4",
+        "--out",
+        s(&a),
+        "--backend",
+        "liggghts",
+    ];
+    args.extend(SET);
+    let e = fails(&args);
+    assert!(e.contains("MPI process") && e.contains("--mpi 2"), "{e}");
 }

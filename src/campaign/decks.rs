@@ -12,13 +12,14 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::backend::Backend;
+use super::lock::TableLock;
 use super::plan::{Plan, Shard};
 use super::registry::ExperimentSettings;
 use crate::dem::contact::ModelClass;
 use crate::dem::experiments::Experiment;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::liggghts::fill_run::{state, RunState, RUN_END};
-use crate::liggghts::shear_box_fill::{INPUT, LOG};
+use crate::liggghts::shear_box_fill::{FINAL_DUMP, INPUT, LOG};
 
 pub const CAMPAIGN_FILE: &str = "campaign.json";
 pub const DESIGN_FILE: &str = "design.csv";
@@ -67,9 +68,9 @@ impl DeckCampaign {
         })
     }
 
-    /// The settings the decks were written with. The processes a user runs a deck on are not
-    /// known, so imported runs are identified as one-process runs.
-    pub fn settings(&self, dir: &Path) -> Result<ExperimentSettings> {
+    /// The settings the decks were written with, and the MPI processes the user ran them on
+    /// (`campaign import --mpi`, recorded in the table's sidecar).
+    pub fn settings(&self, dir: &Path, mpi: Option<usize>) -> Result<ExperimentSettings> {
         let file = dir.join(CAMPAIGN_FILE).display().to_string();
         let class = ModelClass::parse(&self.model_class.replace('+', ","))
             .map_err(|e| Error::input(&file, "model_class", e.to_string()))?;
@@ -79,12 +80,17 @@ impl DeckCampaign {
             box_scale: self.box_scale,
             model_class: Some(class),
             backend,
-            mpi: None,
+            mpi,
         })
     }
 
-    /// The plan of the decks in `dir`, for `experiment` (built from [`Self::settings`]).
-    pub fn plan(&self, dir: &Path, experiment: &dyn Experiment) -> Result<Plan> {
+    /// The plan of the decks in `dir`, for `experiment` (built from `settings`).
+    pub fn plan(
+        &self,
+        dir: &Path,
+        experiment: &dyn Experiment,
+        settings: &ExperimentSettings,
+    ) -> Result<Plan> {
         let file = dir.join(CAMPAIGN_FILE).display().to_string();
         let shard = self
             .shard
@@ -97,7 +103,7 @@ impl DeckCampaign {
             &dir.join(DESIGN_FILE),
             &self.set,
             self.seed,
-            &self.settings(dir)?,
+            settings,
             shard,
         )
     }
@@ -115,6 +121,8 @@ pub struct WrittenDecks {
 /// run script. A directory that already holds decks of another campaign is refused.
 pub fn write_decks(experiment: &dyn Experiment, plan: &Plan, dir: &Path) -> Result<WrittenDecks> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    // Two writers (two shards at once) would each keep only their own shard in campaign.json.
+    let _lock = TableLock::acquire(&dir.join(CAMPAIGN_FILE))?;
     let mut campaign = DeckCampaign::of(plan);
     let design_copy = dir.join(DESIGN_FILE);
     let design_bytes = std::fs::read(&plan.design).map_err(|e| Error::io(&plan.design, e))?;
@@ -147,8 +155,30 @@ pub fn write_decks(experiment: &dyn Experiment, plan: &Plan, dir: &Path) -> Resu
     for run in plan.selected() {
         let d = dir.join(&run.run_id);
         if d.join(INPUT).exists() {
-            written.kept += 1;
-            continue;
+            // A deck is a function of its row: one that differs was edited (or written by
+            // another mbgc). Unrun, it is replaced; run, its results would not be this row's.
+            let fresh =
+                tempfile::tempdir().map_err(|e| Error::invalid(format!("temp dir: {e}")))?;
+            experiment.write_deck(&run.params, run.seed, fresh.path())?;
+            let same =
+                std::fs::read(fresh.path().join(INPUT)).ok() == std::fs::read(d.join(INPUT)).ok();
+            if same {
+                written.kept += 1;
+                continue;
+            }
+            if d.join(LOG).exists() {
+                return Err(Error::input(
+                    d.join(INPUT).display(),
+                    "deck",
+                    format!(
+                        "row {}'s deck, found another one that has been run ({}); remove {} to \
+                         write and run it again",
+                        run.row,
+                        LOG,
+                        d.display()
+                    ),
+                ));
+            }
         }
         experiment.write_deck(&run.params, run.seed, &d)?;
         written.written += 1;
@@ -167,21 +197,26 @@ pub fn write_decks(experiment: &dyn Experiment, plan: &Plan, dir: &Path) -> Resu
     Ok(written)
 }
 
-/// A script that runs, N at a time, every deck whose log does not show a finished run.
+/// A script that runs, N at a time, every deck whose run has not finished; it exits non-zero
+/// when a run failed.
 fn run_script() -> String {
     format!(
         "#!/bin/sh\n\
-         # Runs every deck here that has not finished, N at a time: ./{RUN_SCRIPT} [N] [LIGGGHTS]\n\
-         # (LIGGGHTS: the command, default liggghts; e.g. \"mpirun -np 4 liggghts\").\n\
+         # Runs every deck here whose run has not finished, N at a time:\n\
+         #   ./{RUN_SCRIPT} [N] [COMMAND]   (COMMAND, split at spaces: default liggghts; e.g.\n\
+         #   \"mpirun -np 4 liggghts\", then import with --mpi 4)\n\
          # Then: mbgc campaign import --decks <this directory> --out <table.csv>\n\
          cd \"$(dirname \"$0\")\" || exit 1\n\
-         N=\"${{1:-1}}\" LMP=\"${{2:-liggghts}}\"\n\
+         N=\"${{1:-1}}\"\n\
+         case \"$N\" in ''|*[!0-9]*|0) echo \"{RUN_SCRIPT}: N must be a whole number >= 1, found '$N'\" >&2; exit 2;; esac\n\
+         LMP=\"${{2:-liggghts}}\"\n\
          export LMP\n\
-         for d in */; do [ -f \"${{d}}{INPUT}\" ] && echo \"${{d%/}}\"; done | xargs -P \"$N\" -I{{}} sh -c '\n\
-           cd \"{{}}\" || exit 1\n\
-           grep -q \"^{RUN_END}\" {LOG} 2>/dev/null && exit 0\n\
-           $LMP -in {INPUT} -log {LOG} -screen /dev/null > /dev/null 2>&1 || echo \"{{}}: failed (see {{}}/{LOG})\" >&2\n\
-         '\n"
+         for d in */; do [ -f \"${{d}}{INPUT}\" ] && printf '%s\\0' \"${{d%/}}\"; done | \\\n\
+         xargs -0 -n 1 -P \"$N\" sh -c '\n\
+           cd \"$1\" || exit 1\n\
+           grep -q \"^{RUN_END}\" {LOG} 2>/dev/null && [ -f {FINAL_DUMP} ] && exit 0\n\
+           $LMP -in {INPUT} -log {LOG} -screen /dev/null > /dev/null 2>&1 || {{ echo \"$1: failed (see $1/{LOG})\" >&2; exit 1; }}\n\
+         ' sh\n"
     )
 }
 

@@ -39,7 +39,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
 }
 
 /// Refuses tables whose sidecars say they were run as different campaigns (another seed, `--set`,
-/// box scale, experiment or design size): their rows would not collide by run id, so nothing
+/// box scale, model class, backend, MPI processes, experiment or design size): their rows would not collide by run id, so nothing
 /// else would notice. Tables without a sidecar (already merged) are not compared.
 fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
     let mut first: Option<(&PathBuf, Meta)> = None;
@@ -67,6 +67,16 @@ fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
                 "design rows",
                 m0.design_rows.to_string(),
                 m.design_rows.to_string(),
+            ),
+            (
+                "--backend",
+                m0.backend.clone().unwrap_or_else(|| "embedded".into()),
+                m.backend.clone().unwrap_or_else(|| "embedded".into()),
+            ),
+            (
+                "--mpi",
+                m0.mpi.unwrap_or(1).to_string(),
+                m.mpi.unwrap_or(1).to_string(),
             ),
         ];
         if let Some((what, a, b)) = differs.iter().find(|(_, a, b)| a != b) {

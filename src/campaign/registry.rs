@@ -20,8 +20,10 @@ pub struct ExperimentSettings {
     pub model_class: Option<ModelClass>,
     /// `--backend`: the code that simulates (part of each run's identity).
     pub backend: Backend,
-    /// `--mpi N`: MPI processes per run of an external backend. Part of each run's identity
-    /// when N > 1: LIGGGHTS repeats a run exactly on the same N, not on another.
+    /// `--mpi N`: MPI processes per run of an external backend. LIGGGHTS repeats a run exactly
+    /// on the same N, not on another (the domain decomposition reorders the force sums and the
+    /// granular flow amplifies it), so a table records its N in the sidecar and holds runs of
+    /// one N; the run id names the physical run and leaves N out, as it leaves out the threads.
     pub mpi: Option<usize>,
 }
 
@@ -85,7 +87,13 @@ pub fn experiment_for_import(
             settings.backend
         )));
     }
-    liggghts_experiment(name, settings, DeckMode::Import)
+    liggghts_experiment(
+        name,
+        settings,
+        DeckMode::Import {
+            ranks: settings.mpi.unwrap_or(1),
+        },
+    )
 }
 
 /// Refuses `--box-scale` for an experiment that would ignore it.

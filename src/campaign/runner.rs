@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::columns::{is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
-use super::status::Meta;
+use super::status::{meta_path, Meta};
 use super::table::{self, csv_line, read_table, DONE, FAILED};
 use crate::dem::experiments::{Experiment, Outcome, RunOptions};
 use crate::error::{write_atomic, Error, Result};
@@ -267,6 +267,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
         if !t.header.is_empty() && t.header != columns {
             return Err(header_mismatch(&file, &columns, &t.header));
         }
+        let identity = plan.identity_len();
         for (line, rec) in &t.records {
             let field = || format!("line {line}");
             let row: usize = rec[1].parse().map_err(|_| {
@@ -300,9 +301,10 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                     &file,
                     field(),
                     format!(
-                        "row {row} has run_id {}, but {} on this design with this --seed, --set \
-                         and --box-scale gives {}: the table comes from another campaign; choose \
-                         another --out",
+                        "row {row} has run_id {}, but {} on this design with this --seed, --set, \
+                         --box-scale, --model-class, --backend and --mpi gives {}: the table \
+                         comes from another campaign (its <out>.meta.json says how it was run); \
+                         choose another --out",
                         &rec[0], plan.experiment, planned.run_id
                     ),
                 ));
@@ -310,7 +312,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
             // The run id is not recomputed from the line, so a hand-edited input would otherwise
             // pass as this campaign's run.
             for (k, (name, want)) in planned.params.iter().enumerate() {
-                let field = &rec[plan.identity_len() + k];
+                let field = &rec[identity + k];
                 let same = field
                     .parse::<f64>()
                     .is_ok_and(|v| v.to_bits() == want.to_bits());
@@ -327,7 +329,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
             }
             if rec[2] == *DONE {
                 for (k, name) in plan.responses.iter().enumerate() {
-                    let field = &rec[plan.identity_len() + plan.inputs.len() + k];
+                    let field = &rec[identity + plan.inputs.len() + k];
                     if field.parse::<f64>().is_err() {
                         return Err(Error::input(
                             &file,
@@ -338,6 +340,22 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                 }
             }
             present.insert(rec[0].to_string(), rec[2] == *FAILED);
+        }
+    }
+    if let (Some(t), Some(m)) = (&table, Meta::read(out)?) {
+        let (theirs, ours) = (m.mpi.unwrap_or(1), plan.settings.mpi.unwrap_or(1));
+        // Failed lines hold no result of either count.
+        let done = t.records.iter().any(|(_, r)| r.get(2) == Some(DONE));
+        if theirs != ours && done {
+            return Err(Error::input(
+                meta_path(out).display(),
+                "mpi",
+                format!(
+                    "runs on {theirs} MPI process(es), but this command asks for {ours}: LIGGGHTS \
+                     repeats a run only on the same count, so a table holds one; pass --mpi \
+                     {theirs} to resume it, or choose another --out"
+                ),
+            ));
         }
     }
     Meta::of(plan).write(out)?;

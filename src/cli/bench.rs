@@ -3,8 +3,8 @@
 use clap::{Args, Subcommand};
 
 use crate::studies::{
-    dem_throughput, diagnose_report, gp_vs_gplearn, metamodel_report, restitution,
-    sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
+    dem_throughput, diagnose_report, gp_vs_gplearn, liggghts_backend, metamodel_report,
+    restitution, sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
 };
 
 #[derive(Debug, Args)]
@@ -43,6 +43,9 @@ pub enum BenchCommand {
     /// docs/sensitivity.md: seed 000's power laws, PCA and sensitivity matrix on the hopper's
     /// 36-run design (from its campaign table), each finding checked; Sobol indices of a model.
     Sensitivity(sensitivity_report::Args),
+    /// docs/liggghts_backend.md: the shear box of seed 004's size as a campaign on mbgc's
+    /// engine, LIGGGHTS on 1 process and LIGGGHTS on 2 MPI processes; means and time per run.
+    LiggghtsBackend(liggghts_backend::Args),
 }
 
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
@@ -56,5 +59,6 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Restitution(r) => restitution::run(r),
         BenchCommand::Diagnose(d) => diagnose_report::run(d),
         BenchCommand::Sensitivity(s) => sensitivity_report::run(s),
+        BenchCommand::LiggghtsBackend(l) => liggghts_backend::run(l),
     }
 }

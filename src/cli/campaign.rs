@@ -40,6 +40,13 @@ pub struct ImportArgs {
     /// Threads reading and measuring runs [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
+    /// The MPI processes the decks ran on (part of each run's identity when more than one);
+    /// a run on another number is refused and recorded as failed.
+    #[arg(long, value_name = "N")]
+    pub mpi: Option<usize>,
+    /// Read again the runs recorded as failed (a deck rerun or rewritten since).
+    #[arg(long)]
+    pub retry_failed: bool,
     /// Standard output holds one JSON object; the text goes to standard error.
     #[arg(long)]
     pub json: bool,
@@ -84,9 +91,9 @@ fn run_import(a: &ImportArgs) -> anyhow::Result<()> {
     let design = a.decks.join(DESIGN_FILE);
     refuse_overwriting_inputs("--out", &a.out, &[("the decks' design", &design)])?;
     let campaign = DeckCampaign::read(&a.decks)?;
-    let settings = campaign.settings(&a.decks)?;
+    let settings = campaign.settings(&a.decks, a.mpi)?;
     let experiment = experiment_for_import(&campaign.experiment, &settings)?;
-    let plan = campaign.plan(&a.decks, experiment.as_ref())?;
+    let plan = campaign.plan(&a.decks, experiment.as_ref(), &settings)?;
     let (ready, missing) = ready_runs(&plan, &a.decks);
     let stray = stray_dirs(&plan, &a.decks)?;
     if !stray.is_empty() {
@@ -108,6 +115,7 @@ fn run_import(a: &ImportArgs) -> anyhow::Result<()> {
         &CampaignOptions {
             work_dir: Some(a.decks.clone()),
             only: Some(ready),
+            retry_failed: a.retry_failed,
             ..CampaignOptions::new(a.out.clone(), threads)
         },
     )?;
@@ -151,7 +159,7 @@ fn run_import(a: &ImportArgs) -> anyhow::Result<()> {
     if failed > 0 {
         anyhow::bail!(
             "{failed} imported runs failed: they have status=failed and their reason in the error \
-             column of {}",
+             column of {}; after rerunning or rewriting their decks, import with --retry-failed",
             a.out.display()
         );
     }

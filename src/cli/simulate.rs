@@ -73,7 +73,7 @@ pub struct SimulateArgs {
     pub decks: Option<PathBuf>,
     /// Write the LIGGGHTS decks into DIR/<run_id>/ without running them (with DIR/run_all.sh);
     /// `mbgc campaign import --decks DIR` reads the results back. --out is then not written.
-    #[arg(long, value_name = "DIR", conflicts_with = "decks")]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["decks", "threads", "retry_failed", "vtk"])]
     pub write_decks: Option<PathBuf>,
     /// Standard output holds one JSON object (the run counts); text goes to standard error.
     #[arg(long)]
@@ -122,6 +122,13 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             }
         }
     }
+    if let (Backend::Liggghts, Some(v)) = (a.backend, &a.vtk) {
+        anyhow::bail!(
+            "--vtk {}: the LIGGGHTS backend writes no VTK snapshots, so it would do nothing; its \
+             dumps are kept with --decks DIR",
+            v.display()
+        );
+    }
     if let (Some(n), Some(_)) = (a.mpi, &a.write_decks) {
         anyhow::bail!(
             "--mpi {n}: --write-decks runs nothing, so it would do nothing; choose the processes \
@@ -129,6 +136,31 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         );
     }
     let experiment = experiment_by_name(&a.experiment, &settings)?;
+    if a.backend == Backend::Liggghts && a.write_decks.is_none() {
+        // Checked before the table is touched: otherwise every row would become a failed line.
+        crate::liggghts::require_binary()?;
+        if a.mpi.unwrap_or(1) > 1 {
+            crate::liggghts::require_mpirun()?;
+        }
+        if let Some(d) = &a.decks {
+            if d.join(crate::campaign::decks::CAMPAIGN_FILE).exists() {
+                anyhow::bail!(
+                    "--decks {}: holds decks written by --write-decks; read their runs with \
+                     `mbgc campaign import --decks {}`",
+                    d.display(),
+                    d.display()
+                );
+            }
+            std::fs::create_dir_all(d)
+                .and_then(|()| tempfile::tempfile_in(d).map(drop))
+                .map_err(|e| {
+                    anyhow::anyhow!(
+                        "--decks {}: cannot write there ({e}); expected a writable directory",
+                        d.display()
+                    )
+                })?;
+        }
+    }
     let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
     let set = a
         .set

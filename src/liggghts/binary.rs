@@ -48,12 +48,21 @@ pub fn run_deck_on(binary: &Path, dir: &Path, input: &str, log: &str, ranks: usi
     let args = ["-in", input, "-log", log, "-screen", "/dev/null"];
     let mut cmd = if ranks > 1 {
         let mut c = Command::new(MPIRUN);
-        c.args(["-np", &ranks.to_string()])
-            .arg(binary)
-            .args(args)
-            // Open MPI refuses root unless told twice; containers and CI run as root.
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+        // Inside a Slurm task Open MPI counts its slots from the task count, and several runs at
+        // once would each bind their ranks to the same first cores: the caller sizes the runs
+        // to the cores it has, so neither limit applies.
+        c.args([
+            "-np",
+            &ranks.to_string(),
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+        ])
+        .arg(binary)
+        .args(args)
+        // Open MPI refuses root unless told twice; containers and CI run as root.
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
         c
     } else {
         let mut c = Command::new(binary);
@@ -102,6 +111,19 @@ pub fn run_deck_on(binary: &Path, dir: &Path, input: &str, log: &str, ranks: usi
             error_line
         }
     )))
+}
+
+/// The MPI launcher, or an error saying how to install it.
+pub fn require_mpirun() -> Result<PathBuf> {
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    std::env::split_paths(&path)
+        .map(|dir| dir.join(MPIRUN))
+        .find(|p| is_executable(p))
+        .ok_or_else(|| {
+            Error::invalid(format!(
+                "--mpi: {MPIRUN} not found on PATH (Debian: apt-get install openmpi-bin)"
+            ))
+        })
 }
 
 /// The LIGGGHTS executable, or an error saying how to install it.

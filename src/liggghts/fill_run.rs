@@ -131,19 +131,34 @@ impl FillRun {
             .ok_or_else(|| Error::input(&file, "first line", "'LIGGGHTS (Version ...)'"))?
             .to_owned();
         // "Loop time of T on P procs for N steps with A atoms": one line per `run` command.
-        let (mut steps, mut loop_seconds, mut procs) = (0, 0.0, 1);
+        let (mut steps, mut loop_seconds, mut procs, mut runs) = (0u64, 0.0, 1, 0);
         for l in log.lines().filter(|l| l.starts_with("Loop time of ")) {
             let w: Vec<&str> = l.split_whitespace().collect();
             let bad = || Error::input(&file, "Loop time", format!("a readable line, found {l:?}"));
-            loop_seconds += w
+            let seconds = w
                 .get(3)
                 .and_then(|s| s.parse::<f64>().ok())
+                .filter(|s| s.is_finite() && *s >= 0.0)
                 .ok_or_else(bad)?;
-            procs = w.get(5).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
-            steps += w
+            loop_seconds += seconds;
+            procs = w
+                .get(5)
+                .and_then(|s| s.parse().ok())
+                .filter(|p| *p >= 1)
+                .ok_or_else(bad)?;
+            let n = w
                 .get(8)
                 .and_then(|s| s.parse::<u64>().ok())
                 .ok_or_else(bad)?;
+            steps = steps.checked_add(n).ok_or_else(bad)?;
+            runs += 1;
+        }
+        if runs == 0 {
+            return Err(Error::input(
+                &file,
+                "Loop time",
+                "a 'Loop time of ...' line per run command, found none",
+            ));
         }
         let read = |name: &str| -> Result<Spheres> {
             let f = dir.join(name);

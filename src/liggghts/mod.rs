@@ -21,6 +21,6 @@ pub mod shear_box;
 pub mod shear_box_experiment;
 pub mod shear_box_fill;
 
-pub use binary::{find_binary, require_binary, run_deck, run_deck_on};
+pub use binary::{find_binary, require_binary, require_mpirun, run_deck, run_deck_on};
 pub use closed_box::{LiggghtsCase, LiggghtsResult};
 pub use parse::{parse_dump, parse_dump_rows, parse_log, LogSummary};

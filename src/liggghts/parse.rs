@@ -28,11 +28,16 @@ pub fn parse_dump_rows(file: &str, text: &str) -> Result<Vec<(usize, f64, [f64; 
                     "5 numbers: id radius x y z",
                 )
             })?;
-        if v.len() != 5 || v.iter().any(|x| !x.is_finite()) || v[0] < 1.0 || v[0].fract() != 0.0 {
+        if v.len() != 5
+            || v.iter().any(|x| !x.is_finite())
+            || v[0] < 1.0
+            || v[0].fract() != 0.0
+            || v[1] <= 0.0
+        {
             return Err(Error::input(
                 file,
                 format!("atom row {}", k + 1),
-                "5 finite numbers: id radius x y z",
+                "5 finite numbers: id radius x y z, with a whole id >= 1 and a radius > 0",
             ));
         }
         rows.push((v[0] as usize, v[1], [v[2], v[3], v[4]]));

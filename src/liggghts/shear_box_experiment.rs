@@ -9,13 +9,15 @@
 //!
 //! In [`DeckMode::Import`] nothing is run: the run's directory holds a deck that a user ran
 //! (`--write-decks`, then LIGGGHTS on their machine), and its results are read back after
-//! checking that the deck there is the one this row would write.
+//! checking that the deck there is the one this row would write and that it ran on the number
+//! of MPI processes the import was told (part of the run's identity). A run directory kept with
+//! `--decks` that holds this row's finished run is likewise read, not run again.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::binary::{require_binary, run_deck_on};
-use super::fill_run::{FillRun, Spheres};
+use super::fill_run::{state, FillRun, RunState, Spheres};
 use super::shear_box::gran_model;
 use super::shear_box_fill::{
     fill_deck, write_fill_deck, FillDeck, CLASSES, FILLED_DUMP, FINAL_DUMP, INPUT, INSERTED_DUMP,
@@ -34,8 +36,8 @@ use crate::error::{read_to_string, Error, Result};
 pub enum DeckMode {
     /// Write the deck, run LIGGGHTS on `ranks` MPI processes, measure.
     Run { ranks: usize },
-    /// Measure a deck someone else ran (the directory must be given).
-    Import,
+    /// Measure a deck someone else ran on `ranks` MPI processes (the directory must be given).
+    Import { ranks: usize },
 }
 
 #[derive(Debug, Clone)]
@@ -49,7 +51,10 @@ impl LiggghtsShearBox {
     /// Refuses a model class with an effect LIGGGHTS 3.8 lacks (naming it) and zero ranks.
     pub fn new(shear_box: ShearBox, mode: DeckMode) -> Result<Self> {
         gran_model(&shear_box.class)?;
-        if mode == (DeckMode::Run { ranks: 0 }) {
+        if matches!(
+            mode,
+            DeckMode::Run { ranks: 0 } | DeckMode::Import { ranks: 0 }
+        ) {
             return Err(Error::invalid("--mpi 0: expected at least 1 process"));
         }
         Ok(LiggghtsShearBox { shear_box, mode })
@@ -63,7 +68,13 @@ impl LiggghtsShearBox {
     fn run_in(&self, p: &ParamSet, seed: u64, dir: &Path) -> Result<Outcome> {
         let clock = Instant::now();
         let deck = self.deck(p, seed)?;
+        // A run that finished here before (a crash of mbgc after LIGGGHTS was done, or a
+        // restart) is read, not run again, if its deck is this row's.
+        let reuse = matches!(self.mode, DeckMode::Run { .. })
+            && state(dir) == RunState::Finished
+            && self.check_deck(p, &deck, dir).is_ok();
         match self.mode {
+            DeckMode::Run { .. } if reuse => {}
             DeckMode::Run { ranks } => {
                 let binary = require_binary()?;
                 std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -77,13 +88,15 @@ impl LiggghtsShearBox {
                 write_fill_deck(dir, p, &deck)?;
                 run_deck_on(&binary, dir, INPUT, LOG, ranks)?;
             }
-            DeckMode::Import => self.check_deck(p, &deck, dir)?,
+            DeckMode::Import { .. } => self.check_deck(p, &deck, dir)?,
         }
         let run = FillRun::read(dir)?;
-        let mut o = self.measure(p, &deck, &run)?;
+        let mut o = self
+            .measure(p, &deck, &run)
+            .map_err(|e| Error::invalid(format!("{}: {e}", dir.display())))?;
         o.diagnostics.wall_time_s = match self.mode {
-            DeckMode::Run { .. } => clock.elapsed().as_secs_f64(),
-            DeckMode::Import => run.loop_seconds,
+            DeckMode::Run { .. } if !reuse => clock.elapsed().as_secs_f64(),
+            _ => run.loop_seconds,
         };
         Ok(o)
     }
@@ -107,9 +120,11 @@ impl LiggghtsShearBox {
                 format!("line {}", line + 1),
                 format!(
                     "the deck this row writes ({:?}), found {:?}: the directory holds another \
-                     run's deck; write the decks again with the same command",
+                     run's deck or an edited one; remove {} and write the decks again \
+                     (--write-decks), then run and import it (--retry-failed)",
                     want.lines().nth(line).unwrap_or(""),
-                    found.lines().nth(line).unwrap_or("")
+                    found.lines().nth(line).unwrap_or(""),
+                    dir.display()
                 ),
             ));
         }
@@ -147,10 +162,21 @@ impl LiggghtsShearBox {
         if !stopped {
             warnings.push("outflow did not come to rest within the time limit".into());
         }
-        if self.mode == DeckMode::Import && run.procs > 1 {
-            // The id of an imported run is a one-process run's; another process count gives
-            // another (equally valid) trajectory.
-            warnings.push(format!("run by LIGGGHTS on {} MPI processes", run.procs));
+        let ranks = match self.mode {
+            DeckMode::Run { ranks } | DeckMode::Import { ranks } => ranks,
+        };
+        if run.procs != ranks {
+            // The process count is part of the run's identity: another count is another
+            // (equally valid) trajectory, which this row's id does not name.
+            return Err(Error::input(
+                "log.shear_box_fill",
+                "Loop time",
+                format!(
+                    "a run on {ranks} MPI process(es) (--mpi {ranks}), found one on {}; import \
+                     it with --mpi {}",
+                    run.procs, run.procs
+                ),
+            ));
         }
         let (m_filled, m_last) = (mass(&run.filled), mass(&run.last));
         Ok(Outcome {
@@ -218,7 +244,7 @@ impl Experiment for LiggghtsShearBox {
         }
         match (&opts.work_dir, self.mode) {
             (Some(dir), _) => self.run_in(p, seed, dir),
-            (None, DeckMode::Import) => Err(Error::invalid(
+            (None, DeckMode::Import { .. }) => Err(Error::invalid(
                 "importing a LIGGGHTS run needs the directory it ran in",
             )),
             (None, DeckMode::Run { .. }) => {

@@ -13,12 +13,15 @@
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
 //! - [`sensitivity_report`]: seed 000's three-level sensitivity analysis on the hopper
 //!   (docs/sensitivity.md).
+//! - [`liggghts_backend`]: the shear box as a campaign on mbgc, LIGGGHTS and LIGGGHTS under MPI
+//!   (docs/liggghts_backend.md).
 //! - [`reference`]: the reference codes (`--vs`).
 
 pub mod dem_scene;
 pub mod dem_throughput;
 pub mod diagnose_report;
 pub mod gp_vs_gplearn;
+pub mod liggghts_backend;
 pub mod metamodel_report;
 pub mod reference;
 pub mod restitution;

@@ -249,6 +249,9 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
             seed.to_string(),
             plan.model_class_label(),
         ];
+        if plan.settings.backend.is_recorded() {
+            f.push(plan.settings.backend.label().to_string());
+        }
         for (name, want) in planned.params.iter() {
             let v = match col(name) {
                 Some(c) => {
