@@ -121,6 +121,10 @@ pub fn write_fill_deck(dir: &Path, p: &ParamSet, d: &FillDeck) -> Result<()> {
         "# mbgc shear box, filled by LIGGGHTS itself. Type 1: particles, type 2: walls.\n",
     );
     let _ = writeln!(s, "units si\natom_style granular\natom_modify map array\nboundary f f f\nnewton off\ncommunicate single vel yes");
+    // Under MPI the domain is cut into equal slabs. The box and the poured column sit in the
+    // middle of the domain in y but fill only a part of it in x (room for the outflow) and z
+    // (the fall), so only cuts in y give every process a share of the particles.
+    let _ = writeln!(s, "processors 1 * 1");
     let _ = writeln!(
         s,
         "region domain block {} {} {} {} {} {} units box\ncreate_box 2 domain",
