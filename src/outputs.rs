@@ -21,6 +21,11 @@ fn resolved(p: &Path) -> PathBuf {
     }
 }
 
+/// Whether two paths name the same file once written (symlinks and `..` resolved).
+pub fn same_path(a: &Path, b: &Path) -> bool {
+    resolved(a) == resolved(b)
+}
+
 /// Refuses an output (`option`, e.g. `--out`) that is the same file as one of the named inputs.
 pub fn refuse_overwriting_inputs(option: &str, out: &Path, inputs: &[(&str, &Path)]) -> Result<()> {
     let target = resolved(out);

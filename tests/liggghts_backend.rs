@@ -361,6 +361,31 @@ fn options_the_chosen_backend_would_ignore_are_refused_naming_them() {
         assert!(e.contains(says), "{extra:?}: {e}");
     }
     assert!(!out.exists(), "nothing was written");
+    // Someone else's files are not overwritten by decks.
+    let theirs = dir.path().join("theirs");
+    std::fs::create_dir(&theirs).unwrap();
+    std::fs::write(theirs.join("design.csv"), "mine\n").unwrap();
+    let mut a = vec![
+        "simulate",
+        "--design",
+        s(&d),
+        "--experiment",
+        "shear-box",
+        "--backend",
+        "liggghts",
+        "--write-decks",
+        s(&theirs),
+    ];
+    a.extend(SET);
+    let e = fails(&a);
+    assert!(
+        e.contains("--write-decks") && e.contains("no deck directory"),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(theirs.join("design.csv")).unwrap(),
+        "mine\n"
+    );
 }
 
 #[test]
@@ -387,7 +412,9 @@ fn liggghts_on_two_mpi_processes_repeats_itself_and_a_table_holds_one_process_co
     };
     let (ra, rb) = (strip(&a), strip(&b));
     assert_eq!(ra, rb, "the same runs on the same number of processes");
-    assert!(ra.iter().all(|r| r["status"] == "done"));
+    assert!(ra
+        .iter()
+        .all(|r| r["status"] == "done" && r["backend"] == "liggghts-np2"));
     let meta = std::fs::read_to_string(dir.path().join("a.csv.meta.json")).unwrap();
     assert!(meta.contains("\"mpi\": 2"), "{meta}");
     // Resuming on one process would mix trajectories of two process counts in one table.
@@ -406,5 +433,8 @@ fn liggghts_on_two_mpi_processes_repeats_itself_and_a_table_holds_one_process_co
     ];
     args.extend(SET);
     let e = fails(&args);
-    assert!(e.contains("MPI process") && e.contains("--mpi 2"), "{e}");
+    assert!(
+        e.contains("MPI processes") && e.contains("liggghts-np2"),
+        "{e}"
+    );
 }

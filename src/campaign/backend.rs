@@ -44,6 +44,17 @@ impl Backend {
     }
 }
 
+/// The `backend` field of a table line: the backend, and the MPI processes when more than one
+/// (`liggghts-np2`). LIGGGHTS repeats a run exactly on the same count only, so the table itself
+/// says which count made each line, and a resume or merge with another count is refused even
+/// without the sidecar.
+pub fn table_field(backend: Backend, mpi: Option<usize>) -> String {
+    match mpi {
+        Some(n) if n > 1 => format!("{}-np{n}", backend.label()),
+        _ => backend.label().to_string(),
+    }
+}
+
 impl fmt::Display for Backend {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.label())
@@ -65,5 +76,8 @@ mod tests {
             "{e}"
         );
         assert!(!Backend::Embedded.is_recorded() && Backend::Liggghts.is_recorded());
+        assert_eq!(table_field(Backend::Liggghts, None), "liggghts");
+        assert_eq!(table_field(Backend::Liggghts, Some(1)), "liggghts");
+        assert_eq!(table_field(Backend::Liggghts, Some(2)), "liggghts-np2");
     }
 }

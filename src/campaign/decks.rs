@@ -120,6 +120,26 @@ pub struct WrittenDecks {
 /// Writes the decks of the plan's shard into `dir`, with the campaign, the design's copy and the
 /// run script. A directory that already holds decks of another campaign is refused.
 pub fn write_decks(experiment: &dyn Experiment, plan: &Plan, dir: &Path) -> Result<WrittenDecks> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::invalid(format!(
+            "--write-decks {}: is a file; expected a directory",
+            dir.display()
+        )));
+    }
+    // Files of someone else's must not be replaced by a campaign.json, design.csv or deck.
+    let foreign = dir.is_dir()
+        && !dir.join(CAMPAIGN_FILE).exists()
+        && std::fs::read_dir(dir)
+            .map_err(|e| Error::io(dir, e))?
+            .next()
+            .is_some();
+    if foreign {
+        return Err(Error::invalid(format!(
+            "--write-decks {}: holds files but no {CAMPAIGN_FILE}, so it is no deck directory of \
+             mbgc's; expected a new or empty directory",
+            dir.display()
+        )));
+    }
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     // Two writers (two shards at once) would each keep only their own shard in campaign.json.
     let _lock = TableLock::acquire(&dir.join(CAMPAIGN_FILE))?;

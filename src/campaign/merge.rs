@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use csv::StringRecord;
 
-use super::columns::{is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
+use super::columns::{backend_of, is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
 use super::lock::TableLock;
 use super::status::Meta;
 use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
@@ -109,6 +109,8 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
     let mut by_row: HashMap<u64, (String, String, u64)> = HashMap::new();
     // The first model class seen, with where: a table holds one class.
     let mut class: Option<(String, String, u64)> = None;
+    // Likewise the backend (with its MPI process count), in tables that name it.
+    let mut backend: Option<(String, String, u64)> = None;
     let mut summary = MergeSummary {
         rows: 0,
         duplicates: 0,
@@ -162,6 +164,22 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
                 )
             })?;
             let id = r[0].to_string();
+            if let Some(b) = backend_of(&t.header, &r) {
+                match &backend {
+                    None => backend = Some((b, file.clone(), line)),
+                    Some((b0, f0, l0)) if *b0 != b => {
+                        return Err(Error::input(
+                            &file,
+                            format!("line {line}, column backend"),
+                            format!(
+                                "{b} here but {b0} in {f0} line {l0}: runs of different codes \
+                                 or MPI process counts are different campaigns"
+                            ),
+                        ));
+                    }
+                    Some(_) => {}
+                }
+            }
             let c = &r[MODEL_CLASS_COLUMN];
             match &class {
                 None => class = Some((c.to_string(), file.clone(), line)),

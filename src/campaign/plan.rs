@@ -321,6 +321,14 @@ impl Plan {
         columns::columns(&self.inputs, &self.responses, self.settings.backend)
     }
 
+    /// The `backend` field of this plan's lines, when its table has that column.
+    pub fn backend_field(&self) -> Option<String> {
+        self.settings
+            .backend
+            .is_recorded()
+            .then(|| super::backend::table_field(self.settings.backend, self.settings.mpi))
+    }
+
     /// The identity columns of this plan's table (fixed ones, and `backend` when recorded).
     pub fn identity_len(&self) -> usize {
         columns::identity_len(&self.columns())

@@ -14,7 +14,9 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::columns::{is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
+use super::columns::{
+    identity_len, is_pre_class_header, FIXED_COLUMNS, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE,
+};
 use super::lock::TableLock;
 use super::plan::{Plan, PlannedRun};
 use super::status::{meta_path, Meta};
@@ -264,6 +266,46 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
         if is_pre_class_header(&t.header) {
             return Err(Error::input(&file, "header", PRE_CLASS_TABLE));
         }
+        let theirs_recorded = identity_len(&t.header) > FIXED_COLUMNS.len();
+        let ours = plan.backend_field();
+        if !t.header.is_empty() && theirs_recorded != ours.is_some() {
+            return Err(Error::input(
+                &file,
+                "header",
+                format!(
+                    "a table of {}, but this command asks for --backend {}: one table holds \
+                     the runs of one code; choose another --out",
+                    if theirs_recorded {
+                        "an external backend (its backend column)"
+                    } else {
+                        "the embedded engine (no backend column)"
+                    },
+                    plan.settings.backend
+                ),
+            ));
+        }
+        if let Some(ours) = &ours {
+            for (line, rec) in &t.records {
+                let theirs = rec.get(FIXED_COLUMNS.len()).unwrap_or("");
+                if theirs != ours {
+                    return Err(Error::input(
+                        &file,
+                        format!("line {line}, column backend"),
+                        format!(
+                            "run by {theirs}, but this command runs {ours} (--backend {}{}): \
+                             LIGGGHTS repeats a run only on the same number of MPI processes, \
+                             so a table holds one; pass the --mpi the table was made with \
+                             (liggghts-npN: --mpi N), or choose another --out",
+                            plan.settings.backend,
+                            plan.settings
+                                .mpi
+                                .map(|n| format!(" --mpi {n}"))
+                                .unwrap_or_default()
+                        ),
+                    ));
+                }
+            }
+        }
         if !t.header.is_empty() && t.header != columns {
             return Err(header_mismatch(&file, &columns, &t.header));
         }
@@ -428,7 +470,7 @@ fn execute(
         table::run_line(
             run,
             &plan.model_class_label(),
-            plan.settings.backend,
+            plan.backend_field().as_deref(),
             &plan.responses,
             &result,
         ),

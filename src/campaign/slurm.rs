@@ -84,11 +84,17 @@ impl JobArray {
     fn header(&self, s: &mut String, name: &str, log: &str) {
         let _ = writeln!(s, "#!/bin/bash");
         let _ = writeln!(s, "#SBATCH --job-name={}", sh_quote(name));
-        let _ = writeln!(
-            s,
-            "#SBATCH --output={}",
-            sh_quote(&self.dir.join("logs").join(log).display().to_string())
-        );
+        // `%` starts a Slurm filename pattern: a literal one in the path is written `%%`.
+        let logs = self
+            .dir
+            .join("logs")
+            .display()
+            .to_string()
+            .replace('%', "%%");
+        let out = format!("{logs}/{log}");
+        let _ = writeln!(s, "#SBATCH --output={}", sh_quote(&out));
+        // A resubmission appends to the logs of the earlier attempt instead of erasing them.
+        let _ = writeln!(s, "#SBATCH --open-mode=append");
         if let Some(p) = &self.partition {
             let _ = writeln!(s, "#SBATCH --partition={}", sh_quote(p));
         }
@@ -265,6 +271,17 @@ mod tests {
     fn the_array_runs_shard_k_of_n_into_its_own_table_with_quoted_paths() {
         let s = job().array_script();
         assert!(s.contains("#SBATCH --array=1-4\n"), "{s}");
+        assert!(s.contains(
+            "#SBATCH --output='/home/u/my runs/campaign.csv.slurm/logs/shard_%a.out'\n\
+             #SBATCH --open-mode=append\n"
+        ));
+        let pct = JobArray {
+            dir: "/scratch/100%/c.slurm".into(),
+            ..job()
+        };
+        assert!(pct
+            .array_script()
+            .contains("--output=/scratch/100%%/c.slurm/logs/shard_%a.out"));
         assert!(s.contains("#SBATCH --partition=short\n#SBATCH --time=2:00:00\n"));
         assert!(s.contains("cd '/home/u/my runs'\n"), "{s}");
         assert!(s.contains("'/home/u/my runs/campaign.csv.slurm'/shard_\"$K\".csv"));

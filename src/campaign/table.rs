@@ -9,7 +9,6 @@ use std::path::Path;
 
 use csv::{ByteRecord, StringRecord};
 
-use super::backend::Backend;
 use super::plan::PlannedRun;
 use crate::dem::experiments::Outcome;
 use crate::error::{Error, Result};
@@ -44,7 +43,7 @@ fn number(v: f64) -> String {
 pub fn run_line(
     run: &PlannedRun,
     model_class: &str,
-    backend: Backend,
+    backend: Option<&str>,
     responses: &[String],
     result: &std::result::Result<Outcome, String>,
 ) -> Result<Vec<u8>> {
@@ -58,8 +57,8 @@ pub fn run_line(
         run.seed.to_string(),
         model_class.to_string(),
     ];
-    if backend.is_recorded() {
-        f.push(backend.label().to_string());
+    if let Some(b) = backend {
+        f.push(b.to_string());
     }
     f.extend(run.params.iter().map(|(_, v)| number(v)));
     match result {
@@ -171,6 +170,7 @@ pub fn column(header: &[String], name: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::Backend;
     use crate::dem::experiments::{Diagnostics, ParamSet};
 
     fn run() -> PlannedRun {
@@ -204,18 +204,11 @@ mod tests {
                 warnings: vec!["w1".into(), "w, 2".into()],
             },
         };
-        let done = run_line(
-            &run(),
-            "hertz+mindlin+epsd2",
-            Backend::Embedded,
-            &responses(),
-            &Ok(ok),
-        )
-        .unwrap();
+        let done = run_line(&run(), "hertz+mindlin+epsd2", None, &responses(), &Ok(ok)).unwrap();
         let failed = run_line(
             &run(),
             "hertz+mindlin+epsd2",
-            Backend::Embedded,
+            None,
             &responses(),
             &Err("bad, \"very\"\nbad".to_string()),
         )

@@ -7,10 +7,11 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use crate::campaign::decks::{ready_runs, stray_dirs, DeckCampaign, DESIGN_FILE};
+use crate::campaign::decks::{ready_runs, stray_dirs, DeckCampaign, CAMPAIGN_FILE, DESIGN_FILE};
 use crate::campaign::registry::experiment_for_import;
 use crate::campaign::{merge, run_campaign, status, CampaignOptions};
 use crate::outputs::refuse_overwriting_inputs;
+use anyhow::Context as _;
 
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
@@ -40,8 +41,8 @@ pub struct ImportArgs {
     /// Threads reading and measuring runs [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
-    /// The MPI processes the decks ran on (part of each run's identity when more than one);
-    /// a run on another number is refused and recorded as failed.
+    /// The MPI processes the decks ran on (recorded in the table's backend column, e.g.
+    /// liggghts-np2); a run on another number is recorded as failed.
     #[arg(long, value_name = "N")]
     pub mpi: Option<usize>,
     /// Read again the runs recorded as failed (a deck rerun or rewritten since).
@@ -91,9 +92,15 @@ fn run_import(a: &ImportArgs) -> anyhow::Result<()> {
     let design = a.decks.join(DESIGN_FILE);
     refuse_overwriting_inputs("--out", &a.out, &[("the decks' design", &design)])?;
     let campaign = DeckCampaign::read(&a.decks)?;
-    let settings = campaign.settings(&a.decks, a.mpi)?;
-    let experiment = experiment_for_import(&campaign.experiment, &settings)?;
-    let plan = campaign.plan(&a.decks, experiment.as_ref(), &settings)?;
+    // Values from campaign.json would otherwise be reported as options the user never gave.
+    let file = a.decks.join(CAMPAIGN_FILE);
+    let context = || format!("{} (written by --write-decks)", file.display());
+    let settings = campaign.settings(&a.decks, a.mpi).with_context(context)?;
+    let experiment =
+        experiment_for_import(&campaign.experiment, &settings).with_context(context)?;
+    let plan = campaign
+        .plan(&a.decks, experiment.as_ref(), &settings)
+        .with_context(context)?;
     let (ready, missing) = ready_runs(&plan, &a.decks);
     let stray = stray_dirs(&plan, &a.decks)?;
     if !stray.is_empty() {

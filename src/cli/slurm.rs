@@ -47,8 +47,10 @@ pub struct SlurmArgs {
     /// Constant parameter for every row (repeatable), as for `mbgc simulate`.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// Size factor of the shear box, as for `mbgc simulate`.
     #[arg(long, value_name = "K", allow_negative_numbers = true)]
     pub box_scale: Option<f64>,
+    /// Effects of the contact law, as for `mbgc simulate`.
     #[arg(long, value_name = "EFFECTS", value_parser = parse_model_class)]
     pub model_class: Option<ModelClass>,
     /// embedded or liggghts, as for `mbgc simulate`.
@@ -133,6 +135,12 @@ pub fn run(a: &SlurmArgs) -> anyhow::Result<()> {
             name.push(".slurm");
             out_abs.with_file_name(name)
         });
+    if dir.is_file() || crate::outputs::same_path(&dir, &out_abs) {
+        anyhow::bail!(
+            "--dir {}: expected a directory for the scripts, other than --out (the merged table)",
+            dir.display()
+        );
+    }
     let mut args = vec![
         "--design".to_string(),
         absolute(&a.design, &cwd).display().to_string(),

@@ -196,7 +196,9 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
         ));
     }
     if let Some((line, rec)) = t.records.first() {
-        if let Some(b) = backend_of(&t.header, rec).filter(|b| b != plan.settings.backend.label()) {
+        if let Some(b) =
+            backend_of(&t.header, rec).filter(|b| Some(b) != plan.backend_field().as_ref())
+        {
             return Err(Error::input(
                 &file,
                 format!("line {line}, column backend"),
@@ -249,8 +251,8 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
             seed.to_string(),
             plan.model_class_label(),
         ];
-        if plan.settings.backend.is_recorded() {
-            f.push(plan.settings.backend.label().to_string());
+        if let Some(b) = plan.backend_field() {
+            f.push(b);
         }
         for (name, want) in planned.params.iter() {
             let v = match col(name) {
