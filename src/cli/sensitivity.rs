@@ -16,8 +16,8 @@ use crate::plot::sensitivity::{bars, heat_map, Bar, BarSeries};
 use crate::say;
 use crate::sensitivity::contact_derivatives::{Properties, State, PARAMETERS, PROPERTY_NAMES};
 use crate::sensitivity::design_pca::{design_pca, varied};
-use crate::sensitivity::figures::{exponent_bars, loading_bars};
-use crate::sensitivity::norms::summarise;
+use crate::sensitivity::figures::{exponent_bars, loading_bars, share_bars};
+use crate::sensitivity::norms::{summarise, NormSummary};
 use crate::sensitivity::pca::Pca;
 use crate::sensitivity::sensitivity_matrix::{over_grid, Equation, Grid, Scaling};
 use crate::sensitivity::{flow_curve, local, power_law, sobol};
@@ -550,8 +550,8 @@ fn pca_cmd(a: &PcaArgs) -> anyhow::Result<()> {
 struct MatrixPoint {
     at: Vec<(String, f64)>,
     states: usize,
-    translational: crate::sensitivity::norms::NormSummary,
-    rotational: crate::sensitivity::norms::NormSummary,
+    translational: NormSummary,
+    rotational: NormSummary,
     /// Fraction of the states in gross sliding / with the rolling torque at its cap.
     sliding_fraction: f64,
     rolling_cap_fraction: f64,
@@ -644,7 +644,7 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
     }
     if let Some(dir) = plot_dir(&a.plot)? {
         for eq in ["translational", "rotational"] {
-            let series: Vec<BarSeries> = points
+            let summaries: Vec<(String, &NormSummary)> = points
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
@@ -653,21 +653,11 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
                     } else {
                         &p.rotational
                     };
-                    BarSeries {
-                        label: format!("point {}", i + 1),
-                        bars: s
-                            .shares
-                            .iter()
-                            .map(|v| Bar {
-                                value: *v,
-                                ci95: None,
-                            })
-                            .collect(),
-                    }
+                    (format!("point {}", i + 1), s)
                 })
                 .collect();
             let f = dir.join(format!("matrix_norms_{eq}.svg"));
-            bars(
+            share_bars(
                 &f,
                 &format!(
                     "{eq} equation: normalised sensitivity norms ({} scaling)",
@@ -675,7 +665,7 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
                 ),
                 "norm share",
                 &names,
-                &series,
+                &summaries,
             )?;
             let s = if eq == "translational" {
                 &points[0].translational

@@ -1,7 +1,9 @@
-//! Figures of the sensitivity results: exponent bars with intervals and PCA loadings.
+//! Figures of the sensitivity results: exponent bars with intervals, PCA loadings and the norm
+//! shares of the sensitivity matrix.
 
 use std::path::Path;
 
+use super::norms::NormSummary;
 use super::pca::Pca;
 use super::power_law;
 use crate::plot::sensitivity::{bars, Bar, BarSeries};
@@ -54,4 +56,29 @@ pub fn loading_bars(path: &Path, title: &str, p: &Pca) -> crate::error::Result<(
         })
         .collect();
     bars(path, title, "loading", &p.columns, &series)
+}
+
+/// The norm shares of each labelled summary, one series each, over the parameters `names`.
+pub fn share_bars(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    names: &[String],
+    summaries: &[(String, &NormSummary)],
+) -> crate::error::Result<()> {
+    let series: Vec<BarSeries> = summaries
+        .iter()
+        .map(|(label, s)| BarSeries {
+            label: label.clone(),
+            bars: s
+                .shares
+                .iter()
+                .map(|v| Bar {
+                    value: *v,
+                    ci95: None,
+                })
+                .collect(),
+        })
+        .collect();
+    bars(path, title, y_label, names, &series)
 }
