@@ -12,11 +12,11 @@ use crate::dem::experiments::hopper::FLOW_BIN_NAMES;
 use crate::metamodel::table::read_columns_keeping_nan;
 use crate::metamodel::{Metamodel, Transform};
 use crate::plot::parity::{parity, Split};
-use crate::plot::sensitivity::{bars, heat_map, Bar, BarSeries};
+use crate::plot::sensitivity::heat_map;
 use crate::say;
 use crate::sensitivity::contact_derivatives::{Properties, State, PARAMETERS, PROPERTY_NAMES};
 use crate::sensitivity::design_pca::{design_pca, varied};
-use crate::sensitivity::figures::{exponent_bars, loading_bars, share_bars};
+use crate::sensitivity::figures::{exponent_bars, loading_bars, share_bars, sobol_bars};
 use crate::sensitivity::norms::{summarise, NormSummary};
 use crate::sensitivity::pca::Pca;
 use crate::sensitivity::sensitivity_matrix::{over_grid, Equation, Grid, Scaling};
@@ -792,34 +792,11 @@ fn sobol_cmd(a: &SobolArgs) -> anyhow::Result<()> {
     if let Some(dir) = plot_dir(&a.plot)? {
         for (name, idx) in &series {
             let f = dir.join(format!("sobol_{name}.svg"));
-            let s = [
-                BarSeries {
-                    label: "first order".into(),
-                    bars: idx
-                        .iter()
-                        .map(|x| Bar {
-                            value: x.first,
-                            ci95: Some(x.first_ci95),
-                        })
-                        .collect(),
-                },
-                BarSeries {
-                    label: "total".into(),
-                    bars: idx
-                        .iter()
-                        .map(|x| Bar {
-                            value: x.total,
-                            ci95: Some(x.total_ci95),
-                        })
-                        .collect(),
-                },
-            ];
-            bars(
+            sobol_bars(
                 &f,
                 &format!("{name}: Sobol indices, 95 % bootstrap intervals"),
-                "index",
                 &names,
-                &s,
+                idx,
             )?;
             say!(out, "  figure: {}", f.display());
         }

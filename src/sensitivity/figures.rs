@@ -1,11 +1,12 @@
 //! Figures of the sensitivity results: exponent bars with intervals, PCA loadings and the norm
-//! shares of the sensitivity matrix.
+//! shares of the sensitivity matrix, Sobol indices.
 
 use std::path::Path;
 
 use super::norms::NormSummary;
 use super::pca::Pca;
 use super::power_law;
+use super::sobol::Index;
 use crate::plot::sensitivity::{bars, Bar, BarSeries};
 
 /// Bars of a power law's exponents with their intervals.
@@ -81,4 +82,31 @@ pub fn share_bars(
         })
         .collect();
     bars(path, title, y_label, names, &series)
+}
+
+/// First-order and total Sobol indices of one response, with their intervals, over `names`.
+pub fn sobol_bars(
+    path: &Path,
+    title: &str,
+    names: &[String],
+    idx: &[Index],
+) -> crate::error::Result<()> {
+    let series = |label: &str, pick: fn(&Index) -> (f64, [f64; 2])| BarSeries {
+        label: label.into(),
+        bars: idx
+            .iter()
+            .map(|x| {
+                let (value, ci) = pick(x);
+                Bar {
+                    value,
+                    ci95: Some(ci),
+                }
+            })
+            .collect(),
+    };
+    let s = [
+        series("first order", |x| (x.first, x.first_ci95)),
+        series("total", |x| (x.total, x.total_ci95)),
+    ];
+    bars(path, title, "index", names, &s)
 }

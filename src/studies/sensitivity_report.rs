@@ -17,7 +17,7 @@ use crate::plot::parity::{parity, Split};
 use crate::plot::sensitivity::{bars, heat_map, Bar, BarSeries};
 use crate::sensitivity::contact_derivatives::{Properties, PARAMETERS};
 use crate::sensitivity::design_pca::{design_pca, varied};
-use crate::sensitivity::figures::{loading_bars, share_bars};
+use crate::sensitivity::figures::{loading_bars, share_bars, sobol_bars};
 use crate::sensitivity::norms::{summarise, NormSummary};
 use crate::sensitivity::power_law::{self, Groups, PowerLawFit};
 use crate::sensitivity::sensitivity_matrix::{over_grid, Equation, Grid, Scaling};
@@ -635,37 +635,7 @@ fn sobol_section(model_path: &Path, seed: u64, figure: &Path) -> anyhow::Result<
         }
         if rname == "shear_angle" {
             let names: Vec<String> = model.input_names();
-            let series = [
-                BarSeries {
-                    label: "first order".into(),
-                    bars: idx
-                        .inputs
-                        .iter()
-                        .map(|x| Bar {
-                            value: x.first,
-                            ci95: Some(x.first_ci95),
-                        })
-                        .collect(),
-                },
-                BarSeries {
-                    label: "total".into(),
-                    bars: idx
-                        .inputs
-                        .iter()
-                        .map(|x| Bar {
-                            value: x.total,
-                            ci95: Some(x.total_ci95),
-                        })
-                        .collect(),
-                },
-            ];
-            bars(
-                figure,
-                "shear_angle: Sobol indices",
-                "index",
-                &names,
-                &series,
-            )?;
+            sobol_bars(figure, "shear_angle: Sobol indices", &names, &idx.inputs)?;
         }
     }
     writeln!(
