@@ -5,7 +5,7 @@
 //!     cargo bench --bench sampling
 
 use mbgc::sampling::Method;
-use mbgc::studies::sampling_quality::timing;
+use mbgc_studies::sampling_quality::timing;
 
 fn main() {
     let (n, dim) = (1000, 12);

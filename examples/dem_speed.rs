@@ -7,16 +7,16 @@ fn main() {
         .skip(1)
         .map(|s| s.parse().expect("integer arguments"))
         .collect();
-    let spec = mbgc::studies::dem_scene::BenchSpec {
+    let spec = mbgc_studies::dem_scene::BenchSpec {
         particles: *a.first().unwrap_or(&3300),
         ..Default::default()
     };
     let settle = *a.get(1).unwrap_or(&40000) as u64;
     let timed = *a.get(2).unwrap_or(&20000) as u64;
     let threads = *a.get(3).unwrap_or(&1);
-    let (x, r) = mbgc::studies::dem_scene::initial_packing(&spec).expect("packing");
+    let (x, r) = mbgc_studies::dem_scene::initial_packing(&spec).expect("packing");
     let mut sim =
-        mbgc::dem::Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).expect("scene"))
+        mbgc::dem::Simulation::new(mbgc_studies::dem_scene::scene(&spec, &x, &r).expect("scene"))
             .expect("sim");
     sim.set_threads(threads);
     let t = Instant::now();

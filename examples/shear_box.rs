@@ -1,6 +1,6 @@
 //! One shear-box run with a side-view picture:
 //! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png]
-use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
+use mbgc::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
 
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();

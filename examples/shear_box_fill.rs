@@ -2,14 +2,14 @@
 //! cargo run --release --example shear_box_fill -- CODE POINT SEEDS [k] [classes] [out.tsv]
 //! CODE: mbgc | liggghts | replay (mbgc, then LIGGGHTS continuing from mbgc's initial particles: the
 //! replay deck, whose row is printed as code "replay-liggghts"); POINT: a point of
-//! `mbgc::studies::shear_box_check::point` (a, c, b, a2, c2, b2, gravel);
+//! `mbgc_studies::shear_box_check::point` (a, c, b, a2, c2, b2, gravel);
 //! classes: mbgc's PSD quantised to that many classes (0: continuous), or LIGGGHTS' templates.
 //! column (LIGGGHTS only): "lattice" (mbgc's poured column, from the floor; the name is historical) or "above" (the same
 //! height, starting at the rim), or "above:F": above the rim at solid fraction F.
 use std::io::Write as _;
 
-use mbgc::dem::experiments::shear_box::ShearBox;
-use mbgc::studies::shear_box_fill::{fill_deck, mean_se, run_liggghts, run_mbgc, FillMeasure};
+use mbgc::experiments::shear_box::ShearBox;
+use mbgc_studies::shear_box_fill::{fill_deck, mean_se, run_liggghts, run_mbgc, FillMeasure};
 
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
@@ -23,8 +23,8 @@ fn main() {
         .cloned()
         .unwrap_or("target/shear-box-fill.tsv".into());
     let col = a.get(6).cloned().unwrap_or("lattice".into());
-    let p = mbgc::studies::shear_box_check::point(&point)
-        .expect("point: a, c, b, a2, c2, b2 or gravel");
+    let p =
+        mbgc_studies::shear_box_check::point(&point).expect("point: a, c, b, a2, c2, b2 or gravel");
     let mut file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
@@ -41,7 +41,7 @@ fn main() {
             let (o, rec) = run_mbgc(&sb, &p, seed).expect("mbgc run");
             let dir = format!("target/shear-box-fill/replay-{point}-{seed}");
             let r =
-                mbgc::studies::shear_box_vs_liggghts::replay(std::path::Path::new(&dir), &p, &rec)
+                mbgc_studies::shear_box_vs_liggghts::replay(std::path::Path::new(&dir), &p, &rec)
                     .expect("LIGGGHTS replay");
             let line = format!(
                 "mbgc\t{point}\t{k}\t0/lattice\t{seed}\t{}\nreplay-liggghts\t{point}\t{k}\t0\t{seed}\t{:.3}\t{:.1}",

@@ -1,7 +1,7 @@
 //! Shear box in mbgc and replayed in LIGGGHTS on the identical configuration.
 //! cargo run --release --example shear_box_vs_liggghts -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [seed] [mu_pw] [mu_r_pw]
-use mbgc::dem::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
-use mbgc::studies::shear_box_vs_liggghts::replay;
+use mbgc::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
+use mbgc_studies::shear_box_vs_liggghts::replay;
 
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();

@@ -1,37 +1,103 @@
-//! mbgc: metamodel-first global calibration of DEM simulation parameters.
-//!
-//! The pipeline, stage by stage (see `ARCHITECTURE.md` in the project's shared notes and the
-//! README): a parameter [`space`] is filled by a [`sampling`] design; particle size distributions
-//! ([`psd`]) turn sieve data into the two PSD inputs of the metamodel; later stages simulate,
-//! fit, and calibrate.
+//! The command line: one file per subcommand, each with its argument struct and a `run`.
 
+use clap::{Parser, Subcommand};
+
+pub mod bench;
+pub mod builtin;
 pub mod calibrate;
 pub mod campaign;
-pub mod cli;
-pub mod dem;
+pub mod campaign_progress;
+pub mod choice;
 pub mod diagnose;
-pub mod error;
+pub mod effects;
 pub mod export;
-pub mod gp;
-pub mod liggghts;
-pub mod material;
-pub mod metamodel;
-pub mod model_table;
-pub mod numeric;
-pub mod outputs;
-pub mod plot;
+pub mod fit;
+pub mod metrics;
+pub mod predict;
 pub mod psd;
-pub mod sampling;
+pub mod sample;
 pub mod sensitivity;
-pub mod similarity;
-pub mod space;
-pub mod studies;
+pub mod simulate;
+pub mod slurm;
 pub mod train;
+pub mod validate;
 
-pub use error::{Error, Result};
+#[derive(Debug, Parser)]
+#[command(
+    name = "mbgc",
+    version,
+    about = "Metamodel-first global calibration of DEM simulation parameters"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
 
-// The test stand-ins under `tests/stand_ins/` name the library `mbgc::` as any user would; the
-// unit tests and the `stand-ins` feature include them, so inside the crate that name must
-// resolve too.
-#[cfg(any(test, feature = "stand-ins"))]
-extern crate self as mbgc;
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Generate (or extend) a space-filling design.
+    Sample(sample::SampleArgs),
+    /// Space-filling metrics of a design: MID, COV, centered and wrap-around L2 discrepancy.
+    Metrics(metrics::MetricsArgs),
+    /// Particle size distributions: fit sieve data, draw particle sets.
+    Psd(psd::PsdArgs),
+    /// Run a calibration experiment for every row of a design (resumable, shardable).
+    Simulate(simulate::SimulateArgs),
+    /// Write (and with --submit, submit) a campaign as a Slurm job array and its merge job.
+    Slurm(slurm::SlurmArgs),
+    /// The physical effects a model class can switch on, with their parameters.
+    Effects(effects::EffectsArgs),
+    /// Campaign tables: merge shards, report progress, import runs made from written decks.
+    Campaign(campaign::CampaignArgs),
+    /// Fit one equation per response by genetic-programming symbolic regression.
+    Fit(fit::FitArgs),
+    /// Sample, simulate and fit in one resumable command (a design, its runs, the metamodel).
+    Train(train::TrainArgs),
+    /// Evaluate a saved metamodel on the rows of a table.
+    Predict(predict::PredictArgs),
+    /// Write a saved metamodel's equations as Rust, LaTeX or sympy.
+    Export(export::ExportArgs),
+    /// Calibrate a material: invert a saved metamodel for its measurements.
+    Calibrate(calibrate::CalibrateArgs),
+    /// Rerun the DEM experiment at calibrated parameters and compare with the measurements.
+    Validate(validate::ValidateArgs),
+    /// Compare a measurement set with the model: where it fails, which effect is missing.
+    Diagnose(diagnose::DiagnoseArgs),
+    /// Which inputs matter for which response: power laws, PCA and norms of contact-law
+    /// sensitivities (seed 000's three levels), Sobol indices and local sensitivities of a model.
+    Sensitivity(sensitivity::SensitivityArgs),
+    /// Benchmarks and reproduction reports.
+    Bench(bench::BenchArgs),
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Sample(a) => sample::run(&a),
+        Command::Metrics(a) => metrics::run(&a),
+        Command::Psd(a) => psd::run(&a),
+        Command::Simulate(a) => simulate::run(&a),
+        Command::Slurm(a) => slurm::run(&a),
+        Command::Effects(a) => effects::run(&a),
+        Command::Campaign(a) => campaign::run(&a),
+        Command::Fit(a) => fit::run(&a),
+        Command::Train(a) => train::run(&a),
+        Command::Predict(a) => predict::run(&a),
+        Command::Export(a) => export::run(&a),
+        Command::Calibrate(a) => calibrate::run(&a),
+        Command::Validate(a) => validate::run(&a),
+        Command::Diagnose(a) => diagnose::run(&a),
+        Command::Sensitivity(a) => sensitivity::run(&a),
+        Command::Bench(a) => bench::run(&a),
+    }
+}
+
+/// Entry point of the binary: errors are printed as one readable message, never as a panic.
+pub fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

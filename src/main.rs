@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    mbgc::cli::main()
+    mbgc_cli::main()
 }

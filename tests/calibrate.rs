@@ -5,7 +5,7 @@
 use mbgc::calibrate::{calibrate, Problem};
 use mbgc::gp::Config;
 use mbgc::material::Material;
-use mbgc::metamodel::{fit_table, FitOptions, Metamodel};
+use mbgc::metamodel::{fit, FitSettings, Metamodel, TrainingTable};
 use std::sync::OnceLock;
 
 const INPUTS: [&str; 5] = ["mu_pp", "mu_r_pp", "rho_p", "sigma_ln", "d50"];
@@ -37,24 +37,18 @@ fn model() -> &'static Metamodel {
         }
         let data = dir.path().join("synthetic.csv");
         std::fs::write(&data, csv).unwrap();
-        let opts = FitOptions {
-            data,
-            inputs: INPUTS.iter().map(|s| s.to_string()).collect(),
-            targets: vec!["shear_angle".into(), "bulk_density".into()],
-            test_fraction: 0.1,
-            space: None,
-            config: Config {
+        let inputs: Vec<String> = INPUTS.iter().map(|s| s.to_string()).collect();
+        let targets: Vec<String> = vec!["shear_angle".into(), "bulk_density".into()];
+        let settings = FitSettings::new(inputs.clone(), targets.clone())
+            .test_fraction(0.1)
+            .config(Config {
                 population: 2000,
                 generations: 20,
                 seed: 2,
                 ..Config::default()
-            },
-            plots: None,
-            model_class: None,
-            similarity: None,
-            validation: None,
-        };
-        let m = fit_table(&opts, |_, _| {}).unwrap().model;
+            });
+        let table = TrainingTable::read_csv(&data, &inputs, &targets).unwrap();
+        let m = fit(&table, &settings, |_, _| {}).unwrap().model;
         for r in &m.responses {
             eprintln!(
                 "{}: test R2 {:.5}: {}",
@@ -196,31 +190,21 @@ fn bad_materials_are_refused_naming_the_field() {
 /// ln Z = ln(Phi(12) - Phi(-8)) = 0 (to 1e-15).
 #[test]
 fn bayesian_posterior_and_evidence_of_a_linear_model() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut csv = String::from("a,y\n");
-    for i in 0..=20 {
-        let a = i as f64 / 20.0;
-        csv.push_str(&format!("{a},{a}\n"));
-    }
-    let data = dir.path().join("lin.csv");
-    std::fs::write(&data, csv).unwrap();
-    let opts = FitOptions {
-        data,
-        inputs: vec!["a".into()],
-        targets: vec!["y".into()],
-        test_fraction: 0.0,
-        space: None,
-        config: Config {
+    // In memory: the library fits columns, no file needed.
+    let column: Vec<f64> = (0..=20).map(|i| i as f64 / 20.0).collect();
+    let table = TrainingTable::from_columns(
+        "lin",
+        vec![("a".into(), column.clone()), ("y".into(), column)],
+    )
+    .unwrap();
+    let settings = FitSettings::new(vec!["a".into()], vec!["y".into()])
+        .test_fraction(0.0)
+        .config(Config {
             population: 50,
             generations: 2,
             ..Config::default()
-        },
-        plots: None,
-        model_class: None,
-        similarity: None,
-        validation: None,
-    };
-    let m = fit_table(&opts, |_, _| {}).unwrap().model;
+        });
+    let m = fit(&table, &settings, |_, _| {}).unwrap().model;
     assert_eq!(m.responses[0].equation, "a");
     let mat = Material::from_toml_str("[measured]\ny = { value = 0.4, sd = 0.05 }\n", "lin.toml")
         .unwrap();

@@ -15,7 +15,7 @@
 //! `dem/step.rs`; these tests use the form above, derived independently.
 
 use mbgc::dem::contact::ModelClass;
-use mbgc::dem::material::{Interaction, Material, Materials};
+use mbgc::dem::material::{Interaction, Materials, Solid};
 use mbgc::dem::particles::Particles;
 use mbgc::dem::sim::{Scene, Simulation};
 use mbgc::dem::vec3::V3;
@@ -89,14 +89,14 @@ fn maximise(g: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> (f64, f64) {
 fn materials(i: Interaction) -> Materials {
     let mut m = Materials::new();
     let grain = m
-        .add(Material {
+        .add(Solid {
             name: "grain".into(),
             youngs_modulus: E,
             poisson: NU,
         })
         .unwrap();
     let wall = m
-        .add(Material {
+        .add(Solid {
             name: "wall".into(),
             youngs_modulus: E,
             poisson: NU,
@@ -325,7 +325,7 @@ struct Bed {
 
 impl Bed {
     fn start(&self) -> (Vec<V3>, Vec<f64>) {
-        mbgc::studies::dem_scene::jittered_lattice(
+        mbgc_studies::dem_scene::jittered_lattice(
             self.n, [0.0; 3], self.hi, 1.9e-3, 2.1e-3, self.seed,
         )
         .unwrap()

@@ -4,13 +4,13 @@
 
 use mbgc::dem::contact::ModelClass;
 use mbgc::dem::walls::box_planes;
-use mbgc::dem::{Interaction, Material, Materials, Particles, Scene, Shape, Simulation, Wall};
+use mbgc::dem::{Interaction, Materials, Particles, Scene, Shape, Simulation, Solid, Wall};
 use rand::RngExt;
 
 fn materials(e: f64, mu: f64, mu_r: f64, youngs: f64) -> Materials {
     let mut m = Materials::new();
     let a = m
-        .add(Material {
+        .add(Solid {
             name: "grain".into(),
             youngs_modulus: youngs,
             poisson: 0.3,
@@ -118,14 +118,14 @@ fn sphere_comes_to_rest_on_a_plane_with_the_hertz_overlap() {
     p.add([0.0, 0.0, r + 0.001], r, rho, 0).unwrap();
     let mut m = Materials::new();
     let a = m
-        .add(Material {
+        .add(Solid {
             name: "grain".into(),
             youngs_modulus: youngs,
             poisson: nu,
         })
         .unwrap();
     let w = m
-        .add(Material {
+        .add(Solid {
             name: "rigid".into(),
             youngs_modulus: 1e40,
             poisson: 0.0,
@@ -180,7 +180,7 @@ fn rolling_sphere_stops_where_epsd2_says() {
     p.add([0.0, 0.0, r], r, 2500.0, 0).unwrap();
     let mut m = materials(0.5, 0.5, mu_r, 1e7);
     let w = m
-        .add(Material {
+        .add(Solid {
             name: "rigid".into(),
             youngs_modulus: 1e40,
             poisson: 0.0,
@@ -326,16 +326,15 @@ fn effects_are_chosen_by_name() {
 /// colliding steps they part, as any two granular trajectories differing by round-off do.)
 #[test]
 fn threaded_run_matches_the_serial_run() {
-    let spec = mbgc::studies::dem_scene::BenchSpec {
+    let spec = mbgc_studies::dem_scene::BenchSpec {
         particles: 400,
         box_hi: [0.06, 0.06, 0.12],
         ..Default::default()
     };
-    let (x, r) = mbgc::studies::dem_scene::initial_packing(&spec).unwrap();
+    let (x, r) = mbgc_studies::dem_scene::initial_packing(&spec).unwrap();
     let mut serial =
-        Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
-    let mut team =
-        Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
+        Simulation::new(mbgc_studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
+    let mut team = Simulation::new(mbgc_studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
     serial.run(15000).unwrap();
     team.run(15000).unwrap();
     assert_eq!(
@@ -366,13 +365,13 @@ fn threaded_run_matches_the_serial_run() {
 /// Removing particles keeps the others' contacts (and their history) and changes nothing else.
 #[test]
 fn removing_particles_keeps_the_rest_of_the_packing() {
-    let spec = mbgc::studies::dem_scene::BenchSpec {
+    let spec = mbgc_studies::dem_scene::BenchSpec {
         particles: 300,
         box_hi: [0.06, 0.06, 0.12],
         ..Default::default()
     };
-    let (x, r) = mbgc::studies::dem_scene::initial_packing(&spec).unwrap();
-    let mut sim = Simulation::new(mbgc::studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
+    let (x, r) = mbgc_studies::dem_scene::initial_packing(&spec).unwrap();
+    let mut sim = Simulation::new(mbgc_studies::dem_scene::scene(&spec, &x, &r).unwrap()).unwrap();
     sim.run(15000).unwrap();
     let top = sim.particles.x.iter().map(|x| x[2]).fold(0.0, f64::max);
     let contacts_below = |s: &Simulation| {

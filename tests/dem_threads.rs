@@ -5,7 +5,7 @@
 
 use mbgc::dem::contact::ModelClass;
 use mbgc::dem::walls::box_planes;
-use mbgc::dem::{Interaction, Material, Materials, Particles, Scene, Simulation};
+use mbgc::dem::{Interaction, Materials, Particles, Scene, Simulation, Solid};
 use rand::RngExt;
 
 const LID: usize = 5;
@@ -13,7 +13,7 @@ const LID: usize = 5;
 fn scene() -> Scene {
     let mut m = Materials::new();
     let a = m
-        .add(Material {
+        .add(Solid {
             name: "grain".into(),
             youngs_modulus: 5e6,
             poisson: 0.3,

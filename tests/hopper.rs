@@ -4,8 +4,8 @@
 //!
 //! cargo test --release --test hopper -- --ignored --nocapture
 
-use mbgc::dem::experiments::hopper::{write_series_csv, Hopper, HopperRun};
-use mbgc::dem::experiments::{Experiment, ParamSet, RunOptions};
+use mbgc::experiments::hopper::{write_series_csv, Hopper, HopperRun};
+use mbgc::experiments::{Experiment, ParamSet, RunOptions};
 
 /// Mid-friction beads, soft for speed (seed 000: E does not change flow rate or angles).
 fn params(d50: f64, mu_pp: f64) -> ParamSet {
@@ -196,7 +196,7 @@ fn the_seed_decides_everything() {
             .unwrap()
     };
     // Bit patterns: NaN (e.g. no pile from 200 particles) must equal itself.
-    let bits = |o: &mbgc::dem::experiments::Outcome| -> Vec<u64> {
+    let bits = |o: &mbgc::experiments::Outcome| -> Vec<u64> {
         o.responses.iter().map(|(_, v)| v.to_bits()).collect()
     };
     let (a, b, c) = (run(7), run(7), run(8));

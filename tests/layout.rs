@@ -1,10 +1,12 @@
-//! The source layout's two rules, checked on the tree itself so they cannot quietly erode:
+//! The source layout's rules, checked on the tree itself so they cannot quietly erode:
 //!
-//! 1. No two files of `src/` import each other, directly or through a longer cycle (a `mod.rs`
-//!    that re-exports a child counts as importing it): a concept two files need gets a file of
-//!    its own.
-//! 2. The core library never imports a study: only `src/studies/` and the command line
-//!    (`src/cli/`) name `studies`.
+//! 1. In every crate of the workspace, no two files import each other, directly or through a
+//!    longer cycle (a `mod.rs` that re-exports a child counts as importing it): a concept two
+//!    files need gets a file of its own.
+//! 2. No two top-level modules of a crate import each other either (`experiments -> psd ->
+//!    sampling -> experiments` would be a cycle of modules made of acyclic files).
+//! 3. The crates are the layering: the library crates never depend on clap or indicatif (the
+//!    command line's), and only the command line depends on the studies.
 //!
 //! Imports are read from the source text: `use` trees and inline paths (`crate::a::b`,
 //! `super::x`, `child::y`), outside comments, string literals and the `#[cfg(test)]` module at
@@ -278,8 +280,20 @@ fn resolve(m: &Module, path: &[String], files: &BTreeSet<Module>) -> Option<Modu
         .filter(|p| !p.is_empty() && p != m)
 }
 
-fn graph() -> BTreeMap<Module, BTreeSet<Module>> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+/// The workspace's crates: the command line at the root, the libraries under `crates/`.
+const CRATES: [&str; 6] = [
+    ".",
+    "crates/mbgc-dem",
+    "crates/mbgc-sr",
+    "crates/mbgc",
+    "crates/mbgc-output",
+    "crates/mbgc-studies",
+];
+
+fn graph(krate: &str) -> BTreeMap<Module, BTreeSet<Module>> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(krate)
+        .join("src");
     let mut list = Vec::new();
     source_files(&src, &mut list);
     let files: BTreeSet<Module> = list.iter().map(|f| module_of(&src, f)).collect();
@@ -362,11 +376,8 @@ fn name(m: &Module) -> String {
     m.join("/")
 }
 
-#[test]
-fn no_two_files_import_each_other() {
-    let g = graph();
-    assert!(g.len() > 50, "only {} modules found", g.len());
-    let found: Vec<String> = cycles(&g)
+fn describe(g: &BTreeMap<Module, BTreeSet<Module>>, cycles: &[Vec<Module>]) -> Vec<String> {
+    cycles
         .iter()
         .map(|c| {
             let members: BTreeSet<&Module> = c.iter().collect();
@@ -380,24 +391,95 @@ fn no_two_files_import_each_other() {
                 .collect();
             edges.join(", ")
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn no_two_files_import_each_other() {
+    let mut found = Vec::new();
+    let mut modules = 0;
+    for krate in CRATES {
+        let g = graph(krate);
+        modules += g.len();
+        found.extend(
+            describe(&g, &cycles(&g))
+                .into_iter()
+                .map(|c| format!("{krate}: {c}")),
+        );
+    }
+    assert!(modules > 150, "only {modules} modules found");
     assert!(found.is_empty(), "import cycles:\n{}", found.join("\n"));
 }
 
 #[test]
-fn the_core_library_never_imports_a_study() {
-    let g = graph();
-    let studies = ["studies".to_string()];
-    let offenders: Vec<String> = g
-        .iter()
-        .filter(|(m, _)| !m.is_empty() && m[0] != "studies" && m[0] != "cli")
-        .flat_map(|(m, to)| {
-            to.iter()
-                .filter(|t| t.starts_with(&studies))
-                .map(move |t| format!("{} -> {}", name(m), name(t)))
-        })
-        .collect();
-    assert!(offenders.is_empty(), "{}", offenders.join("\n"));
+fn no_two_top_level_modules_import_each_other() {
+    let mut found = Vec::new();
+    for krate in CRATES {
+        let mut top: BTreeMap<Module, BTreeSet<Module>> = BTreeMap::new();
+        for (m, to) in graph(krate) {
+            let Some(first) = m.first() else { continue };
+            let from = vec![first.clone()];
+            let entry = top.entry(from.clone()).or_default();
+            entry.extend(
+                to.iter()
+                    .filter_map(|t| t.first())
+                    .map(|t| vec![t.clone()])
+                    .filter(|t| *t != from),
+            );
+        }
+        found.extend(
+            describe(&top, &cycles(&top))
+                .into_iter()
+                .map(|c| format!("{krate}: {c}")),
+        );
+    }
+    assert!(found.is_empty(), "module cycles:\n{}", found.join("\n"));
+}
+
+/// The `[dependencies]` table of a crate's manifest, as text.
+fn dependencies(krate: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(krate)
+        .join("Cargo.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let start = text
+        .find("\n[dependencies]")
+        .expect("a [dependencies] table");
+    let rest = &text[start + 1..];
+    let end = rest[1..].find("\n[").map_or(rest.len(), |k| k + 1);
+    rest[..end].to_string()
+}
+
+#[test]
+fn the_library_crates_know_no_command_line_and_no_study() {
+    for krate in [
+        "crates/mbgc-dem",
+        "crates/mbgc-sr",
+        "crates/mbgc",
+        "crates/mbgc-output",
+    ] {
+        let deps = dependencies(krate);
+        for name in [
+            "clap",
+            "indicatif",
+            "mbgc-studies",
+            "mbgc-cli",
+            "mbgc-output",
+        ] {
+            let uses = deps
+                .lines()
+                .any(|l| l.split(['.', ' ', '=']).next() == Some(name));
+            assert!(!uses, "{krate} depends on {name}");
+        }
+    }
+    // The studies take clap only behind their `cli` feature, which the command line switches on.
+    let studies = dependencies("crates/mbgc-studies");
+    let clap = studies
+        .lines()
+        .find(|l| l.starts_with("clap"))
+        .expect("clap");
+    assert!(clap.contains("optional = true"), "{clap}");
+    assert!(!studies.lines().any(|l| l.starts_with("indicatif")));
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! cargo test --test liggghts -- --ignored
 
 use mbgc::liggghts;
-use mbgc::studies::dem_scene::{jittered_lattice, liggghts_case, BenchSpec, BENCHMARK_BOX};
+use mbgc_studies::dem_scene::{jittered_lattice, liggghts_case, BenchSpec, BENCHMARK_BOX};
 
 #[test]
 #[ignore = "runs LIGGGHTS (apt-get install liggghts)"]

@@ -7,10 +7,10 @@ use std::path::Path;
 
 use mbgc::campaign::{ExperimentSettings, Plan};
 use mbgc::dem::contact::ModelClass;
-use mbgc::dem::experiments::hopper::Hopper;
-use mbgc::dem::experiments::shear_box::ShearBox;
-use mbgc::dem::experiments::wall_impact::WallImpact;
-use mbgc::dem::experiments::{Experiment, Outcome, ParamSet, RunOptions};
+use mbgc::experiments::hopper::Hopper;
+use mbgc::experiments::shear_box::ShearBox;
+use mbgc::experiments::wall_impact::WallImpact;
+use mbgc::experiments::{Experiment, Outcome, ParamSet, RunOptions};
 
 fn class(s: &str) -> ModelClass {
     ModelClass::parse(s).unwrap()

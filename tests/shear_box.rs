@@ -1,7 +1,7 @@
 //! Shear box on small scenes (box scale k = 5, about 400 particles): the trends seed 004's
 //! metamodel relies on, and the refusal of impossible parameter sets.
 
-use mbgc::dem::experiments::{shear_box::ShearBox, Experiment, Outcome, ParamSet, RunOptions};
+use mbgc::experiments::{shear_box::ShearBox, Experiment, Outcome, ParamSet, RunOptions};
 
 fn params(mu_pp: f64, mu_r_pp: f64) -> ParamSet {
     ParamSet::from_pairs(&[

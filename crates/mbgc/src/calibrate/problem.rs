@@ -1,0 +1,444 @@
+//! The calibration problem: a metamodel, the material's measurements, what is fixed, the search
+//! box of the free parameters and the constraints between them.
+
+use super::objective::Objective;
+use crate::error::{Error, Result};
+use crate::material::{Constraint, Material};
+use crate::metamodel::Metamodel;
+use mbgc_dem::contact::Pair;
+
+/// A measured response the fit must match.
+#[derive(Clone, Debug)]
+pub struct Target {
+    pub response: usize,
+    pub name: String,
+    pub value: f64,
+    pub sd: f64,
+}
+
+#[derive(Clone, Debug)]
+pub struct Problem<'m> {
+    pub model: &'m Metamodel,
+    /// Every model input; fixed entries hold their value.
+    pub names: Vec<String>,
+    pub base: Vec<f64>,
+    /// Indices (into `names`) of the searched parameters.
+    pub free: Vec<usize>,
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    pub targets: Vec<Target>,
+    pub constraints: Vec<(Constraint, Vec<(usize, f64)>)>,
+    /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
+    pub notes: Vec<String>,
+}
+
+/// Whether a value given in a file is the constant a model was trained at (to rounding).
+pub fn same_value(constant: f64, given: f64) -> bool {
+    (constant - given).abs() <= 1e-9 * constant.abs().max(given.abs())
+}
+
+/// Penalty weight of a constraint violation (in parameter units, squared).
+const PENALTY: f64 = 1e6;
+
+/// Refuses a material that needs an effect the metamodel was not trained with (by its `[model]
+/// class` or by a fixed or bounded parameter of that effect), naming the effect.
+fn check_class(model: &Metamodel, material: &Material) -> Result<()> {
+    let file = material.source.as_str();
+    let Some(theirs) = model.class()? else {
+        if let Some(mine) = material.model_class {
+            return Err(Error::input(
+                file,
+                "model.class",
+                format!(
+                    "{mine}, but the metamodel records no model class (fitted on a table \
+                     without one): nothing confirms it describes these effects; refit with \
+                     --model-class, or remove [model] from the material"
+                ),
+            ));
+        }
+        return Ok(());
+    };
+    if let Some(mine) = material.model_class {
+        let lacking = mine.missing_from(&theirs);
+        let extra = theirs.missing_from(&mine);
+        if !lacking.is_empty() {
+            return Err(Error::input(
+                file,
+                "model.class",
+                format!(
+                    "{mine} needs {}, which the metamodel (trained on {theirs}) lacks: fit one on \
+                     a campaign run with --model-class {mine}",
+                    lacking.join(", ")
+                ),
+            ));
+        }
+        if !extra.is_empty() {
+            return Err(Error::input(
+                file,
+                "model.class",
+                format!(
+                    "{mine}, but the metamodel has {theirs} (also {}): calibrating would give \
+                     values to effects the material says it lacks; expected the metamodel's \
+                     class or a metamodel of {mine}",
+                    extra.join(", ")
+                ),
+            ));
+        }
+    }
+    let names = material
+        .fixed
+        .iter()
+        .map(|(n, _)| ("fixed", n))
+        .chain(material.bounds.iter().map(|(n, _)| ("bounds", n)));
+    for (table, name) in names {
+        theirs
+            .refuse_inactive(name, &Pair::BOTH, "the metamodel")
+            .map_err(|e| {
+                Error::input(
+                    file,
+                    format!("{table}.{name}"),
+                    format!("{e} (the metamodel was trained on {theirs})"),
+                )
+            })?;
+    }
+    Ok(())
+}
+
+impl<'m> Problem<'m> {
+    pub fn new(model: &'m Metamodel, material: &Material) -> Result<Problem<'m>> {
+        let file = material.source.as_str();
+        check_class(model, material)?;
+        let names = model.input_names();
+        let mut targets = Vec::new();
+        for m in &material.measured {
+            let idx = model
+                .responses
+                .iter()
+                .position(|r| r.name == m.response)
+                .ok_or_else(|| {
+                    let known: Vec<&str> =
+                        model.responses.iter().map(|r| r.name.as_str()).collect();
+                    Error::input(
+                        file,
+                        format!("measured.{}", m.response),
+                        format!("a response of the model (it has: {})", known.join(", ")),
+                    )
+                })?;
+            targets.push(Target {
+                response: idx,
+                name: m.response.clone(),
+                value: m.value,
+                sd: m.sd,
+            });
+        }
+        let mut fixed: Vec<Option<f64>> = vec![None; names.len()];
+        let mut notes = Vec::new();
+        let index = |name: &str, field: String| {
+            names.iter().position(|n| n == name).ok_or_else(|| {
+                Error::input(
+                    file,
+                    field,
+                    format!("a parameter of the model (it has: {})", names.join(", ")),
+                )
+            })
+        };
+        let in_domain = |k: usize, v: f64, field: String| -> Result<()> {
+            let d = model.inputs[k].domain;
+            if v >= d[0] && v <= d[1] {
+                Ok(())
+            } else {
+                Err(Error::out_of_domain(
+                    file,
+                    field,
+                    format!(
+                        "a value inside the model's valid domain [{}, {}] (got {v}; outside it \
+                         the equations extrapolate)",
+                        d[0], d[1]
+                    ),
+                ))
+            }
+        };
+        for (name, v) in &material.fixed {
+            if let Some(c) = model.constants.iter().find(|c| c.name == *name) {
+                if !same_value(c.value, *v) {
+                    return Err(Error::out_of_domain(
+                        file,
+                        format!("fixed.{name}"),
+                        format!(
+                            "{}, the value the metamodel's campaign held it at (got {v}): the \
+                             model describes no other",
+                            c.value
+                        ),
+                    ));
+                }
+                continue;
+            }
+            let k = index(name, format!("fixed.{name}"))?;
+            in_domain(k, *v, format!("fixed.{name}"))?;
+            fixed[k] = Some(*v);
+        }
+        if let Some((d50, sigma)) = material.psd_parameters()? {
+            for (name, v) in [("d50", d50), ("sigma_ln", sigma)] {
+                if let Some(k) = names.iter().position(|n| n == name) {
+                    if fixed[k].is_some() {
+                        return Err(Error::input(
+                            file,
+                            format!("fixed.{name}"),
+                            format!("{name} to come from [psd] or [fixed], not both"),
+                        ));
+                    }
+                    in_domain(k, v, format!("psd ({name} = {v:.4})"))?;
+                    fixed[k] = Some(v);
+                    notes.push(format!("{name} = {v:.4} from the PSD"));
+                }
+            }
+        }
+        // A group whose inputs are all fixed must lie in its domain already.
+        for gd in &model.groups {
+            let parts = &gd.group.monomial.powers;
+            let values: Option<Vec<f64>> = parts
+                .iter()
+                .map(|(n, _)| names.iter().position(|m| m == n).and_then(|k| fixed[k]))
+                .collect();
+            if let Some(values) = values {
+                let v = gd
+                    .group
+                    .monomial
+                    .value(|n| values[parts.iter().position(|(m, _)| m == n).unwrap_or(0)]);
+                if !(v >= gd.domain[0] && v <= gd.domain[1]) {
+                    return Err(Error::out_of_domain(
+                        file,
+                        "fixed",
+                        format!(
+                            "{} = {} = {v:.4e} from the fixed {}, inside the model's range \
+                             [{:.4e}, {:.4e}] ({}; outside it the equations extrapolate)",
+                            gd.group.name,
+                            gd.group.monomial.text(),
+                            parts
+                                .iter()
+                                .map(|(n, _)| n.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", "),
+                            gd.domain[0],
+                            gd.domain[1],
+                            gd.group.what
+                        ),
+                    ));
+                }
+            }
+        }
+        for c in &model.constants {
+            if !material.fixed.iter().any(|(n, _)| *n == c.name) {
+                notes.push(format!(
+                    "{} = {} as the metamodel's campaign held it",
+                    c.name, c.value
+                ));
+            }
+        }
+        if !model.groups.is_empty() {
+            notes.push(format!(
+                "the model is fitted in {}: each kept inside the range of its training data",
+                model
+                    .groups
+                    .iter()
+                    .map(|g| format!(
+                        "{} = {} in [{:.3e}, {:.3e}]",
+                        g.group.name,
+                        g.group.monomial.text(),
+                        g.domain[0],
+                        g.domain[1]
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        let mut lower: Vec<f64> = model.inputs.iter().map(|i| i.domain[0]).collect();
+        let mut upper: Vec<f64> = model.inputs.iter().map(|i| i.domain[1]).collect();
+        for (name, [lo, hi]) in &material.bounds {
+            let k = index(name, format!("bounds.{name}"))?;
+            if fixed[k].is_some() {
+                return Err(Error::input(
+                    file,
+                    format!("bounds.{name}"),
+                    format!("{name} is fixed (by [fixed] or [psd]); a range makes no sense"),
+                ));
+            }
+            let d = model.inputs[k].domain;
+            if *lo < d[0] || *hi > d[1] {
+                return Err(Error::out_of_domain(
+                    file,
+                    format!("bounds.{name}"),
+                    format!("a range inside the model's domain [{}, {}]", d[0], d[1]),
+                ));
+            }
+            lower[k] = *lo;
+            upper[k] = *hi;
+        }
+        let free: Vec<usize> = (0..names.len()).filter(|&k| fixed[k].is_none()).collect();
+        for &k in &free {
+            if !material.bounds.iter().any(|(n, _)| *n == names[k]) {
+                notes.push(format!(
+                    "{} searched over the model's domain [{}, {}]",
+                    names[k], lower[k], upper[k]
+                ));
+            }
+        }
+        let mut constraints = Vec::new();
+        for (i, c) in material.constraints.iter().enumerate() {
+            let mut terms = Vec::new();
+            for (n, coef) in &c.terms {
+                terms.push((index(n, format!("constraints.expr[{i}]"))?, *coef));
+            }
+            constraints.push((c.clone(), terms));
+        }
+        let base: Vec<f64> = fixed
+            .iter()
+            .zip(lower.iter().zip(&upper))
+            .map(|(f, (lo, hi))| f.unwrap_or(0.5 * (lo + hi)))
+            .collect();
+        Ok(Problem {
+            model,
+            lower: free.iter().map(|&k| lower[k]).collect(),
+            upper: free.iter().map(|&k| upper[k]).collect(),
+            names,
+            base,
+            free,
+            targets,
+            constraints,
+            notes,
+        })
+    }
+
+    pub fn dim(&self) -> usize {
+        self.free.len()
+    }
+
+    pub fn free_names(&self) -> Vec<&str> {
+        self.free.iter().map(|&k| self.names[k].as_str()).collect()
+    }
+
+    /// All model inputs with the free ones set.
+    pub fn full(&self, free: &[f64]) -> Vec<f64> {
+        let mut x = self.base.clone();
+        for (&k, &v) in self.free.iter().zip(free) {
+            x[k] = v;
+        }
+        x
+    }
+
+    /// Physical free parameters from unit coordinates.
+    pub fn from_unit(&self, u: &[f64]) -> Vec<f64> {
+        u.iter()
+            .enumerate()
+            .map(|(j, &u)| self.lower[j] + (self.upper[j] - self.lower[j]) * u)
+            .collect()
+    }
+
+    /// Model predictions of the measured responses (NaN where an equation is not finite).
+    pub fn predictions(&self, free: &[f64]) -> Vec<f64> {
+        let x = self.full(free);
+        self.targets
+            .iter()
+            .map(|t| {
+                self.model
+                    .predict_point(&self.model.responses[t.response], &x)
+            })
+            .collect()
+    }
+
+    /// Sum of squared violations of the constraints, and of the model's group domains (in
+    /// natural-log units: a group 10 % beyond its range counts 0.0095).
+    pub fn violation(&self, free: &[f64]) -> f64 {
+        let x = self.full(free);
+        let groups: f64 = (0..self.model.groups.len())
+            .map(|g| self.group_excess(g, &x).powi(2))
+            .sum();
+        groups
+            + self
+                .constraints
+                .iter()
+                .map(|(c, terms)| {
+                    let v = terms.iter().map(|(k, a)| a * x[*k]).sum::<f64>() + c.constant;
+                    v.max(0.0).powi(2)
+                })
+                .sum::<f64>()
+    }
+
+    /// How far group `g` lies outside its domain at `x`, in ln units, signed: positive above the
+    /// range, negative below, 0 inside.
+    fn group_excess(&self, g: usize, x: &[f64]) -> f64 {
+        let gd = &self.model.groups[g];
+        let v = self.model.group_value(&gd.group, x).ln();
+        let (lo, hi) = (gd.domain[0].ln(), gd.domain[1].ln());
+        if v > hi {
+            v - hi
+        } else if v < lo {
+            v - lo
+        } else {
+            0.0
+        }
+    }
+
+    /// chi^2 = sum ((prediction - measured) / sd)^2 plus the constraint penalty, and its gradient
+    /// with respect to the free parameters; `None` where an equation is not finite.
+    pub fn objective(&self, free: &[f64]) -> Option<(f64, Vec<f64>)> {
+        let x = self.full(free);
+        let mut f = 0.0;
+        let mut g = vec![0.0; self.free.len()];
+        for t in &self.targets {
+            let (y, dy) = self
+                .model
+                .value_and_gradient(&self.model.responses[t.response], &x)?;
+            let r = (y - t.value) / t.sd;
+            f += r * r;
+            for (j, &k) in self.free.iter().enumerate() {
+                g[j] += 2.0 * r * dy[k] / t.sd;
+            }
+        }
+        // A group outside the range the model was fitted on is extrapolation, like an input
+        // outside its bounds: kept out by a penalty on its log.
+        for gi in 0..self.model.groups.len() {
+            let v = self.group_excess(gi, &x);
+            if v != 0.0 {
+                f += PENALTY * v * v;
+                let m = &self.model.groups[gi].group.monomial;
+                for (j, &k) in self.free.iter().enumerate() {
+                    g[j] += 2.0 * PENALTY * v * m.log_derivative(&self.names[k], x[k]);
+                }
+            }
+        }
+        for (c, terms) in &self.constraints {
+            let v = terms.iter().map(|(k, a)| a * x[*k]).sum::<f64>() + c.constant;
+            if v > 0.0 {
+                f += PENALTY * v * v;
+                for (k, a) in terms {
+                    if let Some(j) = self.free.iter().position(|f| f == k) {
+                        g[j] += 2.0 * PENALTY * v * a;
+                    }
+                }
+            }
+        }
+        Some((f, g))
+    }
+
+    /// Normalised residuals `(prediction - measured) / sd`.
+    pub fn residuals(&self, free: &[f64]) -> Vec<f64> {
+        self.predictions(free)
+            .iter()
+            .zip(&self.targets)
+            .map(|(p, t)| (p - t.value) / t.sd)
+            .collect()
+    }
+}
+
+impl Objective for Problem<'_> {
+    fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+    fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+    fn objective(&self, x: &[f64]) -> Option<(f64, Vec<f64>)> {
+        Problem::objective(self, x)
+    }
+}

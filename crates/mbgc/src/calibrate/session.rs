@@ -1,0 +1,361 @@
+//! One calibration session: a material against one saved metamodel, from loading the model to
+//! everything `mbgc calibrate` reports (optima, solution set, posterior, the calibrated
+//! parameter file). The command line only prints and writes what [`Session`] holds.
+
+use std::fmt::Write as _;
+
+use super::bayes::{self, Posterior};
+use super::optimize::{calibrate, Calibration, Optimum};
+use super::problem::Problem;
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::metamodel::Metamodel;
+
+/// How a material is calibrated: built with [`SessionOptions::default`] and the setters, checked
+/// by [`SessionOptions::check`] (which [`run`] calls first).
+#[derive(Clone, Debug)]
+pub struct SessionOptions {
+    /// L-BFGS starts (Sobol points of the search box), 1 to [`MAX_STARTS`].
+    pub starts: usize,
+    /// Seed of the starts and of the posterior sampler.
+    pub seed: u64,
+    /// Also sample the posterior by TMCMC.
+    pub bayes: bool,
+    /// TMCMC samples per stage.
+    pub samples: usize,
+    /// Upper bound of the uniform prior of the relative model error sigma (>= 0; 0: none).
+    pub sigma_max: f64,
+}
+
+/// More starts than this find nothing new and only cost memory (each start keeps its optimum).
+pub const MAX_STARTS: usize = 65_536;
+
+impl Default for SessionOptions {
+    /// `mbgc calibrate`'s defaults: 64 starts, seed 1, no posterior (2000 samples per stage and
+    /// sigma_max 0.1 when one is asked for).
+    fn default() -> Self {
+        SessionOptions {
+            starts: 64,
+            seed: 1,
+            bayes: false,
+            samples: 2000,
+            sigma_max: 0.1,
+        }
+    }
+}
+
+impl SessionOptions {
+    /// Uses `starts` L-BFGS starts.
+    pub fn starts(mut self, starts: usize) -> Self {
+        self.starts = starts;
+        self
+    }
+
+    /// Seeds the starts and the sampler.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Also samples the posterior by TMCMC with `samples` per stage.
+    pub fn bayes(mut self, samples: usize) -> Self {
+        self.bayes = true;
+        self.samples = samples;
+        self
+    }
+
+    /// Refuses options no session can honour.
+    pub fn check(&self) -> Result<()> {
+        if self.starts == 0 || self.starts > MAX_STARTS {
+            return Err(Error::invalid(format!(
+                "--starts {}: expected 1 to {MAX_STARTS} starting points",
+                self.starts
+            )));
+        }
+        if self.bayes {
+            if self.samples < 10 {
+                return Err(Error::invalid(format!(
+                    "--samples {}: expected at least 10 TMCMC samples per stage",
+                    self.samples
+                )));
+            }
+            if !(self.sigma_max.is_finite() && self.sigma_max >= 0.0) {
+                return Err(Error::invalid(format!(
+                    "--sigma-max: expected a relative error >= 0, got {}",
+                    self.sigma_max
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A measured response as the session matched it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    pub name: String,
+    pub value: f64,
+    pub sd: f64,
+}
+
+/// The result of one session. Plain data: it no longer borrows the model.
+#[derive(Clone, Debug)]
+pub struct Session {
+    pub material: String,
+    /// The material file.
+    pub source: String,
+    /// The model file, as given.
+    pub model: String,
+    /// The model class the metamodel was trained on, if it records one.
+    pub model_class: Option<String>,
+    /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
+    pub notes: Vec<String>,
+    /// The material's fixed parameters, in file order.
+    pub fixed: Vec<(String, f64)>,
+    pub measured: Vec<Measurement>,
+    /// The searched parameters and their box.
+    pub free: Vec<String>,
+    pub bounds: Vec<(f64, f64)>,
+    /// Every model input at the best optimum (fixed ones included), in model order.
+    pub best_inputs: Vec<(String, f64)>,
+    /// Distinct optima, best first (never empty).
+    pub calibration: Calibration,
+    /// Free parameters absent from every equation of the measured responses: any value in
+    /// range fits equally.
+    pub unused: Vec<String>,
+    pub posterior: Option<Posterior>,
+    /// The `sigma_max` the posterior was sampled with (the range of its `sigma` axis).
+    pub sigma_max: f64,
+}
+
+/// Axis ranges and the marked point of a corner plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub ranges: Vec<(f64, f64)>,
+    pub marks: Vec<f64>,
+}
+
+/// Calibrates `material` against `model` (named `model_name` in the session's record). Fails
+/// with [`Error::OutOfDomain`] when a value the material fixes lies outside the model's domain,
+/// [`Error::NoSolution`] when no start converged and [`Error::Infeasible`] when the best optimum
+/// still violates the material's constraints.
+pub fn run(
+    material: &Material,
+    model: &Metamodel,
+    model_name: &str,
+    opts: &SessionOptions,
+) -> Result<Session> {
+    opts.check()?;
+    let problem = Problem::new(model, material)?;
+    let cal = calibrate(&problem, opts.starts, opts.seed);
+    let Some(best) = cal.optima.first() else {
+        return Err(Error::NoSolution(
+            "no start converged: the model's equations are not finite anywhere in the search box"
+                .into(),
+        ));
+    };
+    if best.violation > 1e-8 {
+        let list: Vec<&str> = problem
+            .constraints
+            .iter()
+            .map(|(c, _)| c.text.as_str())
+            .collect();
+        return Err(Error::Infeasible(format!(
+            "{}: the constraints [{}] cannot be met inside the search box (smallest violation^2 {:.3e})",
+            material.source,
+            list.join(", "),
+            best.violation
+        )));
+    }
+    let posterior = if opts.bayes {
+        Some(bayes::posterior(
+            &problem,
+            opts.samples,
+            opts.sigma_max,
+            opts.seed,
+        )?)
+    } else {
+        None
+    };
+    let free: Vec<String> = problem.free_names().iter().map(|s| s.to_string()).collect();
+    let unused = free
+        .iter()
+        .filter(|n| {
+            !problem
+                .targets
+                .iter()
+                .any(|t| model.responses[t.response].uses.iter().any(|u| u == *n))
+        })
+        .cloned()
+        .collect();
+    let best_inputs = problem
+        .names
+        .iter()
+        .cloned()
+        .zip(problem.full(&best.x))
+        .collect();
+    Ok(Session {
+        material: material.name.clone(),
+        source: material.source.clone(),
+        model: model_name.to_string(),
+        model_class: model.model_class.clone(),
+        notes: problem.notes.clone(),
+        fixed: material.fixed.clone(),
+        measured: problem
+            .targets
+            .iter()
+            .map(|t| Measurement {
+                name: t.name.clone(),
+                value: t.value,
+                sd: t.sd,
+            })
+            .collect(),
+        free,
+        bounds: problem
+            .lower
+            .iter()
+            .copied()
+            .zip(problem.upper.iter().copied())
+            .collect(),
+        best_inputs,
+        calibration: cal,
+        unused,
+        posterior,
+        sigma_max: opts.sigma_max,
+    })
+}
+
+impl Session {
+    pub fn best(&self) -> &Optimum {
+        &self.calibration.optima[0]
+    }
+
+    /// The optima as good as the best (chi^2 within 1): points of one solution set when the
+    /// data cannot fix every parameter.
+    pub fn equally_good(&self) -> Vec<&Optimum> {
+        let limit = self.best().chi2 + 1.0;
+        self.calibration
+            .optima
+            .iter()
+            .filter(|o| o.chi2 <= limit)
+            .collect()
+    }
+
+    /// The equally good optima when they are worth drawing: the data leave a solution set and
+    /// the starts found more than one point of it.
+    pub fn solution_set(&self) -> Option<Vec<Vec<f64>>> {
+        let good = self.equally_good();
+        (self.calibration.excess_parameters > 0 && good.len() > 1 && !self.free.is_empty())
+            .then(|| good.iter().map(|o| o.x.clone()).collect())
+    }
+
+    /// Axes of a corner plot of the posterior: the search box with the best optimum marked,
+    /// plus `[0, sigma_max]` and the posterior mean when sigma was sampled.
+    pub fn posterior_frame(&self) -> Option<Frame> {
+        let post = self.posterior.as_ref()?;
+        let mut ranges = self.bounds.clone();
+        let mut marks = self.best().x.clone();
+        if post.names.len() > self.free.len() {
+            ranges.push((0.0, self.sigma_max));
+            marks.push(post.parameters.last().map_or(0.0, |s| s.mean));
+        }
+        Some(Frame { ranges, marks })
+    }
+
+    /// The best parameter set as the TOML file `mbgc validate` reads.
+    pub fn calibrated_toml(&self) -> String {
+        let mut t = format!(
+            "# Calibrated by mbgc from {} with {}\nmaterial = {:?}\n\n[parameters]\n",
+            self.source, self.model, self.material
+        );
+        for (n, v) in &self.best_inputs {
+            let _ = writeln!(t, "{n} = {v:?}");
+        }
+        t.push_str("\n[predicted]\n");
+        for (m, p) in self.measured.iter().zip(&self.best().predictions) {
+            let _ = writeln!(t, "{} = {p:?}", m.name);
+        }
+        // `mbgc validate` reruns the DEM with the effects the metamodel was trained on.
+        if let Some(c) = &self.model_class {
+            let _ = write!(t, "\n[model]\nclass = {c:?}\n");
+        }
+        t
+    }
+
+    /// The machine-readable record of `mbgc calibrate --json`.
+    /// The machine-readable result (`calibrate --json`): `solutions` best first, each with every
+    /// model input by name (fixed ones included), the predicted responses and the objective;
+    /// with a posterior, per parameter its mean, COV and 5/95 % quantiles, and the
+    /// log-evidence. `calibration` keeps the full optimiser record.
+    pub fn json(&self) -> serde_json::Value {
+        use serde_json::{Map, Value};
+        let solutions: Vec<Value> = self
+            .calibration
+            .optima
+            .iter()
+            .map(|o| {
+                // Every model input: the inputs that no optimum varies (fixed in the material or by
+                // its PSD) as at the best optimum, then this optimum's free values.
+                let mut params = Map::new();
+                for (name, v) in &self.best_inputs {
+                    params.insert(name.clone(), Value::from(*v));
+                }
+                for (name, v) in self.free.iter().zip(&o.x) {
+                    params.insert(name.clone(), Value::from(*v));
+                }
+                let predicted: Map<String, Value> = self
+                    .measured
+                    .iter()
+                    .zip(&o.predictions)
+                    .map(|(m, p)| (m.name.clone(), Value::from(*p)))
+                    .collect();
+                serde_json::json!({
+                    "params": params,
+                    "predicted": predicted,
+                    "objective": o.chi2,
+                    "constraint_violation": o.violation,
+                    "starts": o.starts,
+                })
+            })
+            .collect();
+        let posterior = self.posterior.as_ref().map(|p| {
+            p.parameters
+                .iter()
+                .map(|s| {
+                    (
+                        s.name.clone(),
+                        serde_json::json!({
+                            "mean": s.mean, "sd": s.sd, "cov": s.cov, "q05": s.q05, "q95": s.q95,
+                        }),
+                    )
+                })
+                .collect::<Map<String, Value>>()
+        });
+        serde_json::json!({
+            "material": self.material,
+            "model": self.model,
+            "model_class": self.model_class,
+            "notes": self.notes,
+            "solutions": solutions,
+            "posterior": posterior,
+            "log_evidence": self.posterior.as_ref().map(|p| p.ln_evidence),
+            "posterior_details": self.posterior,
+            "calibration": self.calibration,
+        })
+    }
+}
+
+/// Log-evidence of each session (minus infinity without a posterior) and the posterior
+/// probability of each model class under equal prior odds.
+pub fn class_probabilities(sessions: &[Session]) -> (Vec<f64>, Vec<f64>) {
+    let ln_z: Vec<f64> = sessions
+        .iter()
+        .map(|s| {
+            s.posterior
+                .as_ref()
+                .map_or(f64::NEG_INFINITY, |p| p.ln_evidence)
+        })
+        .collect();
+    let prob = bayes::class_probabilities(&ln_z);
+    (ln_z, prob)
+}

@@ -1,0 +1,592 @@
+//! Runs a plan: worker threads (one run each) send finished lines over a channel to the calling
+//! thread, the only writer, which appends each line with one `write_all` and `sync_data`. A kill
+//! at any moment therefore loses at most the runs in flight and leaves at worst an incomplete last
+//! line, which the next start truncates before redoing that run.
+
+use std::collections::{HashMap, HashSet};
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::time::Instant;
+
+use super::columns::{
+    identity_len, is_pre_class_header, FIXED_COLUMNS, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE,
+};
+use super::lock::TableLock;
+use super::observer::ObserverHandle;
+use super::plan::{Plan, PlannedRun};
+use super::status::{meta_path, Meta};
+use super::table::{self, csv_line, read_table, DONE, FAILED};
+use crate::error::{write_atomic, Error, Result};
+use crate::experiments::{Experiment, Outcome, RunOptions};
+
+/// How a campaign runs: the table, the threads and what else to write.
+#[derive(Debug, Clone)]
+pub struct CampaignOptions {
+    /// The table; an existing one is resumed.
+    pub out: PathBuf,
+    /// Worker threads, each running one run at a time.
+    pub threads: usize,
+    /// Each run gets `vtk_dir/<run_id>/` for its snapshots.
+    pub vtk_dir: Option<PathBuf>,
+    /// Told of each recorded run (a progress bar, a log); nobody when `None`.
+    pub observer: Option<ObserverHandle>,
+    /// Run again the rows whose earlier run failed (their failed lines are removed first).
+    pub retry_failed: bool,
+    /// Each run gets `work_dir/<run_id>/` for an external backend's deck, log and dumps.
+    pub work_dir: Option<PathBuf>,
+    /// Run only these run ids of the shard (`campaign import`: the decks that have results);
+    /// the others are left for a later invocation, neither run nor recorded.
+    pub only: Option<HashSet<String>>,
+}
+
+impl CampaignOptions {
+    /// A campaign into `out` on `threads` threads, nothing else asked for.
+    pub fn new(out: PathBuf, threads: usize) -> Self {
+        CampaignOptions {
+            out,
+            threads,
+            vtk_dir: None,
+            observer: None,
+            retry_failed: false,
+            work_dir: None,
+            only: None,
+        }
+    }
+}
+
+/// What [`run_campaign`] did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Rows of this shard (all design rows without a shard).
+    pub planned: usize,
+    /// Rows already in the table (done or failed) and therefore not run again.
+    pub skipped: usize,
+    /// Of those, rows whose earlier run failed (not retried without `retry_failed`).
+    pub failed_before: usize,
+    /// Failed rows removed from the table to be run again (`retry_failed`).
+    pub retried: usize,
+    /// Runs completed and recorded as done in this invocation.
+    pub done: usize,
+    /// Runs that ended in an error in this invocation (recorded as failed).
+    pub failed: usize,
+    /// Bytes of an incomplete last line removed from the table before resuming.
+    pub truncated_bytes: u64,
+    /// Worker threads used.
+    pub threads: usize,
+    /// Wall-clock time of the invocation, s.
+    pub elapsed_s: f64,
+}
+
+/// Runs every row of the plan's shard that the table does not hold yet.
+pub fn run_campaign(
+    experiment: &dyn Experiment,
+    plan: &Plan,
+    opts: &CampaignOptions,
+) -> Result<Summary> {
+    if opts.threads == 0 {
+        return Err(Error::invalid("--threads: expected at least 1"));
+    }
+    if experiment.name() != plan.experiment {
+        return Err(Error::invalid(format!(
+            "the plan was made for {} but the experiment is {}",
+            plan.experiment,
+            experiment.name()
+        )));
+    }
+    let t0 = Instant::now();
+    // Outputs are checked before any run: a campaign must not run for hours and then find that
+    // its snapshots cannot be written.
+    if let Some(dir) = &opts.vtk_dir {
+        check_writable_dir(dir, "--vtk")?;
+    }
+    // Before the table is read: a second process must not resume from a table that the first
+    // is still appending to.
+    let _lock = TableLock::acquire(&opts.out)?;
+    let (mut present, truncated_bytes) = prepare_table(plan, &opts.out)?;
+    let selected: Vec<&PlannedRun> = plan
+        .selected()
+        .filter(|r| opts.only.as_ref().is_none_or(|ids| ids.contains(&r.run_id)))
+        .collect();
+    let failed_ids: HashSet<String> = selected
+        .iter()
+        .filter(|r| present.get(r.run_id.as_str()) == Some(&true))
+        .map(|r| r.run_id.clone())
+        .collect();
+    let mut retried = 0;
+    if opts.retry_failed && !failed_ids.is_empty() {
+        retried = remove_failed_lines(&opts.out, &failed_ids)?;
+        for id in &failed_ids {
+            present.remove(id.as_str());
+        }
+    }
+    let todo: Vec<&PlannedRun> = selected
+        .iter()
+        .copied()
+        .filter(|r| !present.contains_key(r.run_id.as_str()))
+        .collect();
+    let threads = opts.threads.min(todo.len()).max(1);
+    let mut summary = Summary {
+        planned: selected.len(),
+        skipped: selected.len() - todo.len(),
+        failed_before: if opts.retry_failed {
+            0
+        } else {
+            failed_ids.len()
+        },
+        retried,
+        done: 0,
+        failed: 0,
+        truncated_bytes,
+        threads,
+        elapsed_s: 0.0,
+    };
+    if todo.is_empty() {
+        summary.elapsed_s = t0.elapsed().as_secs_f64();
+        return Ok(summary);
+    }
+    let mut file = OpenOptions::new()
+        .append(true)
+        .open(&opts.out)
+        .map_err(|e| Error::io(&opts.out, e))?;
+    let observer = opts.observer.as_ref().map(|o| o.0.as_ref());
+    if let Some(o) = observer {
+        o.started(todo.len(), summary.skipped);
+    }
+
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<(bool, Result<Vec<u8>>)>();
+    let mut write_error = None;
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, stop, todo) = (&next, &stop, &todo);
+            s.spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(run) = todo.get(i) else { break };
+                    let (failed, line) = execute(experiment, plan, run, opts);
+                    if tx.send((failed, line)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        for (failed, line) in rx {
+            if let Err(e) = line.and_then(|l| append(&mut file, &opts.out, &l)) {
+                // Workers finish the runs in flight, whose lines are then dropped (and redone
+                // on the next start); no new run starts.
+                stop.store(true, Ordering::Relaxed);
+                write_error = Some(e);
+                break;
+            }
+            if failed {
+                summary.failed += 1;
+            } else {
+                summary.done += 1;
+            }
+            if let Some(o) = observer {
+                o.run_recorded(failed);
+            }
+        }
+    });
+    if let Some(e) = write_error {
+        if let Some(o) = observer {
+            o.ended(false);
+        }
+        return Err(e);
+    }
+    if let Some(o) = observer {
+        o.ended(true);
+    }
+    summary.elapsed_s = t0.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// A directory exists (or is created) and takes a file, or the error names `option`.
+fn check_writable_dir(dir: &Path, option: &str) -> Result<()> {
+    let probe = std::fs::create_dir_all(dir).and_then(|()| tempfile::tempfile_in(dir));
+    probe.map(drop).map_err(|e| {
+        Error::invalid(format!(
+            "{option} {}: cannot write there ({e}); expected a writable directory",
+            dir.display()
+        ))
+    })
+}
+
+/// Rewrites the table without the failed lines of `ids`; returns how many were removed.
+fn remove_failed_lines(out: &Path, ids: &HashSet<String>) -> Result<usize> {
+    let t = read_table(out)?;
+    let mut bytes = csv_line(&t.header)?;
+    let mut removed = 0;
+    for (_, rec) in &t.records {
+        if rec[2] == *FAILED && ids.contains(&rec[0]) {
+            removed += 1;
+        } else {
+            bytes.extend(csv_line(rec.iter())?);
+        }
+    }
+    write_atomic(out, &bytes)?;
+    Ok(removed)
+}
+
+/// Creates the table (header only) or checks an existing one against the plan, writes the
+/// sidecar, and truncates an incomplete last line. Returns the run ids already present, each
+/// with whether its run failed. Nothing is modified when the table belongs to another campaign.
+fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)> {
+    let file = out.display().to_string();
+    let columns = plan.columns();
+    let mut present = HashMap::new();
+    let exists = out.exists();
+    let table = if exists { Some(read_table(out)?) } else { None };
+    if let Some(t) = &table {
+        if t.header.is_empty() && t.partial_len > 0 {
+            return Err(Error::input(
+                &file,
+                "header",
+                "no complete header line: not a campaign table; choose another --out or \
+                 remove the file",
+            ));
+        }
+        // Before the header: another class usually means other columns too, and the class is
+        // what the user has to change.
+        let class = plan.model_class_label();
+        let other_class = t.records.iter().find(|(_, rec)| {
+            // `-`: an experiment without a contact law; the header tells that apart.
+            rec.get(MODEL_CLASS_COLUMN)
+                .is_some_and(|c| c != class && c != "-" && class != "-")
+        });
+        if let (Some((line, rec)), Some("model_class")) = (
+            other_class,
+            t.header.get(MODEL_CLASS_COLUMN).map(String::as_str),
+        ) {
+            let theirs = &rec[MODEL_CLASS_COLUMN];
+            return Err(Error::input(
+                &file,
+                format!("line {line}, column model_class"),
+                format!(
+                    "run with the model class {theirs}, but this command asks for {class}: a \
+                     campaign holds one class; pass --model-class {} to resume it, or choose \
+                     another --out",
+                    theirs.replace('+', ",")
+                ),
+            ));
+        }
+        if is_pre_class_header(&t.header) {
+            return Err(Error::input(&file, "header", PRE_CLASS_TABLE));
+        }
+        let theirs_recorded = identity_len(&t.header) > FIXED_COLUMNS.len();
+        let ours = plan.backend_field();
+        if !t.header.is_empty() && theirs_recorded != ours.is_some() {
+            return Err(Error::input(
+                &file,
+                "header",
+                format!(
+                    "a table of {}, but this command asks for --backend {}: one table holds \
+                     the runs of one code; choose another --out",
+                    if theirs_recorded {
+                        "an external backend (its backend column)"
+                    } else {
+                        "the embedded engine (no backend column)"
+                    },
+                    plan.settings.backend
+                ),
+            ));
+        }
+        if let Some(ours) = &ours {
+            for (line, rec) in &t.records {
+                let theirs = rec.get(FIXED_COLUMNS.len()).unwrap_or("");
+                if theirs != ours {
+                    return Err(Error::input(
+                        &file,
+                        format!("line {line}, column backend"),
+                        format!(
+                            "run by {theirs}, but this command runs {ours} (--backend {}{}): \
+                             LIGGGHTS repeats a run only on the same number of MPI processes, \
+                             so a table holds one; pass the --mpi the table was made with \
+                             (liggghts-npN: --mpi N), or choose another --out",
+                            plan.settings.backend,
+                            plan.settings
+                                .mpi
+                                .map(|n| format!(" --mpi {n}"))
+                                .unwrap_or_default()
+                        ),
+                    ));
+                }
+            }
+        }
+        if !t.header.is_empty() && t.header != columns {
+            return Err(header_mismatch(&file, &columns, &t.header));
+        }
+        let identity = plan.identity_len();
+        for (line, rec) in &t.records {
+            let field = || format!("line {line}");
+            let row: usize = rec[1].parse().map_err(|_| {
+                Error::input(
+                    &file,
+                    field(),
+                    format!("row: expected a row number, found \"{}\"", &rec[1]),
+                )
+            })?;
+            if rec[2] != *DONE && rec[2] != *FAILED {
+                return Err(Error::input(
+                    &file,
+                    field(),
+                    format!("status: expected done or failed, found \"{}\"", &rec[2]),
+                ));
+            }
+            let Some(planned) = plan.rows.get(row) else {
+                return Err(Error::input(
+                    &file,
+                    field(),
+                    format!(
+                        "row {row} is beyond the {} rows of {}: the table comes from another \
+                         design; choose another --out",
+                        plan.rows.len(),
+                        plan.design.display()
+                    ),
+                ));
+            };
+            if planned.run_id != rec[0] {
+                return Err(Error::input(
+                    &file,
+                    field(),
+                    format!(
+                        "row {row} has run_id {}, but {} on this design with this --seed, --set, \
+                         --box-scale, --model-class, --backend and --mpi gives {}: the table \
+                         comes from another campaign (its <out>.meta.json says how it was run); \
+                         choose another --out",
+                        &rec[0], plan.experiment, planned.run_id
+                    ),
+                ));
+            }
+            // The run id is not recomputed from the line, so a hand-edited input would otherwise
+            // pass as this campaign's run.
+            for (k, (name, want)) in planned.params.iter().enumerate() {
+                let field = &rec[identity + k];
+                let same = field
+                    .parse::<f64>()
+                    .is_ok_and(|v| v.to_bits() == want.to_bits());
+                if !same {
+                    return Err(Error::input(
+                        &file,
+                        format!("line {line}, column {name}"),
+                        format!(
+                            "{want:?} as planned for row {row}, found \"{field}\": the line was \
+                             edited or comes from another campaign; choose another --out"
+                        ),
+                    ));
+                }
+            }
+            if rec[2] == *DONE {
+                for (k, name) in plan.responses.iter().enumerate() {
+                    let field = &rec[identity + plan.inputs.len() + k];
+                    if field.parse::<f64>().is_err() {
+                        return Err(Error::input(
+                            &file,
+                            format!("line {line}, column {name}"),
+                            format!("a number for a done run, found \"{field}\""),
+                        ));
+                    }
+                }
+            }
+            present.insert(rec[0].to_string(), rec[2] == *FAILED);
+        }
+    }
+    if let (Some(t), Some(m)) = (&table, Meta::read(out)?) {
+        let (theirs, ours) = (m.mpi.unwrap_or(1), plan.settings.mpi.unwrap_or(1));
+        // Failed lines hold no result of either count.
+        let done = t.records.iter().any(|(_, r)| r.get(2) == Some(DONE));
+        if theirs != ours && done {
+            return Err(Error::input(
+                meta_path(out).display(),
+                "mpi",
+                format!(
+                    "runs on {theirs} MPI process(es), but this command asks for {ours}: LIGGGHTS \
+                     repeats a run only on the same count, so a table holds one; pass --mpi \
+                     {theirs} to resume it, or choose another --out"
+                ),
+            ));
+        }
+    }
+    Meta::of(plan).write(out)?;
+    match &table {
+        Some(t) if !t.header.is_empty() => {
+            if t.partial_len > 0 {
+                let f = OpenOptions::new()
+                    .write(true)
+                    .open(out)
+                    .map_err(|e| Error::io(out, e))?;
+                f.set_len(t.complete_len)
+                    .and_then(|()| f.sync_all())
+                    .map_err(|e| Error::io(out, e))?;
+            }
+        }
+        // New (or empty) table: the header appears whole or not at all.
+        _ => write_atomic(out, &csv_line(&columns)?)?,
+    }
+    Ok((present, table.map(|t| t.partial_len).unwrap_or(0)))
+}
+
+fn header_mismatch(file: &str, want: &[String], found: &[String]) -> Error {
+    let k = want
+        .iter()
+        .zip(found)
+        .position(|(a, b)| a != b)
+        .unwrap_or(want.len().min(found.len()));
+    let at = |h: &[String]| h.get(k).map(|s| s.as_str()).unwrap_or("(none)").to_string();
+    Error::input(
+        file,
+        "header",
+        format!(
+            "the table has other columns than this campaign (other experiment, design columns or \
+             --set): column {} is {} in the file but {} here ({} vs {} columns); choose another \
+             --out or remove the file",
+            k + 1,
+            at(found),
+            at(want),
+            found.len(),
+            want.len()
+        ),
+    )
+}
+
+/// One run, its failures and panics included, as a table line.
+fn execute(
+    experiment: &dyn Experiment,
+    plan: &Plan,
+    run: &PlannedRun,
+    campaign: &CampaignOptions,
+) -> (bool, Result<Vec<u8>>) {
+    let opts = RunOptions {
+        vtk_dir: campaign.vtk_dir.as_ref().map(|d| d.join(&run.run_id)),
+        picture: None,
+        threads: 1,
+        work_dir: campaign.work_dir.as_ref().map(|d| d.join(&run.run_id)),
+    };
+    let result: std::result::Result<Outcome, String> = match catch_unwind(AssertUnwindSafe(|| {
+        experiment.run(&run.params, run.seed, &opts)
+    })) {
+        Ok(Ok(o)) => match plan.responses.iter().find(|r| o.get(r).is_none()) {
+            None => Ok(o),
+            Some(r) => Err(format!("the experiment returned no response {r}")),
+        },
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(payload) => Err(format!("panic: {}", panic_message(payload.as_ref()))),
+    };
+    (
+        result.is_err(),
+        table::run_line(
+            run,
+            &plan.model_class_label(),
+            plan.backend_field().as_deref(),
+            &plan.responses,
+            &result,
+        ),
+    )
+}
+
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "(no message)".into()
+    }
+}
+
+fn append(file: &mut File, path: &Path, line: &[u8]) -> Result<()> {
+    // One write of the whole line, then to disk before the next: a crash leaves whole lines and
+    // at most one incomplete last line.
+    file.write_all(line)
+        .and_then(|()| file.sync_data())
+        .map_err(|e| Error::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::plan::Shard;
+    use crate::campaign::registry::sleep_test::SleepTest;
+    use crate::campaign::registry::ExperimentSettings;
+
+    fn setup(design: &str, shard: Option<Shard>) -> (tempfile::TempDir, Plan, CampaignOptions) {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path().join("design.csv");
+        std::fs::write(&d, design).unwrap();
+        let plan = Plan::new(
+            &SleepTest,
+            &d,
+            &[],
+            1,
+            &ExperimentSettings::default(),
+            shard,
+        )
+        .unwrap();
+        let opts = CampaignOptions::new(dir.path().join("out.csv"), 2);
+        (dir, plan, opts)
+    }
+
+    #[test]
+    fn failures_and_panics_become_failed_rows_and_resume_skips_everything() {
+        let (_dir, plan, opts) =
+            setup("x,y,fail,panic\n1,1,0,0\n2,1,1,0\n3,1,0,1\n4,1,0,0\n", None);
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.planned, s.done, s.failed, s.skipped), (4, 2, 2, 0));
+        let t = read_table(&opts.out).unwrap();
+        let err = table::column(&t.header, "error").unwrap();
+        let by_row = |row: &str| {
+            t.records
+                .iter()
+                .find(|(_, r)| &r[1] == row)
+                .unwrap()
+                .1
+                .clone()
+        };
+        assert_eq!(&by_row("1")[2], "failed");
+        assert!(by_row("1")[err].contains(",\nsecond line"));
+        assert_eq!(&by_row("2")[2], "failed");
+        assert!(by_row("2")[err].starts_with("panic: sleep-test: panic on request"));
+        assert_eq!(&by_row("3")[2], "done");
+
+        let before = std::fs::read(&opts.out).unwrap();
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.skipped, s.done, s.failed), (4, 0, 0));
+        assert_eq!(std::fs::read(&opts.out).unwrap(), before);
+    }
+
+    #[test]
+    fn an_incomplete_last_line_is_cut_and_its_run_redone() {
+        let (_dir, plan, opts) = setup("x,y\n1,1\n2,1\n3,1\n", None);
+        run_campaign(&SleepTest, &plan, &opts).unwrap();
+        let full = std::fs::read(&opts.out).unwrap();
+        let last_start = full[..full.len() - 1]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .unwrap()
+            + 1;
+        std::fs::write(&opts.out, &full[..last_start + 7]).unwrap();
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.truncated_bytes, s.skipped, s.done), (7, 2, 1));
+        assert_eq!(std::fs::read(&opts.out).unwrap(), full);
+    }
+
+    #[test]
+    fn shards_run_only_their_rows() {
+        let (_dir, plan, opts) = setup(
+            "x,y\n1,1\n2,1\n3,1\n4,1\n5,1\n",
+            Some(Shard { index: 2, count: 2 }),
+        );
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.planned, s.done), (2, 2));
+        let t = read_table(&opts.out).unwrap();
+        let rows: HashSet<&str> = t.records.iter().map(|(_, r)| &r[1]).collect();
+        assert_eq!(rows, HashSet::from(["1", "3"]));
+    }
+}

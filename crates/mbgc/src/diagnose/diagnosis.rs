@@ -1,0 +1,517 @@
+//! The diagnosis of a measurement set: the joint calibration under the set's model class, where
+//! its residuals are structured, and for each candidate effect how much of the misfit it
+//! explains once its strength is fitted jointly (chi^2/dof, the Bayes factor from TMCMC
+//! evidences, the structure left), ranked, with a verdict.
+
+use serde::Serialize;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+use super::joint::Joint;
+use super::measurements::{switchable_effects, MeasurementSet};
+use super::structure::{self, Point, Test};
+use super::surrogate::Surrogate;
+use crate::error::{Error, Result};
+
+/// Settings of a diagnosis: fit starts, TMCMC samples, seed and test level.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// L-BFGS starts of each joint fit.
+    pub starts: usize,
+    /// TMCMC samples per stage (evidence and posterior).
+    pub samples: usize,
+    /// Seed of the fit starts and of TMCMC; the same seed gives the same diagnosis.
+    pub seed: u64,
+    /// Family-wise level of the structure tests and of the chi^2 test.
+    pub alpha: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            starts: 16,
+            samples: 2000,
+            seed: 1,
+            alpha: 0.01,
+        }
+    }
+}
+
+/// ln 10: a Bayes factor of 10, "strong" evidence on Jeffreys' scale.
+pub const STRONG: f64 = std::f64::consts::LN_10;
+
+/// One searched parameter of a joint fit: best fit and posterior summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct Parameter {
+    /// Parameter name, as in the models.
+    pub name: String,
+    /// At the best fit.
+    pub best: f64,
+    /// Mean of the TMCMC posterior draws.
+    pub posterior_mean: f64,
+    /// 5 % quantile of the posterior draws (lower end of the 90 % interval).
+    pub q05: f64,
+    /// 95 % quantile of the posterior draws (upper end of the 90 % interval).
+    pub q95: f64,
+}
+
+/// One measurement against the model's prediction at the best fit.
+#[derive(Clone, Debug, Serialize)]
+pub struct Residual {
+    /// Sample name.
+    pub sample: String,
+    /// Response name (e.g. `shear_angle`).
+    pub response: String,
+    /// Measured value, in the response's unit.
+    pub measured: f64,
+    /// Model prediction at the best fit, in the response's unit.
+    pub predicted: f64,
+    /// Measurement standard deviation, in the response's unit.
+    pub sd: f64,
+    /// sd and model error together.
+    pub sigma: f64,
+    /// (measured - predicted) / sigma.
+    pub z: f64,
+}
+
+/// How well the fit matches one sample, with the sample's PSD for plotting trends.
+#[derive(Clone, Debug, Serialize)]
+pub struct SampleError {
+    /// Sample name.
+    pub sample: String,
+    /// Mass median particle size of the sample, mm, when known.
+    pub d50: Option<f64>,
+    /// Log-normal width sigma_ln of the sample's PSD, when known.
+    pub sigma_ln: Option<f64>,
+    /// Root mean square of its standardised residuals.
+    pub rms_z: f64,
+}
+
+/// The misfit of one response over all samples.
+#[derive(Clone, Debug, Serialize)]
+pub struct ResponseError {
+    /// Response name.
+    pub response: String,
+    /// Root mean square of measured minus predicted over the samples, in the response's unit.
+    pub rmse: f64,
+}
+
+/// One model class fitted to the whole set.
+#[derive(Clone, Debug, Serialize)]
+pub struct ClassFit {
+    /// The model class fitted, as effect names.
+    pub class: String,
+    /// The effect added to the set's class (None: the set's class itself).
+    pub effect: Option<String>,
+    /// Which model each sample uses, and what was decided on the user's behalf.
+    pub notes: Vec<String>,
+    /// The models used, each once.
+    pub models: Vec<String>,
+    /// The searched parameters of the joint fit, in the joint problem's order.
+    pub parameters: Vec<Parameter>,
+    /// Sum of squared standardised residuals z at the best fit.
+    pub chi2: f64,
+    /// Degrees of freedom: measurements minus searched parameters (may be <= 0).
+    pub dof: isize,
+    /// chi^2 / dof; near 1 when the class explains the data within their uncertainty (NaN for
+    /// dof <= 0).
+    pub chi2_dof: f64,
+    /// P(chi^2 >= observed) under the class; NaN without degrees of freedom.
+    pub p_value: f64,
+    /// Natural log of the model evidence estimated by TMCMC; differences between classes are log
+    /// Bayes factors.
+    pub ln_evidence: f64,
+    /// Every measurement's residual at the best fit.
+    pub residuals: Vec<Residual>,
+    /// Per sample: the RMS standardised residual.
+    pub samples: Vec<SampleError>,
+    /// Per response: the RMS residual in the response's unit.
+    pub rmse: Vec<ResponseError>,
+    /// Every structure test of the residuals (offsets and trends in d50 and sigma_ln).
+    pub structure: Vec<Test>,
+    /// Tests significant at the family-wise level.
+    pub structured: Vec<Test>,
+}
+
+/// A candidate effect and how much of the misfit it explains.
+#[derive(Clone, Debug, Serialize)]
+pub struct Ranked {
+    /// Name of the candidate effect added to the set's class.
+    pub effect: String,
+    /// chi^2 / dof of the joint fit with the effect.
+    pub chi2_dof_after: f64,
+    /// P(chi^2 >= observed) with the effect; NaN without degrees of freedom.
+    pub p_value_after: f64,
+    /// ln(evidence with the effect / evidence without).
+    pub log_bayes_factor: f64,
+    /// chi^2 without the effect over chi^2 with it.
+    pub chi2_ratio: f64,
+    /// Whether significant structure is left in the residuals with the effect.
+    pub structure_left: bool,
+    /// The effect's parameters: best fit and 90 % posterior interval.
+    pub strength: Vec<Parameter>,
+}
+
+/// A candidate effect that could not be evaluated, with the reason.
+#[derive(Clone, Debug, Serialize)]
+pub struct Unavailable {
+    /// Name of the effect.
+    pub effect: String,
+    /// Why it was not evaluated (e.g. no model for its class, or all its parameters fixed).
+    pub reason: String,
+}
+
+/// The result of `mbgc diagnose`: the fit under the set's class, the candidate effects ranked
+/// by log Bayes factor (then chi^2/dof), and a verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    /// Name of the measurement set.
+    pub set: String,
+    /// The set's own model class.
+    pub class: String,
+    /// Number of measured values fitted.
+    pub measurements: usize,
+    /// chi^2 / dof of the set's own class (same as `base.chi2_dof`).
+    pub chi2_dof: f64,
+    /// P(chi^2 >= observed) under the set's own class.
+    pub p_value: f64,
+    /// The full fit under the set's own class.
+    pub base: ClassFit,
+    /// Candidates that could be evaluated, best first.
+    pub ranking: Vec<Ranked>,
+    /// Candidates that could not be evaluated, with reasons.
+    pub unavailable: Vec<Unavailable>,
+    /// The fits with each ranked effect, in ranking order (the error ladder: base, then these).
+    pub extended: Vec<ClassFit>,
+    /// One-sentence conclusion: consistent, explained by an effect, or helped but not explained.
+    pub verdict: String,
+    /// The options the diagnosis ran with, for reproducing it.
+    pub settings: Settings,
+}
+
+/// The [`Options`] a diagnosis ran with, as written to its report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    /// L-BFGS starts of each joint fit.
+    pub starts: usize,
+    /// TMCMC samples per stage.
+    pub samples: usize,
+    /// Seed of the fit starts and of TMCMC.
+    pub seed: u64,
+    /// Family-wise level of the structure tests and of the chi^2 test.
+    pub alpha: f64,
+}
+
+fn p_value(chi2: f64, dof: isize) -> f64 {
+    if dof <= 0 {
+        return f64::NAN;
+    }
+    ChiSquared::new(dof as f64).map_or(f64::NAN, |d| 1.0 - d.cdf(chi2))
+}
+
+fn class_fit(set: &MeasurementSet, j: &Joint, opts: &Options) -> Result<ClassFit> {
+    let fit = j.fit(opts.starts, opts.seed);
+    let ev = j
+        .evidence(opts.samples, opts.seed)
+        .map_err(|e| Error::invalid(format!("TMCMC of {}: {e}", j.class)))?;
+    let parameters = j
+        .names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| {
+            let mut v: Vec<f64> = ev.draws.iter().map(|d| d[k]).collect();
+            v.sort_by(f64::total_cmp);
+            let q = |p: f64| crate::numeric::quantile_sorted(&v, p);
+            Parameter {
+                name: n.clone(),
+                best: fit.theta[k],
+                posterior_mean: v.iter().sum::<f64>() / v.len().max(1) as f64,
+                q05: q(0.05),
+                q95: q(0.95),
+            }
+        })
+        .collect();
+    let (pred, _) = j.predictions(&fit.theta);
+    let residuals: Vec<Residual> = j
+        .targets
+        .iter()
+        .zip(&pred)
+        .map(|(t, p)| Residual {
+            sample: set.samples[t.sample].name.clone(),
+            response: t.response.clone(),
+            measured: t.value,
+            predicted: *p,
+            sd: t.sd,
+            sigma: t.sigma(),
+            z: (t.value - p) / t.sigma(),
+        })
+        .collect();
+    let psd: Vec<Option<(f64, f64)>> = set
+        .samples
+        .iter()
+        .map(|s| {
+            s.psd
+                .as_ref()
+                .and_then(|p| p.parameters().ok())
+                .or_else(|| {
+                    let get = |n: &str| {
+                        s.fixed
+                            .iter()
+                            .chain(&set.fixed)
+                            .find(|(k, _)| k == n)
+                            .map(|(_, v)| *v)
+                    };
+                    get("d50").zip(get("sigma_ln"))
+                })
+        })
+        .collect();
+    let samples = set
+        .samples
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let z: Vec<f64> = j
+                .targets
+                .iter()
+                .zip(&residuals)
+                .filter(|(t, _)| t.sample == i)
+                .map(|(_, r)| r.z)
+                .collect();
+            SampleError {
+                sample: s.name.clone(),
+                d50: psd[i].map(|p| p.0),
+                sigma_ln: psd[i].map(|p| p.1),
+                rms_z: (z.iter().map(|z| z * z).sum::<f64>() / z.len().max(1) as f64).sqrt(),
+            }
+        })
+        .collect();
+    let mut rmse: Vec<ResponseError> = Vec::new();
+    for r in &residuals {
+        if !rmse.iter().any(|e| e.response == r.response) {
+            let d: Vec<f64> = residuals
+                .iter()
+                .filter(|q| q.response == r.response)
+                .map(|q| q.measured - q.predicted)
+                .collect();
+            rmse.push(ResponseError {
+                response: r.response.clone(),
+                rmse: (d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64).sqrt(),
+            });
+        }
+    }
+    let points: Vec<Point> = j
+        .targets
+        .iter()
+        .zip(&residuals)
+        .map(|(t, r)| Point {
+            response: t.response.clone(),
+            experiment: set.samples[t.sample].experiment.clone(),
+            d50: psd[t.sample].map(|p| p.0),
+            sigma_ln: psd[t.sample].map(|p| p.1),
+            z: r.z,
+        })
+        .collect();
+    let tests = structure::tests(&points);
+    let structured = structure::significant(&tests, opts.alpha)
+        .into_iter()
+        .cloned()
+        .collect();
+    let chi2: f64 = residuals.iter().map(|r| r.z * r.z).sum();
+    let dof = j.dof();
+    Ok(ClassFit {
+        class: j.class.to_string(),
+        effect: j.effect.map(|e| e.name.to_string()),
+        notes: j.notes.clone(),
+        models: j.models(),
+        parameters,
+        chi2,
+        dof,
+        chi2_dof: if dof > 0 { chi2 / dof as f64 } else { f64::NAN },
+        p_value: p_value(chi2, dof),
+        ln_evidence: ev.ln_evidence,
+        residuals,
+        samples,
+        rmse,
+        structure: tests,
+        structured,
+    })
+}
+
+/// Runs the diagnosis of `set` against the models.
+pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> Result<Diagnosis> {
+    let base_joint = Joint::new(set, models, None).map_err(|e| {
+        Error::input(
+            &set.source,
+            "model.class",
+            format!("a model for the set's class: {e}"),
+        )
+    })?;
+    if base_joint.dof() < 0 {
+        return Err(Error::input(
+            &set.source,
+            "sample",
+            format!(
+                "at least as many measurements as searched parameters: {} measurements, {} searched \
+                 ({}); fix known values or measure more",
+                base_joint.targets.len(),
+                base_joint.dim(),
+                base_joint.names.join(", ")
+            ),
+        ));
+    }
+    let base = class_fit(set, &base_joint, opts)?;
+    let mut effects = switchable_effects(&set.class);
+    for c in &set.candidates {
+        if !effects.iter().any(|e| e.name == c.effect.name) {
+            effects.push(c.effect);
+        }
+    }
+    let mut ranked: Vec<(Ranked, ClassFit)> = Vec::new();
+    let mut unavailable = Vec::new();
+    for e in effects {
+        let settings = set.candidate(e);
+        let j = match Joint::new(set, models, Some(&settings)) {
+            Ok(j) => j,
+            Err(reason) => {
+                unavailable.push(Unavailable {
+                    effect: e.name.to_string(),
+                    reason,
+                });
+                continue;
+            }
+        };
+        if j.effect_params.is_empty() {
+            unavailable.push(Unavailable {
+                effect: e.name.to_string(),
+                reason: "every parameter of it is fixed: nothing to fit".into(),
+            });
+            continue;
+        }
+        let fit = class_fit(set, &j, opts)?;
+        let strength = j
+            .effect_params
+            .iter()
+            .map(|&k| fit.parameters[k].clone())
+            .collect();
+        ranked.push((
+            Ranked {
+                effect: e.name.to_string(),
+                chi2_dof_after: fit.chi2_dof,
+                p_value_after: fit.p_value,
+                log_bayes_factor: fit.ln_evidence - base.ln_evidence,
+                chi2_ratio: base.chi2 / fit.chi2,
+                structure_left: !fit.structured.is_empty(),
+                strength,
+            },
+            fit,
+        ));
+    }
+    ranked.sort_by(|a, b| {
+        b.0.log_bayes_factor
+            .total_cmp(&a.0.log_bayes_factor)
+            .then(a.0.chi2_dof_after.total_cmp(&b.0.chi2_dof_after))
+    });
+    // Without degrees of freedom (p NaN) the chi^2 test cannot reject.
+    let consistent = not_rejected(base.p_value, opts.alpha) && base.structured.is_empty();
+    let untested: Vec<&str> = unavailable.iter().map(|u| u.effect.as_str()).collect();
+    let verdict = verdict(
+        &base,
+        consistent,
+        ranked.first().map(|r| &r.0),
+        &untested,
+        opts.alpha,
+    );
+    Ok(Diagnosis {
+        set: set.name.clone(),
+        class: set.class.to_string(),
+        measurements: set.measurements(),
+        chi2_dof: base.chi2_dof,
+        p_value: base.p_value,
+        base,
+        ranking: ranked.iter().map(|r| r.0.clone()).collect(),
+        extended: ranked.into_iter().map(|r| r.1).collect(),
+        unavailable,
+        verdict,
+        settings: Settings {
+            starts: opts.starts,
+            samples: opts.samples,
+            seed: opts.seed,
+            alpha: opts.alpha,
+        },
+    })
+}
+
+fn not_rejected(p: f64, alpha: f64) -> bool {
+    p.is_nan() || p >= alpha
+}
+
+fn verdict(
+    base: &ClassFit,
+    consistent: bool,
+    best: Option<&Ranked>,
+    untested: &[&str],
+    alpha: f64,
+) -> String {
+    let strong = best.filter(|b| b.log_bayes_factor > STRONG);
+    match (consistent, strong) {
+        (true, None) => format!(
+            "consistent, no effect needed: chi^2/dof {:.2} (p = {:.3}), no structure in the \
+             residuals at the {alpha} level, and no candidate has a Bayes factor above 10",
+            base.chi2_dof, base.p_value
+        ),
+        (_, Some(b)) if not_rejected(b.p_value_after, alpha) && !b.structure_left => format!(
+            "{} explains it: chi^2/dof {:.2} -> {:.2}, ln Bayes factor {:.1}, no structure left",
+            b.effect, base.chi2_dof, b.chi2_dof_after, b.log_bayes_factor
+        ),
+        (_, Some(b)) => format!(
+            "{} helps most but does not explain everything: chi^2/dof {:.2} -> {:.2} (p = {:.2e}), \
+             ln Bayes factor {:.1}{}",
+            b.effect,
+            base.chi2_dof,
+            b.chi2_dof_after,
+            b.p_value_after,
+            b.log_bayes_factor,
+            if b.structure_left { ", structure left in the residuals" } else { "" }
+        ),
+        // The misfit is real and a candidate removes it, but the data cannot yet tell the
+        // extended class from the base decisively: say so rather than "none explains it".
+        (false, None) => {
+            match best.filter(|b| {
+                b.log_bayes_factor > 0.0
+                    && not_rejected(b.p_value_after, alpha)
+                    && !b.structure_left
+            }) {
+                Some(b) => format!(
+                "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}); {} removes the misfit (chi^2/dof \
+                 -> {:.2}, no structure left) but the evidence for it is weak (ln Bayes factor \
+                 {:.1}, below ln 10): more samples or repeats would decide",
+                base.chi2_dof,
+                base.p_value,
+                if base.structured.is_empty() { "" } else { ", structured residuals" },
+                b.effect,
+                b.chi2_dof_after,
+                b.log_bayes_factor
+            ),
+                None => format!(
+                    "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}) and none of the evaluated \
+                 candidates explains it{}",
+                    base.chi2_dof,
+                    base.p_value,
+                    if base.structured.is_empty() {
+                        ""
+                    } else {
+                        ", structured residuals"
+                    },
+                    if untested.is_empty() {
+                        String::new()
+                    } else {
+                        format!(
+                            "; not evaluated for want of a model: {} (add one with `mbgc train \
+                         --extends`)",
+                            untested.join(", ")
+                        )
+                    }
+                ),
+            }
+        }
+    }
+}

@@ -1,0 +1,614 @@
+//! The joint problem of a measurement set under one model class: which model predicts each
+//! sample, which parameters are known, searched once for all samples or per sample, and the
+//! chi^2, likelihood and fit over all samples together.
+//!
+//! A class with an effect the set's class lacks (a candidate) uses a model of that class; a
+//! model of a richer class serves a poorer one on the face of its space where the extra effect
+//! is off (a rolling friction or a cohesion of 0).
+
+use rayon::prelude::*;
+
+use super::measurements::{owns, CandidateSettings, MeasurementSet};
+use super::surrogate::Surrogate;
+use crate::calibrate::problem::same_value;
+use crate::calibrate::tmcmc::{tmcmc, TmcmcOptions, UniformBox};
+use crate::calibrate::{minimize, starts, Objective};
+use mbgc_dem::contact::{EffectSpec, ModelClass, Slot};
+
+/// One measured value.
+#[derive(Clone, Debug)]
+pub struct Target {
+    /// Index of the sample in the measurement set.
+    pub sample: usize,
+    /// Response name, as in the sample's model.
+    pub response: String,
+    /// Index of the response in the sample's model.
+    model_response: usize,
+    /// Measured value, in the response's unit.
+    pub value: f64,
+    /// Measurement standard deviation, in the response's unit (> 0 unless the model error is).
+    pub sd: f64,
+    /// The model's own error for this response.
+    pub model_error: f64,
+}
+
+impl Target {
+    /// Standard deviation of measured minus predicted: measurement and model error together.
+    pub fn sigma(&self) -> f64 {
+        self.sd.hypot(self.model_error)
+    }
+}
+
+struct Row {
+    model: usize,
+    x: Vec<f64>,
+    /// (model input, searched parameter) pairs.
+    slots: Vec<(usize, usize)>,
+}
+
+/// The joint calibration problem of a measurement set under one model class: one parameter
+/// vector theta for all samples, predicted by each sample's model.
+pub struct Joint<'s> {
+    /// The class compared (the set's, or with one candidate effect).
+    pub class: ModelClass,
+    /// The candidate effect added to the set's class, or `None` for the set's class itself.
+    pub effect: Option<&'static EffectSpec>,
+    surrogates: &'s [Surrogate],
+    /// Searched parameters: `mu_pp`, or `mu_pw [2 mm]` for one searched per sample.
+    pub names: Vec<String>,
+    /// Lower bounds of the searched parameters, from the models' domains.
+    pub lower: Vec<f64>,
+    /// Upper bounds of the searched parameters, from the models' domains.
+    pub upper: Vec<f64>,
+    /// Indices into `names` of the candidate effect's parameters.
+    pub effect_params: Vec<usize>,
+    rows: Vec<Row>,
+    /// Every measured value of every sample, in sample order.
+    pub targets: Vec<Target>,
+    /// Which model each sample uses, and what was decided on the user's behalf.
+    pub notes: Vec<String>,
+}
+
+impl Joint<'_> {
+    /// The models the samples use, each once, in sample order.
+    pub fn models(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for r in &self.rows {
+            let label = &self.surrogates[r.model].label;
+            if !out.contains(label) {
+                out.push(label.clone());
+            }
+        }
+        out
+    }
+}
+
+/// Weight of a derived group outside its fitted range (ln units squared).
+const PENALTY: f64 = 1e6;
+
+/// How far beyond a model's domain (share of its width) the value that switches an effect off
+/// may lie and still be read at the domain's edge: a design rarely puts a point exactly on 0.
+const OFF_TOLERANCE: f64 = 0.02;
+
+/// The class `base` with `effect` switched on in its slot.
+pub fn with_effect(base: &ModelClass, effect: &EffectSpec) -> Result<ModelClass, String> {
+    let mut names: Vec<&str> = base
+        .effects()
+        .iter()
+        .filter(|e| e.slot != effect.slot)
+        .map(|e| e.name)
+        .collect();
+    names.push(effect.name);
+    if base.limit_force {
+        names.push(mbgc_dem::contact::LIMIT_FORCE);
+    }
+    ModelClass::from_names(&names).map_err(|e| e.to_string())
+}
+
+fn in_slot(c: &ModelClass, slot: Slot) -> Option<&'static EffectSpec> {
+    c.effects().into_iter().find(|e| e.slot == slot)
+}
+
+/// The effects `model` has beyond `want` (to be switched off), or why it cannot stand for `want`.
+fn extra_effects(
+    model: &ModelClass,
+    want: &ModelClass,
+) -> Result<Vec<&'static EffectSpec>, String> {
+    if model.limit_force != want.limit_force {
+        return Err(format!(
+            "its class {model} differs from {want} in limit-force"
+        ));
+    }
+    let mut extra = Vec::new();
+    for slot in Slot::ALL {
+        match (in_slot(want, slot), in_slot(model, slot)) {
+            (Some(a), Some(b)) if a.name == b.name => {}
+            (None, None) => {}
+            (None, Some(b)) if !b.params.is_empty() && b.params.iter().all(|p| p.off.is_some()) => {
+                extra.push(b)
+            }
+            (a, b) => {
+                return Err(format!(
+                    "its class {model} has {} where {want} has {}",
+                    b.map_or("none", |e| e.name),
+                    a.map_or("none", |e| e.name)
+                ))
+            }
+        }
+    }
+    Ok(extra)
+}
+
+impl<'s> Joint<'s> {
+    /// The joint problem of `set` under its class, or with `candidate` switched on; `Err` says
+    /// why no model (or no consistent choice) describes it.
+    pub fn new(
+        set: &MeasurementSet,
+        surrogates: &'s [Surrogate],
+        candidate: Option<&CandidateSettings>,
+    ) -> Result<Joint<'s>, String> {
+        let effect = candidate.map(|c| c.effect);
+        let class = match effect {
+            Some(e) => with_effect(&set.class, e)?,
+            None => set.class,
+        };
+        let mut names: Vec<String> = Vec::new();
+        let mut lower: Vec<f64> = Vec::new();
+        let mut upper: Vec<f64> = Vec::new();
+        let mut rows = Vec::new();
+        let mut targets = Vec::new();
+        let mut notes = Vec::new();
+        let mut used_fixed: Vec<String> = Vec::new();
+        for (si, s) in set.samples.iter().enumerate() {
+            // The models that can stand for the class, fewest effects to switch off first (first
+            // given first among equals); the first whose domain holds the sample's known values.
+            let mut reasons = Vec::new();
+            let mut ordered: Vec<(usize, Vec<&'static EffectSpec>)> = Vec::new();
+            for (mi, m) in surrogates.iter().enumerate() {
+                let why = if m.experiment.as_deref().is_some_and(|e| e != s.experiment) {
+                    Err(format!(
+                        "it models {}",
+                        m.experiment.as_deref().unwrap_or("")
+                    ))
+                } else if let Some(r) = s
+                    .measured
+                    .iter()
+                    .find(|r| m.response(&r.response).is_none())
+                {
+                    Err(format!("it does not predict {}", r.response))
+                } else {
+                    extra_effects(&m.class, &class)
+                };
+                match why {
+                    Ok(extra) => ordered.push((mi, extra)),
+                    Err(w) => reasons.push(format!("{}: {w}", m.label)),
+                }
+            }
+            ordered.sort_by_key(|(mi, e)| (e.len(), *mi));
+            let mut chosen: Option<Row> = None;
+            for (mi, off) in ordered {
+                let saved = (
+                    names.clone(),
+                    lower.clone(),
+                    upper.clone(),
+                    notes.clone(),
+                    used_fixed.clone(),
+                );
+                let attempt = (|| -> Result<Row, String> {
+                    let m = &surrogates[mi];
+                    notes.push(format!(
+                        "sample \"{}\": {}{}",
+                        s.name,
+                        m.label,
+                        if off.is_empty() {
+                            String::new()
+                        } else {
+                            format!(
+                                " with {} off",
+                                off.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
+                            )
+                        }
+                    ));
+                    // Known values, and where they come from (for messages).
+                    let mut known: Vec<(String, f64, String)> = Vec::new();
+                    for e in &off {
+                        for p in e.params {
+                            for n in p.names {
+                                known.push((
+                                    n.to_string(),
+                                    p.off.unwrap_or(0.0),
+                                    format!("{} off", e.name),
+                                ));
+                            }
+                        }
+                    }
+                    if let Some(c) = candidate {
+                        for (n, v) in &c.fixed {
+                            known.push((
+                                n.clone(),
+                                *v,
+                                format!("candidates.{}.fixed", c.effect.name),
+                            ));
+                        }
+                    }
+                    for (n, v) in &set.fixed {
+                        known.push((n.clone(), *v, "fixed".into()));
+                    }
+                    for (n, v) in &s.fixed {
+                        known.push((n.clone(), *v, format!("{}.fixed", s.field)));
+                    }
+                    if let Some(psd) = &s.psd {
+                        let (d50, sigma) = psd.parameters().map_err(|e| e.to_string())?;
+                        known.push(("d50".into(), d50, format!("{}.psd", s.field)));
+                        known.push(("sigma_ln".into(), sigma, format!("{}.psd", s.field)));
+                    }
+                    for (c, v) in &m.constants {
+                        match known.iter().find(|(n, _, _)| n == c) {
+                            Some((_, w, from)) if !same_value(*v, *w) => {
+                                return Err(format!(
+                                    "{} holds {c} at {v} but {from} gives {w} (sample \"{}\")",
+                                    m.label, s.name
+                                ))
+                            }
+                            Some(_) => {}
+                            None => {
+                                return Err(format!(
+                                "{} holds {c} at {v}, which the set searches (sample \"{}\"); fix \
+                                 {c} = {v} in the set to compare with this model",
+                                m.label, s.name
+                            ))
+                            }
+                        }
+                    }
+                    let mut x = vec![f64::NAN; m.inputs.len()];
+                    let mut slots = Vec::new();
+                    for (k, input) in m.inputs.iter().enumerate() {
+                        let d = m.domains[k];
+                        if let Some((_, v, from)) = known.iter().find(|(n, _, _)| n == input) {
+                            let mut v = *v;
+                            if !(v >= d[0] && v <= d[1]) {
+                                let tol = OFF_TOLERANCE * (d[1] - d[0]);
+                                if from.ends_with(" off") && v >= d[0] - tol && v <= d[1] + tol {
+                                    let edge = v.clamp(d[0], d[1]);
+                                    let note = format!(
+                                    "{input} = {v} ({from}) read at the edge {edge:.4} of {}'s domain",
+                                    m.label
+                                );
+                                    if !notes.contains(&note) {
+                                        notes.push(note);
+                                    }
+                                    v = edge;
+                                } else {
+                                    return Err(format!(
+                                    "sample \"{}\": {input} = {v} (from {from}) lies outside {}'s \
+                                     domain [{}, {}]; outside it the equations extrapolate",
+                                    s.name, m.label, d[0], d[1]
+                                ));
+                                }
+                            }
+                            x[k] = v;
+                            if from == "fixed" && !used_fixed.contains(input) {
+                                used_fixed.push(input.clone());
+                            }
+                            continue;
+                        }
+                        let per_sample = set.per_sample.contains(input);
+                        let name = if per_sample {
+                            format!("{input} [{}]", s.name)
+                        } else {
+                            input.clone()
+                        };
+                        let range = if effect.is_some_and(|e| owns(e, input)) {
+                            candidate.and_then(|c| {
+                                c.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b)
+                            })
+                        } else {
+                            set.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b)
+                        };
+                        let (lo, hi) = match range {
+                        Some([lo, hi]) if lo >= d[0] && hi <= d[1] => (lo, hi),
+                        Some([lo, hi]) => return Err(format!(
+                            "the range [{lo}, {hi}] of {input} reaches outside {}'s domain [{}, {}]",
+                            m.label, d[0], d[1]
+                        )),
+                        None => (d[0], d[1]),
+                    };
+                        let j = match names.iter().position(|n| *n == name) {
+                            Some(j) => {
+                                lower[j] = lower[j].max(lo);
+                                upper[j] = upper[j].min(hi);
+                                if lower[j] >= upper[j] {
+                                    return Err(format!(
+                                        "{name}: the domains of the models used do not overlap"
+                                    ));
+                                }
+                                j
+                            }
+                            None => {
+                                names.push(name);
+                                lower.push(lo);
+                                upper.push(hi);
+                                names.len() - 1
+                            }
+                        };
+                        slots.push((k, j));
+                    }
+                    Ok(Row {
+                        model: mi,
+                        x,
+                        slots,
+                    })
+                })();
+                match attempt {
+                    Ok(row) => {
+                        chosen = Some(row);
+                        break;
+                    }
+                    Err(w) => {
+                        (names, lower, upper, notes, used_fixed) = saved;
+                        reasons.push(format!("{}: {w}", surrogates[mi].label));
+                    }
+                }
+            }
+            let Some(row) = chosen else {
+                return Err(format!(
+                    "no model describes {class} for sample \"{}\" ({}): {}",
+                    s.name,
+                    s.experiment,
+                    if reasons.is_empty() {
+                        "no model given".into()
+                    } else {
+                        reasons.join("; ")
+                    }
+                ));
+            };
+            let m = &surrogates[row.model];
+            for r in &s.measured {
+                let model_response = m.response(&r.response).unwrap_or(0);
+                let model_error = set
+                    .model_error
+                    .iter()
+                    .find(|(n, _)| *n == r.response)
+                    .map_or(m.error[model_response], |(_, e)| *e);
+                targets.push(Target {
+                    sample: si,
+                    response: r.response.clone(),
+                    model_response,
+                    value: r.value,
+                    sd: r.sd,
+                    model_error,
+                });
+            }
+            rows.push(row);
+        }
+        for (n, _) in &set.fixed {
+            let constant = rows
+                .iter()
+                .any(|r| surrogates[r.model].constants.iter().any(|(c, _)| c == n));
+            if !used_fixed.contains(n) && !constant {
+                return Err(format!(
+                    "fixed.{n}: no model used for {class} reads it (a value that would do nothing)"
+                ));
+            }
+        }
+        // Shared first, per-sample next, the candidate's parameters last: the same order in every
+        // class, so that tables line up.
+        let mut order: Vec<usize> = (0..names.len()).collect();
+        let rank = |j: usize| {
+            if effect.is_some_and(|e| owns(e, &names[j])) {
+                2
+            } else if names[j].contains(" [") {
+                1
+            } else {
+                0
+            }
+        };
+        order.sort_by_key(|&j| (rank(j), j));
+        let mut inverse = vec![0; order.len()];
+        for (new, &old) in order.iter().enumerate() {
+            inverse[old] = new;
+        }
+        for r in &mut rows {
+            for s in &mut r.slots {
+                s.1 = inverse[s.1];
+            }
+        }
+        let names: Vec<String> = order.iter().map(|&j| names[j].clone()).collect();
+        let lower = order.iter().map(|&j| lower[j]).collect();
+        let upper = order.iter().map(|&j| upper[j]).collect();
+        let effect_params = (0..names.len())
+            .filter(|&j| effect.is_some_and(|e| owns(e, &names[j])))
+            .collect();
+        Ok(Joint {
+            class,
+            effect,
+            surrogates,
+            names,
+            lower,
+            upper,
+            effect_params,
+            rows,
+            targets,
+            notes,
+        })
+    }
+
+    /// Number of searched parameters.
+    pub fn dim(&self) -> usize {
+        self.names.len()
+    }
+
+    fn x(&self, row: &Row, theta: &[f64]) -> Vec<f64> {
+        let mut x = row.x.clone();
+        for &(k, j) in &row.slots {
+            x[k] = theta[j];
+        }
+        x
+    }
+
+    /// Predictions of every target, and the penalty of derived groups outside their range.
+    pub fn predictions(&self, theta: &[f64]) -> (Vec<f64>, f64) {
+        let xs: Vec<Vec<f64>> = self.rows.iter().map(|r| self.x(r, theta)).collect();
+        let outside = self
+            .rows
+            .iter()
+            .zip(&xs)
+            .map(|(r, x)| self.surrogates[r.model].outside(x))
+            .sum();
+        let p = self
+            .targets
+            .iter()
+            .map(|t| {
+                let r = &self.rows[t.sample];
+                self.surrogates[r.model].predict(t.model_response, &xs[t.sample])
+            })
+            .collect();
+        (p, outside)
+    }
+
+    /// Standardised residuals `(measured - predicted) / sigma`.
+    pub fn residuals(&self, theta: &[f64]) -> Vec<f64> {
+        let (p, _) = self.predictions(theta);
+        self.targets
+            .iter()
+            .zip(p)
+            .map(|(t, p)| (t.value - p) / t.sigma())
+            .collect()
+    }
+
+    /// chi^2 plus the penalty of groups outside their range; NaN where a prediction is not finite.
+    pub fn chi2(&self, theta: &[f64]) -> f64 {
+        let (p, outside) = self.predictions(theta);
+        let c: f64 = self
+            .targets
+            .iter()
+            .zip(p)
+            .map(|(t, p)| ((t.value - p) / t.sigma()).powi(2))
+            .sum();
+        c + PENALTY * outside
+    }
+
+    /// Gaussian log-likelihood of the measurements at `theta` (-inf outside a group's range).
+    pub fn ln_likelihood(&self, theta: &[f64]) -> f64 {
+        let (p, outside) = self.predictions(theta);
+        if outside > 0.0 {
+            return f64::NEG_INFINITY;
+        }
+        let mut l = 0.0;
+        for (t, p) in self.targets.iter().zip(p) {
+            if !p.is_finite() {
+                return f64::NEG_INFINITY;
+            }
+            let s = t.sigma();
+            l -= 0.5 * (((t.value - p) / s).powi(2) + (2.0 * std::f64::consts::PI * s * s).ln());
+        }
+        l
+    }
+
+    /// Degrees of freedom: measurements minus searched parameters.
+    pub fn dof(&self) -> isize {
+        self.targets.len() as isize - self.dim() as isize
+    }
+
+    /// The best fit over `n_starts` L-BFGS runs from scrambled Sobol points.
+    pub fn fit(&self, n_starts: usize, seed: u64) -> Fit {
+        if self.dim() == 0 {
+            return Fit {
+                theta: Vec::new(),
+                chi2: self.chi2(&[]),
+            };
+        }
+        let best = starts(self.dim(), n_starts.max(1), seed)
+            .par_iter()
+            .filter_map(|u0| minimize(self, u0, 200))
+            .map(|theta| Fit {
+                chi2: self.chi2(&theta),
+                theta,
+            })
+            .filter(|f| f.chi2.is_finite())
+            .min_by(|a, b| a.chi2.total_cmp(&b.chi2));
+        best.unwrap_or_else(|| {
+            let mid: Vec<f64> = self
+                .lower
+                .iter()
+                .zip(&self.upper)
+                .map(|(a, b)| 0.5 * (a + b))
+                .collect();
+            Fit {
+                chi2: self.chi2(&mid),
+                theta: mid,
+            }
+        })
+    }
+
+    /// TMCMC over the uniform prior on the search box: the log-evidence and the posterior draws.
+    pub fn evidence(&self, samples: usize, seed: u64) -> Result<Evidence, String> {
+        if self.dim() == 0 {
+            return Ok(Evidence {
+                ln_evidence: self.ln_likelihood(&[]),
+                draws: Vec::new(),
+            });
+        }
+        let prior = UniformBox::new(self.lower.clone(), self.upper.clone())?;
+        let opts = TmcmcOptions {
+            samples,
+            seed,
+            burn_in: 10,
+            ..TmcmcOptions::default()
+        };
+        let r = tmcmc(&prior, |th| self.ln_likelihood(th), &opts)?;
+        Ok(Evidence {
+            ln_evidence: r.ln_evidence,
+            draws: r.samples,
+        })
+    }
+}
+
+/// The best joint fit found by the L-BFGS starts.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// Searched parameter values at the best fit, in `names` order.
+    pub theta: Vec<f64>,
+    /// Sum of squared standardised residuals at `theta`.
+    pub chi2: f64,
+}
+
+/// TMCMC's evidence estimate and posterior draws.
+pub struct Evidence {
+    /// Natural log of the model evidence (marginal likelihood) under the uniform prior on the bounds.
+    pub ln_evidence: f64,
+    /// Posterior draws of theta, one `Vec` per draw, in `names` order.
+    pub draws: Vec<Vec<f64>>,
+}
+
+impl Objective for Joint<'_> {
+    fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+    fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+    fn objective(&self, x: &[f64]) -> Option<(f64, Vec<f64>)> {
+        let f = self.chi2(x);
+        if !f.is_finite() {
+            return None;
+        }
+        // Central differences: a few searched parameters and microsecond predictions.
+        let mut g = vec![0.0; x.len()];
+        let mut y = x.to_vec();
+        for j in 0..x.len() {
+            let h = 1e-6 * (self.upper[j] - self.lower[j]);
+            let (lo, hi) = ((x[j] - h).max(self.lower[j]), (x[j] + h).min(self.upper[j]));
+            y[j] = hi;
+            let fp = self.chi2(&y);
+            y[j] = lo;
+            let fm = self.chi2(&y);
+            y[j] = x[j];
+            if !(fp.is_finite() && fm.is_finite()) || hi <= lo {
+                return None;
+            }
+            g[j] = (fp - fm) / (hi - lo);
+        }
+        Some((f, g))
+    }
+}

@@ -1,0 +1,704 @@
+//! Fitting a metamodel to a table in memory: split, scale, one GP run per response, metrics.
+//! The rows come as a [`TrainingTable`] and the settings as checked [`FitSettings`]; the result
+//! is the model plus each response's observed and predicted values, from which the caller may
+//! draw figures ([`crate::plot::parity::fit_figures`]) or not.
+
+use super::fit_settings::FitSettings;
+use super::model::{
+    residual_quantiles, Constant, DataSource, FrontMember, GroupDomain, GroupedEquation, Input,
+    Metamodel, Metrics, ResponseModel, Transform, FORMAT, VERSION,
+};
+use super::training_table::TrainingTable;
+use crate::error::{Error, Result};
+use crate::similarity::Monomial;
+use crate::space::Scale;
+use mbgc_dem::contact::{ModelClass, Pair};
+use mbgc_sr::{self as gp, expr, Dataset};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+
+/// A fitted metamodel and what it was scored on.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// The model, ready to save, predict with or calibrate against.
+    pub model: Metamodel,
+    /// Each response's observed and predicted values on the training, test and validation rows,
+    /// in the order of the model's responses.
+    pub splits: Vec<ResponseSplits>,
+    /// What the caller should tell the user (an equation not finite on some test rows, ...).
+    pub warnings: Vec<String>,
+}
+
+/// Observed and predicted values of one response on one set of rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplitValues {
+    /// The measured (simulated) values.
+    pub observed: Vec<f64>,
+    /// The model's values on the same rows.
+    pub predicted: Vec<f64>,
+}
+
+/// One response's values on the rows trained on, held out and set aside for validation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResponseSplits {
+    /// The response's name.
+    pub response: String,
+    /// The training rows.
+    pub train: SplitValues,
+    /// The held-out test rows (`None` without any).
+    pub test: Option<SplitValues>,
+    /// The validation table's rows (`None` without one).
+    pub validation: Option<SplitValues>,
+}
+
+fn transforms(settings: &FitSettings, absorbed: &[String]) -> Result<Vec<Transform>> {
+    let Some(space) = &settings.space else {
+        return Ok(vec![Transform::Identity; settings.inputs.len()]);
+    };
+    settings
+        .inputs
+        .iter()
+        .map(|name| {
+            // The composed equations read an absorbed input raw, inside the log of its group.
+            if absorbed.contains(name) {
+                return Ok(Transform::Identity);
+            }
+            let p = space.get(name).ok_or_else(|| {
+                Error::input(
+                    &space.source,
+                    format!("parameters.{name}"),
+                    format!("the input {name} to be defined (to scale it)"),
+                )
+            })?;
+            Ok(if p.is_fixed() {
+                Transform::Identity
+            } else {
+                match p.scale {
+                    Scale::Linear => Transform::Linear {
+                        offset: p.min,
+                        width: p.max - p.min,
+                    },
+                    Scale::Log => Transform::Log {
+                        offset: p.min.ln(),
+                        width: p.max.ln() - p.min.ln(),
+                    },
+                }
+            })
+        })
+        .collect()
+}
+
+/// The model class of the rows: the table's `model_class` column (one class for all rows; `-`
+/// marks an experiment without a contact law), else the settings' class, else the space's `[model]
+/// class`; `None` when nothing says (a table that did not come from DEM runs). Sources that
+/// disagree are refused.
+fn data_class(table: &TrainingTable, settings: &FitSettings) -> Result<Option<ModelClass>> {
+    let file = &table.source;
+    let mut from_table: Option<Option<ModelClass>> = None;
+    if let Some(labels) = &table.model_class {
+        let mut first: Option<(Option<ModelClass>, String, usize)> = None;
+        for (row, label) in labels.iter().enumerate() {
+            let c = if label == "-" {
+                None
+            } else {
+                Some(ModelClass::parse(label).map_err(|e| {
+                    Error::input(
+                        file,
+                        format!("column model_class (data row {})", row + 1),
+                        e.to_string(),
+                    )
+                })?)
+            };
+            match &first {
+                None => first = Some((c, label.to_string(), row + 1)),
+                Some((c0, l0, r0)) if *c0 != c => {
+                    return Err(Error::input(
+                        file,
+                        format!("column model_class (data row {})", row + 1),
+                        format!(
+                            "{label} here but {l0} in data row {r0}: one model class per fit (a \
+                             metamodel describes one set of effects)"
+                        ),
+                    ))
+                }
+                Some(_) => {}
+            }
+        }
+        from_table = first.map(|f| f.0);
+    }
+    let space = settings
+        .space
+        .as_ref()
+        .and_then(|sp| sp.model_class.map(|c| (c, sp.source.clone())));
+    let given = [
+        from_table
+            .flatten()
+            .map(|c| (c, format!("column model_class of {file}"))),
+        settings
+            .model_class
+            .map(|c| (c, "--model-class".to_string())),
+        space.map(|(c, f)| (c, format!("[model] class of {f}"))),
+    ];
+    let given: Vec<(ModelClass, String)> = given.into_iter().flatten().collect();
+    if let Some((c0, w0)) = given.first() {
+        if let Some((c, w)) = given.iter().find(|(c, _)| c != c0) {
+            return Err(Error::invalid(format!(
+                "model class: {w0} says {c0} but {w} says {c}; expected one class"
+            )));
+        }
+    }
+    Ok(given.first().map(|g| g.0))
+}
+
+/// The columns a fit reads: inputs then targets, each the table's column of that name.
+fn columns(table: &TrainingTable, settings: &FitSettings) -> Result<Vec<Vec<f64>>> {
+    settings
+        .inputs
+        .iter()
+        .chain(&settings.targets)
+        .map(|n| table.column(n).map(<[f64]>::to_vec))
+        .collect()
+}
+
+/// How the model's inputs reach GP: each input's scaling and domain, the dimensionless groups
+/// with their log scaling, and the columns GP is offered (inputs not absorbed, then groups).
+struct Scaling {
+    inputs: Vec<Input>,
+    groups: Vec<GroupDomain>,
+    /// Every input scaled, `xt[k][row]`.
+    xt: Vec<Vec<f64>>,
+    /// The inputs GP sees (indices into `inputs`); the groups follow them.
+    gp_inputs: Vec<usize>,
+    /// The columns GP sees: `xt` of `gp_inputs`, then each group's scaled value.
+    gp_cols: Vec<Vec<f64>>,
+    symbols: Vec<String>,
+    gp_symbols: Vec<String>,
+}
+
+fn range(col: &[f64]) -> [f64; 2] {
+    [
+        col.iter().copied().fold(f64::INFINITY, f64::min),
+        col.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    ]
+}
+
+fn var_of(settings: &FitSettings, name: &str) -> u16 {
+    settings.inputs.iter().position(|n| n == name).unwrap_or(0) as u16
+}
+
+fn scaling(
+    table: &TrainingTable,
+    settings: &FitSettings,
+    absorbed: &[String],
+    x_phys: &[Vec<f64>],
+) -> Result<Scaling> {
+    let transforms = transforms(settings, absorbed)?;
+    for (k, t) in transforms.iter().enumerate() {
+        let logged = matches!(t, Transform::Log { .. }) || absorbed.contains(&settings.inputs[k]);
+        if logged {
+            if let Some(v) = x_phys[k].iter().find(|v| **v <= 0.0) {
+                return Err(Error::input(
+                    &table.source,
+                    format!("column {}", settings.inputs[k]),
+                    format!("positive values for its log scale, got {v}"),
+                ));
+            }
+        }
+    }
+    let inputs: Vec<Input> = settings
+        .inputs
+        .iter()
+        .zip(&transforms)
+        .zip(x_phys)
+        .map(|((name, t), col)| {
+            // An absorbed input is valid wherever its groups are: over the space's bounds, not
+            // only at the values the campaign held it at.
+            let bounds = settings
+                .space
+                .as_ref()
+                .filter(|_| absorbed.contains(name))
+                .and_then(|sp| sp.get(name))
+                .map(|p| [p.min, p.max]);
+            Input {
+                name: name.clone(),
+                transform: t.clone(),
+                domain: bounds.unwrap_or_else(|| range(col)),
+            }
+        })
+        .collect();
+    let n = table.rows();
+    let mut groups: Vec<GroupDomain> = Vec::new();
+    let mut group_cols: Vec<Vec<f64>> = Vec::new();
+    for g in settings.similarity.iter().flat_map(|s| &s.groups) {
+        let col: Vec<f64> = (0..n)
+            .map(|r| {
+                g.monomial
+                    .value(|name| x_phys[var_of(settings, name) as usize][r])
+            })
+            .collect();
+        let domain = range(&col);
+        let (lo, hi) = (domain[0].ln(), domain[1].ln());
+        let transform = Transform::Log {
+            offset: lo,
+            width: if hi > lo { hi - lo } else { 1.0 },
+        };
+        group_cols.push(col.iter().map(|&v| transform.apply(v)).collect());
+        groups.push(GroupDomain {
+            group: g.clone(),
+            transform,
+            domain,
+        });
+    }
+    let symbols: Vec<String> = inputs.iter().map(Input::symbol).collect();
+    let xt: Vec<Vec<f64>> = inputs
+        .iter()
+        .zip(x_phys)
+        .map(|(i, c)| c.iter().map(|&v| i.transform.apply(v)).collect())
+        .collect();
+    let gp_inputs: Vec<usize> = (0..settings.inputs.len())
+        .filter(|&k| !absorbed.contains(&settings.inputs[k]))
+        .collect();
+    let gp_symbols: Vec<String> = gp_inputs
+        .iter()
+        .map(|&k| symbols[k].clone())
+        .chain(groups.iter().map(|g| format!("{}_u", g.group.name)))
+        .collect();
+    let gp_cols: Vec<Vec<f64>> = gp_inputs
+        .iter()
+        .map(|&k| xt[k].clone())
+        .chain(group_cols)
+        .collect();
+    Ok(Scaling {
+        inputs,
+        groups,
+        xt,
+        gp_inputs,
+        gp_cols,
+        symbols,
+        gp_symbols,
+    })
+}
+
+impl Scaling {
+    /// A GP program over GP's own variables, written as one over the model's inputs (and
+    /// multiplied back by the response's factor).
+    fn compose(
+        &self,
+        settings: &FitSettings,
+        p: &[gp::Node],
+        factor: Option<&Monomial>,
+    ) -> Vec<gp::Node> {
+        let var_of = |name: &str| var_of(settings, name);
+        let mut out = Vec::with_capacity(p.len() + 8);
+        for node in p {
+            match *node {
+                gp::Node::Var(j) if (j as usize) < self.gp_inputs.len() => {
+                    out.push(gp::Node::Var(self.gp_inputs[j as usize] as u16))
+                }
+                gp::Node::Var(j) => {
+                    let g = &self.groups[j as usize - self.gp_inputs.len()];
+                    let Transform::Log { offset, width } = g.transform else {
+                        unreachable!("groups are log-scaled")
+                    };
+                    out.extend(g.group.monomial.ln_program(&var_of));
+                    out.extend([
+                        gp::Node::Const(offset),
+                        gp::Node::Sub,
+                        gp::Node::Const(width),
+                        gp::Node::Div,
+                    ]);
+                }
+                other => out.push(other),
+            }
+        }
+        if let Some(f) = factor {
+            out.extend(f.program(&var_of));
+            out.push(gp::Node::Mul);
+        }
+        out
+    }
+
+    fn text(&self, p: &[gp::Node]) -> String {
+        expr::infix(
+            &expr::Expr::from_postfix(p),
+            &self.symbols,
+            &expr::exact_constant,
+        )
+    }
+}
+
+fn predict(p: &[gp::Node], d: &Dataset) -> (bool, Vec<f64>) {
+    let mut out = vec![0.0; d.rows()];
+    let ok = gp::eval::Evaluator::new().eval(p, &d.x, &mut out);
+    (ok, out)
+}
+
+fn pick(col: &[f64], idx: &[usize]) -> Vec<f64> {
+    idx.iter().map(|&i| col[i]).collect()
+}
+
+/// The rows of one fit: which are trained on, which held out, and the validation set.
+struct Rows<'a> {
+    train: &'a [usize],
+    test: &'a [usize],
+    /// The validation table's columns (inputs then targets) and its scaled inputs.
+    validation: Option<(Vec<Vec<f64>>, Vec<Vec<f64>>)>,
+}
+
+/// Fits one response and scores it.
+#[allow(clippy::too_many_arguments)]
+fn fit_response(
+    table: &TrainingTable,
+    settings: &FitSettings,
+    scaling: &Scaling,
+    x_phys: &[Vec<f64>],
+    y: &[f64],
+    target: &str,
+    t: usize,
+    rows: &Rows,
+    progress: &mut impl FnMut(&str, &gp::Progress),
+    warnings: &mut Vec<String>,
+) -> Result<(ResponseModel, ResponseSplits)> {
+    let n = table.rows();
+    let n_in = settings.inputs.len();
+    let scaled = settings.similarity.as_ref().and_then(|s| s.scaled(target));
+    let factor = scaled.map(|s| &s.factor);
+    // The response GP fits: divided by its factor when the similarity has one.
+    let y_fit: Vec<f64> = match factor {
+        Some(f) => (0..n)
+            .map(|r| y[r] / f.value(|name| x_phys[var_of(settings, name) as usize][r]))
+            .collect(),
+        None => y.to_vec(),
+    };
+    let train = Dataset::new(
+        scaling.xt.iter().map(|c| pick(c, rows.train)).collect(),
+        pick(y, rows.train),
+    );
+    let gp_train = Dataset::new(
+        scaling
+            .gp_cols
+            .iter()
+            .map(|c| pick(c, rows.train))
+            .collect(),
+        pick(&y_fit, rows.train),
+    );
+    if gp_train.y_var() <= 0.0 {
+        return Err(Error::input(
+            &table.source,
+            format!("column {target}"),
+            "a response that varies (all training values are equal)",
+        ));
+    }
+    let test = Dataset::new(
+        scaling.xt.iter().map(|c| pick(c, rows.test)).collect(),
+        pick(y, rows.test),
+    );
+    let res = gp::fit(&gp_train, &settings.config, |p| progress(target, p))
+        .map_err(|e| Error::invalid(format!("fitting {target}: {e}")))?;
+    let front: Vec<FrontMember> = res
+        .front
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let program = scaling.compose(settings, &e.program, factor);
+            let test_r2 = (test.rows() > 0)
+                .then(|| {
+                    let (ok, out) = predict(&program, &test);
+                    ok.then(|| Metrics::of(&test.y, &out).r2)
+                })
+                .flatten();
+            FrontMember {
+                size: e.size,
+                train_r2: 1.0 - e.train_nmse,
+                test_r2,
+                cv_r2: res.cv_nmse.as_ref().map(|cv| 1.0 - cv[i]),
+                equation: scaling.text(&program),
+                program,
+            }
+        })
+        .collect();
+    let best = res.best();
+    let program = scaling.compose(settings, &best.program, factor);
+    let (_, train_pred) = predict(&program, &train);
+    let (test_ok, test_pred) = predict(&program, &test);
+    if test.rows() > 0 && !test_ok {
+        warnings.push(format!(
+            "the equation for {target} is not finite on some test rows (they lie outside the \
+             training box)"
+        ));
+    }
+    let test_metrics = (test.rows() > 0).then(|| Metrics::of(&test.y, &test_pred));
+    let validation = rows.validation.as_ref().map(|(v, x)| {
+        let d = Dataset::new(x.clone(), v[n_in + t].clone());
+        let (_, pred) = predict(&program, &d);
+        SplitValues {
+            observed: d.y,
+            predicted: pred,
+        }
+    });
+    let grouped = settings.similarity.as_ref().map(|_| GroupedEquation {
+        fitted: scaled.map_or_else(|| target.to_string(), |s| s.fitted.clone()),
+        equation: expr::infix(
+            &expr::Expr::from_postfix(&best.program),
+            &scaling.gp_symbols,
+            &expr::exact_constant,
+        ),
+        factor: factor.cloned(),
+    });
+    let model = ResponseModel {
+        name: target.to_string(),
+        equation: scaling.text(&program),
+        size: best.size,
+        uses: gp::program::used_variables(&program)
+            .into_iter()
+            .map(|k| settings.inputs[k].clone())
+            .collect(),
+        program,
+        train: Metrics::of(&train.y, &train_pred),
+        test: test_metrics,
+        train_residual_quantiles: residual_quantiles(&train.y, &train_pred),
+        test_residual_quantiles: residual_quantiles(&test.y, &test_pred),
+        pareto_front: front,
+        selection_rule: settings.config.selection.describe(),
+        generations: res.generations,
+        node_evals: res.node_evals,
+        seconds: res.seconds,
+        grouped,
+        validation: validation
+            .as_ref()
+            .map(|v| Metrics::of(&v.observed, &v.predicted)),
+    };
+    let splits = ResponseSplits {
+        response: target.to_string(),
+        train: SplitValues {
+            observed: train.y,
+            predicted: train_pred,
+        },
+        test: (test.rows() > 0).then_some(SplitValues {
+            observed: test.y,
+            predicted: test_pred,
+        }),
+        validation,
+    };
+    Ok((model, splits))
+}
+
+/// What the campaign held fixed and is not an input: the model holds only there.
+fn constants(table: &TrainingTable, settings: &FitSettings) -> Vec<Constant> {
+    let mut constants: Vec<Constant> = Vec::new();
+    if let Some(space) = &settings.space {
+        for p in &space.parameters {
+            if let (Some(v), false) = (p.fixed, settings.inputs.contains(&p.name)) {
+                constants.push(Constant {
+                    name: p.name.clone(),
+                    value: v,
+                });
+            }
+        }
+    }
+    for (name, v) in table.campaign.iter().flat_map(|m| m.set.iter()) {
+        if !settings.inputs.contains(name) && !constants.iter().any(|c| c.name == *name) {
+            constants.push(Constant {
+                name: name.clone(),
+                value: *v,
+            });
+        }
+    }
+    constants
+}
+
+/// Fits one equation per response of `settings` to the rows of `table`.
+/// `progress(response, state)` is called every generation (a progress bar, a log, nothing).
+pub fn fit(
+    table: &TrainingTable,
+    settings: &FitSettings,
+    mut progress: impl FnMut(&str, &gp::Progress),
+) -> Result<Fit> {
+    settings.check()?;
+    let absorbed = settings.absorbed();
+    let cols = columns(table, settings)?;
+    let class = data_class(table, settings)?;
+    if let Some(class) = &class {
+        for name in &settings.inputs {
+            class
+                .refuse_inactive(name, &Pair::BOTH, "the data")
+                .map_err(|e| Error::invalid(format!("--inputs {name}: {e}")))?;
+        }
+    }
+    let n = table.rows();
+    let n_in = settings.inputs.len();
+    let x_phys = &cols[..n_in];
+    let scaling = scaling(table, settings, &absorbed, x_phys)?;
+    let n_test = (settings.test_fraction * n as f64).round() as usize;
+    if n - n_test < 5 {
+        return Err(Error::input(
+            &table.source,
+            "rows",
+            format!(
+                "at least 5 training rows, got {} ({n} usable rows)",
+                n - n_test
+            ),
+        ));
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(
+        settings.config.seed,
+    ));
+    let (test_idx, train_idx) = order.split_at(n_test);
+    let (mut train_idx, mut test_idx) = (train_idx.to_vec(), test_idx.to_vec());
+    train_idx.sort_unstable();
+    test_idx.sort_unstable();
+    let validation = match &settings.validation {
+        Some(v) => {
+            let vc = columns(v, settings)?;
+            let x: Vec<Vec<f64>> = scaling
+                .inputs
+                .iter()
+                .zip(&vc[..n_in])
+                .map(|(i, c)| c.iter().map(|&x| i.transform.apply(x)).collect())
+                .collect();
+            Some((vc, x))
+        }
+        None => None,
+    };
+    let rows = Rows {
+        train: &train_idx,
+        test: &test_idx,
+        validation,
+    };
+    let mut responses = Vec::new();
+    let mut splits = Vec::new();
+    let mut warnings = Vec::new();
+    for (t, target) in settings.targets.iter().enumerate() {
+        let (model, split) = fit_response(
+            table,
+            settings,
+            &scaling,
+            x_phys,
+            &cols[n_in + t],
+            target,
+            t,
+            &rows,
+            &mut progress,
+            &mut warnings,
+        )?;
+        responses.push(model);
+        splits.push(split);
+    }
+    let model = Metamodel {
+        model_class: class.map(|c| c.to_string()),
+        format: FORMAT.into(),
+        version: VERSION,
+        created_by: format!("mbgc {}", env!("CARGO_PKG_VERSION")),
+        inputs: scaling.inputs,
+        responses,
+        settings: settings.config.clone(),
+        seed: settings.config.seed,
+        data: DataSource {
+            file: table.source.clone(),
+            fnv1a64: table.fingerprint.clone(),
+            rows: n,
+            train_rows: train_idx.len(),
+            test_rows: test_idx.len(),
+            test_fraction: settings.test_fraction,
+            skipped_rows: table.skipped_rows,
+            no_value_rows: table.no_value_rows,
+        },
+        groups: scaling.groups,
+        experiment: table.campaign.as_ref().map(|m| m.experiment.clone()),
+        constants: constants(table, settings),
+    };
+    Ok(Fit {
+        model,
+        splits,
+        warnings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::similarity::{Group, Monomial, ScaledResponse, Similarity};
+
+    /// A table held at one rho and one d (as the shipped campaign is), whose density is
+    /// rho * (0.5 + 0.02 ln K) with K = E / (rho d): the fitted model must be right at other rho
+    /// and d too, since it is written in K and rho.
+    #[test]
+    fn a_fit_in_groups_extends_to_the_absorbed_inputs() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("t.csv");
+        let mut text = String::from("E,rho,d,mu,density,angle\n");
+        for r in 0..60 {
+            let e = 1e6 * (1.0 + 0.37 * r as f64);
+            let mu = (r as f64 * 0.618).fract();
+            let k: f64 = e / (2000.0 * 4.0);
+            let density = 2000.0 * (0.5 + 0.02 * k.ln());
+            text.push_str(&format!("{e},2000,4,{mu},{density},{}\n", 20.0 + 15.0 * mu));
+        }
+        std::fs::write(&data, text).unwrap();
+        let k = Monomial {
+            coefficient: 1.0,
+            powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
+        };
+        let similarity = Similarity {
+            groups: vec![Group {
+                name: "K".into(),
+                what: "stiffness".into(),
+                monomial: k,
+            }],
+            scaled: vec![ScaledResponse {
+                response: "density".into(),
+                factor: Monomial {
+                    coefficient: 1.0,
+                    powers: vec![("rho".into(), 1.0)],
+                },
+                fitted: "phi".into(),
+            }],
+        };
+        let inputs: Vec<String> = vec!["E".into(), "rho".into(), "d".into(), "mu".into()];
+        let targets: Vec<String> = vec!["density".into(), "angle".into()];
+        let settings = FitSettings::new(inputs.clone(), targets.clone())
+            .test_fraction(0.0)
+            .config(gp::Config {
+                population: 300,
+                generations: 5,
+                ..gp::Config::default()
+            })
+            .similarity(similarity);
+        let table = TrainingTable::read_csv(&data, &inputs, &targets).unwrap();
+        let m = fit(&table, &settings, |_, _| {}).unwrap().model;
+        let density = &m.responses[0];
+        assert!(density.train.r2 > 0.999999, "{:?}", density.train);
+        let g = density.grouped.as_ref().unwrap();
+        assert_eq!(g.fitted, "phi");
+        assert!(
+            !g.equation.contains("rho") && !g.equation.contains("E"),
+            "{}",
+            g.equation
+        );
+        // At another density and size with the same K range: rho * phi(K).
+        for (e, rho, d) in [(2e7, 2600.0, 3.0), (1e7, 1000.0, 5.0)] {
+            let kv: f64 = e / (rho * d);
+            let want = rho * (0.5 + 0.02 * kv.ln());
+            let got = m.predict_point(density, &[e, rho, d, 0.5]);
+            assert!((got / want - 1.0).abs() < 1e-6, "{got} {want}");
+            // Without a space file an absorbed input's bounds are the data's (one value); the
+            // group is inside its range.
+            let out = m.outside_domain(&[e, rho, d, 0.5]);
+            assert!(
+                out.iter().all(|o| ["E", "rho", "d"].contains(&o.0)),
+                "{out:?}"
+            );
+            // Gradient by the chain rule through K and the factor.
+            let (_, grad) = m.value_and_gradient(density, &[e, rho, d, 0.5]).unwrap();
+            let want_drho = 0.5 + 0.02 * kv.ln() - 0.02;
+            assert!((grad[1] / want_drho - 1.0).abs() < 1e-5, "{grad:?}");
+        }
+        // The angle's equation reads no group and no absorbed input.
+        assert_eq!(m.responses[1].uses, vec!["mu".to_string()]);
+        // K beyond the data is outside the domain, named by the group.
+        let out = m.outside_domain(&[1e9, 2000.0, 4.0, 0.5]);
+        assert!(out.iter().any(|o| o.0 == "K"), "{out:?}");
+        assert!(m.outside_domain(&[1e7, 2000.0, 4.0, 0.5]).is_empty());
+    }
+}

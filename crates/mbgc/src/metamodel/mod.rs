@@ -1,0 +1,16 @@
+//! The saved global metamodel: one equation per response, the input scaling, the valid domain,
+//! accuracy on training and test rows, the Pareto front, the settings, the seed and the data hash.
+//!
+//! A model file is JSON. Predictions evaluate the stored postfix program with the same evaluator
+//! the fit used, so `mbgc predict`, the exported Rust and the fit agree to round-off.
+
+mod build;
+mod fit_settings;
+pub mod model;
+pub mod table;
+mod training_table;
+
+pub use build::{fit, Fit, ResponseSplits, SplitValues};
+pub use fit_settings::FitSettings;
+pub use model::*;
+pub use training_table::TrainingTable;

@@ -1,0 +1,466 @@
+//! The model file: equations per response, input transforms, domain, metrics, Pareto front,
+//! settings, seed and data hash, saved and loaded as JSON.
+
+use crate::error::{read_to_string, write_atomic, Error, Result};
+use crate::similarity::{Group, Monomial};
+use mbgc_dem::contact::{ModelClass, Pair};
+use mbgc_sr::{self as gp, Node};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub const FORMAT: &str = "mbgc-metamodel";
+/// Deepest equation tree a model file may hold (`mbgc fit` limits trees to 64 nodes).
+pub const MAX_TREE_DEPTH: usize = 512;
+
+/// Depth of the tree a valid postfix program encodes (a single leaf has depth 1).
+fn tree_depth(program: &[Node]) -> usize {
+    let mut stack: Vec<usize> = Vec::with_capacity(program.len());
+    let mut deepest = 0;
+    for n in program {
+        let d = match n.arity() {
+            0 => 1,
+            1 => stack.pop().unwrap_or(0) + 1,
+            _ => {
+                let r = stack.pop().unwrap_or(0);
+                let l = stack.pop().unwrap_or(0);
+                l.max(r) + 1
+            }
+        };
+        deepest = deepest.max(d);
+        stack.push(d);
+    }
+    deepest
+}
+pub const VERSION: u32 = 1;
+
+/// How a physical input becomes the equation's variable: `(t(x) - offset) / width`, with `t` the
+/// identity or the natural log. Stored as the two numbers used, so exports compute bit for bit
+/// the same value.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Transform {
+    Identity,
+    Linear { offset: f64, width: f64 },
+    Log { offset: f64, width: f64 },
+}
+
+impl Transform {
+    #[inline]
+    pub fn apply(&self, x: f64) -> f64 {
+        match self {
+            Transform::Identity => x,
+            Transform::Linear { offset, width } => (x - offset) / width,
+            Transform::Log { offset, width } => (x.ln() - offset) / width,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Input {
+    pub name: String,
+    pub transform: Transform,
+    /// Smallest and largest value in the data the model was fitted on: its valid domain.
+    pub domain: [f64; 2],
+}
+
+impl Input {
+    /// The name of the variable the equations use (the input itself when not transformed).
+    pub fn symbol(&self) -> String {
+        match self.transform {
+            Transform::Identity => self.name.clone(),
+            _ => format!("{}_u", self.name),
+        }
+    }
+}
+
+/// A number that serde_json wrote as `null` (it writes NaN so) reads back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    pub rows: usize,
+    // NaN (R^2 of a single test row) is written as JSON null, and must read back.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub r2: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub rmse: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mae: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub max_abs_error: f64,
+}
+
+impl Metrics {
+    pub fn of(observed: &[f64], predicted: &[f64]) -> Metrics {
+        let n = observed.len();
+        if n == 0 {
+            return Metrics::default();
+        }
+        let mean = observed.iter().sum::<f64>() / n as f64;
+        let ss_tot: f64 = observed.iter().map(|y| (y - mean).powi(2)).sum();
+        let res: Vec<f64> = observed.iter().zip(predicted).map(|(y, p)| y - p).collect();
+        let ss_res: f64 = res.iter().map(|r| r * r).sum();
+        Metrics {
+            rows: n,
+            r2: if ss_tot > 0.0 {
+                1.0 - ss_res / ss_tot
+            } else {
+                f64::NAN
+            },
+            rmse: (ss_res / n as f64).sqrt(),
+            mae: res.iter().map(|r| r.abs()).sum::<f64>() / n as f64,
+            max_abs_error: res.iter().fold(0.0, |m, r| m.max(r.abs())),
+        }
+    }
+}
+
+/// Residual (observed - predicted) quantiles.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Quantile {
+    pub q: f64,
+    pub residual: f64,
+}
+
+pub const QUANTILES: [f64; 7] = [0.0, 0.05, 0.25, 0.5, 0.75, 0.95, 1.0];
+
+pub fn residual_quantiles(observed: &[f64], predicted: &[f64]) -> Vec<Quantile> {
+    let mut r: Vec<f64> = observed.iter().zip(predicted).map(|(y, p)| y - p).collect();
+    if r.is_empty() {
+        return Vec::new();
+    }
+    r.sort_by(f64::total_cmp);
+    QUANTILES
+        .iter()
+        .map(|&q| {
+            let pos = q * (r.len() - 1) as f64;
+            let (i, f) = (pos.floor() as usize, pos.fract());
+            let v = if i + 1 < r.len() {
+                r[i] * (1.0 - f) + r[i + 1] * f
+            } else {
+                r[i]
+            };
+            Quantile { q, residual: v }
+        })
+        .collect()
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FrontMember {
+    pub size: usize,
+    pub train_r2: f64,
+    pub test_r2: Option<f64>,
+    /// 1 - the cross-validated normalised error, when the selection rule computed it (in the
+    /// fitted response: with a similarity, the dimensionless one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cv_r2: Option<f64>,
+    pub equation: String,
+    pub program: Vec<Node>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ResponseModel {
+    pub name: String,
+    /// The equation in the input symbols (Python/sympy syntax, constants exact).
+    pub equation: String,
+    /// The equation as a postfix program over the transformed inputs (what predictions evaluate).
+    pub program: Vec<Node>,
+    pub size: usize,
+    /// Inputs the equation reads.
+    pub uses: Vec<String>,
+    pub train: Metrics,
+    pub test: Option<Metrics>,
+    pub train_residual_quantiles: Vec<Quantile>,
+    pub test_residual_quantiles: Vec<Quantile>,
+    pub pareto_front: Vec<FrontMember>,
+    pub selection_rule: String,
+    pub generations: usize,
+    pub node_evals: u64,
+    pub seconds: f64,
+    /// With a similarity: the equation as fitted, in the groups and the dimensionless response
+    /// (what `program` computes once the groups and the factor are written out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grouped: Option<GroupedEquation>,
+    /// Metrics on a separate validation table never trained on (`mbgc train`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub validation: Option<Metrics>,
+}
+
+/// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GroupedEquation {
+    pub fitted: String,
+    pub equation: String,
+    /// `response = factor * fitted` (None: the response itself was fitted).
+    pub factor: Option<Monomial>,
+}
+
+/// A dimensionless group the equations read, with the scaling the fit gave it and the range of
+/// the data (the model's valid domain in that group).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GroupDomain {
+    pub group: Group,
+    /// `u = (ln G - offset) / width` is the variable the fitted equation read.
+    pub transform: Transform,
+    pub domain: [f64; 2],
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct DataSource {
+    pub file: String,
+    /// FNV-1a 64 of the file's bytes, hex.
+    pub fnv1a64: String,
+    pub rows: usize,
+    pub train_rows: usize,
+    pub test_rows: usize,
+    pub test_fraction: f64,
+    pub skipped_rows: usize,
+    /// Finished runs without a value of some response (NaN), left out.
+    #[serde(default)]
+    pub no_value_rows: usize,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Metamodel {
+    pub format: String,
+    pub version: u32,
+    pub created_by: String,
+    pub inputs: Vec<Input>,
+    pub responses: Vec<ResponseModel>,
+    pub settings: gp::Config,
+    pub seed: u64,
+    pub data: DataSource,
+    /// The model class of the DEM runs the model was fitted on (comma-separated effects); null
+    /// when the data did not say (a table not from DEM runs, or a model file written before
+    /// model classes existed: no class is guessed for it).
+    #[serde(default)]
+    pub model_class: Option<String>,
+    /// The dimensionless groups the equations were fitted in (their domains bound the model
+    /// besides the inputs' own); empty for a fit in the inputs themselves.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<GroupDomain>,
+    /// The experiment the training runs measured (`shear-box`), from the campaign table's
+    /// sidecar; null when the data did not say.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub experiment: Option<String>,
+    /// Parameters the campaign held at one value that are not inputs (a local space's known
+    /// material values): the model describes runs at these values only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constants: Vec<Constant>,
+}
+
+/// A parameter held at one value in every training run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Constant {
+    pub name: String,
+    pub value: f64,
+}
+
+impl Metamodel {
+    /// The model class the metamodel was trained on, if recorded.
+    pub fn class(&self) -> Result<Option<ModelClass>> {
+        self.model_class
+            .as_deref()
+            .map(ModelClass::parse)
+            .transpose()
+            .map_err(Into::into)
+    }
+
+    /// Reads a model file written by `mbgc fit` or `mbgc train`.
+    pub fn load(path: &Path) -> Result<Metamodel> {
+        Metamodel::from_json_str(&read_to_string(path)?, &path.display().to_string())
+    }
+
+    /// A model from the text of its JSON file (a model built into a program, or received);
+    /// `source` names it in errors.
+    pub fn from_json_str(text: &str, source: &str) -> Result<Metamodel> {
+        let file = source.to_string();
+        let m: Metamodel = serde_json::from_str(text).map_err(|e| {
+            Error::input(
+                &file,
+                format!("line {} column {}", e.line(), e.column()),
+                format!("a metamodel JSON file written by `mbgc fit` ({e})"),
+            )
+        })?;
+        if m.format != FORMAT {
+            return Err(Error::input(
+                &file,
+                "format",
+                format!("\"{FORMAT}\", got \"{}\"", m.format),
+            ));
+        }
+        let class = m
+            .class()
+            .map_err(|e| Error::input(&file, "model_class", e.to_string()))?;
+        // An input of an effect the class lacks would be calibrated and then refused by the DEM.
+        if let Some(c) = class {
+            for i in &m.inputs {
+                c.refuse_inactive(&i.name, &Pair::BOTH, "the model")
+                    .map_err(|e| {
+                        Error::input(&file, format!("inputs.{}", i.name), e.to_string())
+                    })?;
+            }
+        }
+        for g in &m.groups {
+            if let Some((n, _)) = g
+                .group
+                .monomial
+                .powers
+                .iter()
+                .find(|(n, _)| !m.inputs.iter().any(|i| &i.name == n))
+            {
+                return Err(Error::input(
+                    &file,
+                    format!("groups.{}", g.group.name),
+                    format!("a product of the model's inputs, but {n} is not one"),
+                ));
+            }
+        }
+        if m.version != VERSION {
+            return Err(Error::input(
+                &file,
+                "version",
+                format!("{VERSION}, got {}", m.version),
+            ));
+        }
+        for r in &m.responses {
+            let programs = std::iter::once(("program".to_string(), &r.program)).chain(
+                r.pareto_front
+                    .iter()
+                    .enumerate()
+                    .map(|(k, f)| (format!("pareto_front[{k}].program"), &f.program)),
+            );
+            for (field, program) in programs {
+                let field = format!("responses.{}.{field}", r.name);
+                if !gp::program::is_valid(program, m.inputs.len()) {
+                    return Err(Error::input(
+                        &file,
+                        field,
+                        format!(
+                            "a well-formed postfix program over {} inputs",
+                            m.inputs.len()
+                        ),
+                    ));
+                }
+                // Printing and simplifying walk the tree recursively; a fitted equation is a few
+                // levels deep, a hand-made one of thousands would overflow the stack.
+                let depth = tree_depth(program);
+                if depth > MAX_TREE_DEPTH {
+                    return Err(Error::input(
+                        &file,
+                        field,
+                        format!("a tree at most {MAX_TREE_DEPTH} levels deep, found {depth}"),
+                    ));
+                }
+            }
+        }
+        Ok(m)
+    }
+
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(|e| Error::invalid(e.to_string()))?;
+        write_atomic(path, text.as_bytes())
+    }
+
+    pub fn input_names(&self) -> Vec<String> {
+        self.inputs.iter().map(|i| i.name.clone()).collect()
+    }
+
+    pub fn symbols(&self) -> Vec<String> {
+        self.inputs.iter().map(Input::symbol).collect()
+    }
+
+    pub fn response(&self, name: &str) -> Option<&ResponseModel> {
+        self.responses.iter().find(|r| r.name == name)
+    }
+
+    /// Transformed input columns from physical columns (`x[input][row]`).
+    pub fn transform(&self, x: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        self.inputs
+            .iter()
+            .zip(x)
+            .map(|(inp, col)| col.iter().map(|&v| inp.transform.apply(v)).collect())
+            .collect()
+    }
+
+    /// Predictions of one response for physical input columns; NaN where the equation is not
+    /// finite (outside its valid domain).
+    pub fn predict(&self, response: &ResponseModel, x: &[Vec<f64>]) -> Vec<f64> {
+        let xt = self.transform(x);
+        let rows = x.first().map_or(0, Vec::len);
+        let mut out = vec![0.0; rows];
+        let mut ev = gp::eval::Evaluator::new();
+        if !ev.eval(&response.program, &xt, &mut out) {
+            // Row by row, to keep the finite ones.
+            for (r, o) in out.iter_mut().enumerate() {
+                let row: Vec<Vec<f64>> = xt.iter().map(|c| vec![c[r]]).collect();
+                let mut one = [0.0];
+                *o = if ev.eval(&response.program, &row, &mut one) {
+                    one[0]
+                } else {
+                    f64::NAN
+                };
+            }
+        }
+        out
+    }
+
+    /// One prediction at a physical input point.
+    pub fn predict_point(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        let cols: Vec<Vec<f64>> = x.iter().map(|&v| vec![v]).collect();
+        self.predict(response, &cols)[0]
+    }
+
+    /// Prediction and its gradient with respect to the physical inputs at one point; `None`
+    /// where the equation is not finite.
+    pub fn value_and_gradient(
+        &self,
+        response: &ResponseModel,
+        x: &[f64],
+    ) -> Option<(f64, Vec<f64>)> {
+        let xt: Vec<f64> = self
+            .inputs
+            .iter()
+            .zip(x)
+            .map(|(i, &v)| i.transform.apply(v))
+            .collect();
+        let (f, mut g) = gp::grad::value_and_gradient(&response.program, &xt)?;
+        for ((gk, inp), &v) in g.iter_mut().zip(&self.inputs).zip(x) {
+            *gk *= match inp.transform {
+                Transform::Identity => 1.0,
+                Transform::Linear { width, .. } => 1.0 / width,
+                Transform::Log { width, .. } => 1.0 / (v * width),
+            };
+        }
+        Some((f, g))
+    }
+
+    /// Inputs of a point outside the valid domain, as `(name, value, [min, max])`.
+    pub fn outside_domain<'a>(&'a self, x: &[f64]) -> Vec<(&'a str, f64, [f64; 2])> {
+        let mut v: Vec<(&str, f64, [f64; 2])> = self
+            .inputs
+            .iter()
+            .zip(x)
+            .filter(|(i, &v)| !(v >= i.domain[0] && v <= i.domain[1]))
+            .map(|(i, &v)| (i.name.as_str(), v, i.domain))
+            .collect();
+        for g in &self.groups {
+            let value = self.group_value(&g.group, x);
+            if !(value >= g.domain[0] && value <= g.domain[1]) {
+                v.push((g.group.name.as_str(), value, g.domain));
+            }
+        }
+        v
+    }
+
+    /// A group's value at a point of physical inputs (NaN if it names an input the model lacks).
+    pub fn group_value(&self, g: &Group, x: &[f64]) -> f64 {
+        g.monomial.value(|n| {
+            self.inputs
+                .iter()
+                .position(|i| i.name == n)
+                .map_or(f64::NAN, |k| x[k])
+        })
+    }
+}

@@ -1,0 +1,133 @@
+//! The table a metamodel is fitted to, in memory: named numeric columns, where they came from
+//! and, for a campaign table, what the campaign held fixed. A fit never reads a file itself;
+//! [`TrainingTable::read_csv`] is the convenience that reads one the way `mbgc fit` does.
+
+use std::path::Path;
+
+use super::table::read_columns_skipping_nan;
+use crate::campaign::status::Meta;
+use crate::error::{Error, Result};
+use crate::numeric::{fnv1a64, Fnv1a};
+
+/// Named columns of numbers with the facts a saved model records about its data.
+#[derive(Clone, Debug)]
+pub struct TrainingTable {
+    /// Where the rows came from (a file path or a label); errors and the saved model name it.
+    pub source: String,
+    /// 64-bit FNV-1a of the source, as 16 hex digits (of the file's bytes when read from one).
+    pub fingerprint: String,
+    /// `(name, values)` with one value per row, every column as long as the first.
+    pub columns: Vec<(String, Vec<f64>)>,
+    /// The `model_class` label of each row, when the table has that column (campaign tables).
+    pub model_class: Option<Vec<String>>,
+    /// Rows left out because a campaign table's `status` said the run did not finish.
+    pub skipped_rows: usize,
+    /// Finished campaign runs left out because a response was `NaN` (nothing was measured).
+    pub no_value_rows: usize,
+    /// The campaign's sidecar (experiment, constants set with `--set`), when there is one.
+    pub campaign: Option<Meta>,
+}
+
+impl TrainingTable {
+    /// A table from columns already in memory (a data frame, a computed sample). Every column
+    /// must have as many values as the first and every value must be finite; names are unique.
+    pub fn from_columns(source: &str, columns: Vec<(String, Vec<f64>)>) -> Result<TrainingTable> {
+        let rows = columns.first().map_or(0, |c| c.1.len());
+        let mut hash = Fnv1a::default();
+        for (k, (name, values)) in columns.iter().enumerate() {
+            if columns[..k].iter().any(|c| c.0 == *name) {
+                return Err(Error::input(
+                    source,
+                    format!("column {name}"),
+                    "appears twice: expected unique column names",
+                ));
+            }
+            if values.len() != rows {
+                return Err(Error::input(
+                    source,
+                    format!("column {name}"),
+                    format!(
+                        "{rows} values like column {}, found {}",
+                        columns[0].0,
+                        values.len()
+                    ),
+                ));
+            }
+            if let Some(row) = values.iter().position(|v| !v.is_finite()) {
+                return Err(Error::input(
+                    source,
+                    format!("column {name}, row {}", row + 1),
+                    format!("a finite number, found {}", values[row]),
+                ));
+            }
+            hash.str(name);
+            for v in values {
+                hash.u64(v.to_bits());
+            }
+        }
+        Ok(TrainingTable {
+            source: source.to_string(),
+            fingerprint: format!("{:016x}", hash.0),
+            columns,
+            model_class: None,
+            skipped_rows: 0,
+            no_value_rows: 0,
+            campaign: None,
+        })
+    }
+
+    /// Reads the columns `inputs` and `responses` of a CSV table (any other columns may hold
+    /// anything). In a campaign table, rows whose run did not finish are left out, as are done
+    /// rows with a `NaN` response; the sidecar next to the table is read when present.
+    pub fn read_csv(path: &Path, inputs: &[String], responses: &[String]) -> Result<TrainingTable> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let names: Vec<String> = inputs.iter().chain(responses).cloned().collect();
+        let cols = read_columns_skipping_nan(path, &names, inputs.len())?;
+        let model_class = cols
+            .header
+            .iter()
+            .position(|h| h == "model_class")
+            .map(|k| {
+                cols.records
+                    .iter()
+                    .map(|rec| rec.get(k).cloned().unwrap_or_default())
+                    .collect()
+            });
+        Ok(TrainingTable {
+            source: path.display().to_string(),
+            fingerprint: format!("{:016x}", fnv1a64(&bytes)),
+            columns: names.into_iter().zip(cols.values).collect(),
+            model_class,
+            skipped_rows: cols.skipped,
+            no_value_rows: cols.no_value,
+            campaign: Meta::read(path)?,
+        })
+    }
+
+    /// Rows in the table.
+    pub fn rows(&self) -> usize {
+        self.columns.first().map_or(0, |c| c.1.len())
+    }
+
+    /// The column called `name`; the error names the source and the columns it has.
+    pub fn column(&self, name: &str) -> Result<&[f64]> {
+        self.columns
+            .iter()
+            .find(|c| c.0 == name)
+            .map(|c| c.1.as_slice())
+            .ok_or_else(|| {
+                Error::input(
+                    &self.source,
+                    format!("column {name}"),
+                    format!(
+                        "a column named {name} (the table has: {})",
+                        self.columns
+                            .iter()
+                            .map(|c| c.0.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })
+    }
+}

@@ -1,0 +1,218 @@
+//! Dimensional similarity of an experiment: the dimensionless groups through which some of its
+//! inputs act, and the responses that are a known factor times a dimensionless function.
+//!
+//! An experiment declares it ([`crate::experiments::Experiment::similarity`]); `mbgc fit`
+//! and `mbgc train` then fit the equations in the groups (fewer, sharper variables) and compose
+//! them back into equations of the physical inputs, so that predictions, gradients and exports
+//! stay plain functions of what a user calibrates. The shear box without cohesion is the example:
+//! E_p, rho_p and d50 act only through K_p = E_p / (rho_p g d50), and the bulk density is
+//! rho_p times a solid fraction.
+
+use mbgc_sr::Node;
+use serde::{Deserialize, Serialize};
+
+/// `coefficient * prod(input^power)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Monomial {
+    /// Constant factor; carries physical constants and unit conversions (e.g. 1 / (9.81e-3) for g
+    /// in m/s^2 with d50 in mm).
+    pub coefficient: f64,
+    /// `(input name, exponent)` pairs; inputs must be positive where the monomial is evaluated.
+    pub powers: Vec<(String, f64)>,
+}
+
+impl Monomial {
+    /// Its value at a point; `value(name)` gives each input's value.
+    pub fn value(&self, value: impl Fn(&str) -> f64) -> f64 {
+        self.powers
+            .iter()
+            .fold(self.coefficient, |acc, (n, p)| acc * value(n).powf(*p))
+    }
+
+    /// `d ln(monomial) / d input` at a point (zero for an input it does not contain).
+    pub fn log_derivative(&self, input: &str, x: f64) -> f64 {
+        self.powers
+            .iter()
+            .filter(|(n, _)| n == input)
+            .map(|(_, p)| p / x)
+            .sum()
+    }
+
+    /// Readable form such as `101.9 E_p / (rho_p d50)`, coefficient to four significant digits.
+    pub fn text(&self) -> String {
+        let mut num = Vec::new();
+        let mut den = Vec::new();
+        for (n, p) in &self.powers {
+            let (side, q) = if *p < 0.0 {
+                (&mut den, -p)
+            } else {
+                (&mut num, *p)
+            };
+            side.push(if q == 1.0 {
+                n.clone()
+            } else {
+                format!("{n}^{q}")
+            });
+        }
+        let mut s = if self.coefficient == 1.0 {
+            String::new()
+        } else {
+            // Four significant digits: the text is for reading, the exact value is `coefficient`.
+            match crate::numeric::four_significant(self.coefficient) {
+                (m, None) => format!("{m} "),
+                (m, Some(e)) => format!("{m}e{e} "),
+            }
+        };
+        s.push_str(&if num.is_empty() {
+            "1".into()
+        } else {
+            num.join(" ")
+        });
+        if !den.is_empty() {
+            s.push_str(&format!(" / ({})", den.join(" ")));
+        }
+        s
+    }
+
+    /// Postfix nodes computing `ln(monomial)` from the raw inputs (`var(name)` gives the variable
+    /// index of an input whose transform is the identity).
+    pub fn ln_program(&self, var: &impl Fn(&str) -> u16) -> Vec<Node> {
+        let mut out = Vec::new();
+        for (k, (n, p)) in self.powers.iter().enumerate() {
+            out.extend([Node::Var(var(n)), Node::Log]);
+            if p.abs() != 1.0 {
+                out.extend([Node::Const(p.abs()), Node::Mul]);
+            }
+            if k > 0 {
+                out.push(if *p < 0.0 { Node::Sub } else { Node::Add });
+            } else if *p < 0.0 {
+                out.push(Node::Neg);
+            }
+        }
+        if self.coefficient != 1.0 || self.powers.is_empty() {
+            out.push(Node::Const(self.coefficient.ln()));
+            if !self.powers.is_empty() {
+                out.push(Node::Add);
+            }
+        }
+        out
+    }
+
+    /// Postfix nodes computing the monomial itself: the plain product for powers of +-1 and a
+    /// coefficient of 1, else `exp(ln ...)`.
+    pub fn program(&self, var: &impl Fn(&str) -> u16) -> Vec<Node> {
+        let simple = self.coefficient == 1.0
+            && !self.powers.is_empty()
+            && self.powers[0].1 == 1.0
+            && self.powers.iter().all(|(_, p)| p.abs() == 1.0);
+        if !simple {
+            let mut v = self.ln_program(var);
+            v.push(Node::Exp);
+            return v;
+        }
+        let mut out = vec![Node::Var(var(&self.powers[0].0))];
+        for (n, p) in &self.powers[1..] {
+            out.push(Node::Var(var(n)));
+            out.push(if *p > 0.0 { Node::Mul } else { Node::Div });
+        }
+        out
+    }
+}
+
+/// A dimensionless group, e.g. `K_p = E_p / (rho_p g d50)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Group {
+    /// Name of the group as a fitting variable (e.g. `K_p`).
+    pub name: String,
+    /// Its physical meaning, for reports.
+    pub what: String,
+    /// The group as a monomial of the physical inputs; dimensionless by construction.
+    pub monomial: Monomial,
+}
+
+/// A response that is `factor * fitted`, with `fitted` dimensionless (e.g. the bulk density is
+/// rho_p times the solid fraction).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScaledResponse {
+    /// Name of the physical response (e.g. the bulk density, kg/m^3).
+    pub response: String,
+    /// The dimensional factor, a monomial of the inputs (e.g. rho_p).
+    pub factor: Monomial,
+    /// Name of the dimensionless quantity that is fitted instead (e.g. the solid fraction).
+    pub fitted: String,
+}
+
+/// The similarity an experiment declares: its dimensionless groups and its scaled responses.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Similarity {
+    /// Dimensionless groups that replace the inputs they absorb as fitting variables.
+    pub groups: Vec<Group>,
+    /// Responses fitted as dimensionless fractions of a known factor.
+    pub scaled: Vec<ScaledResponse>,
+}
+
+impl Similarity {
+    /// Inputs that act only through the groups: the equations are fitted without them.
+    pub fn absorbed(&self) -> Vec<String> {
+        let mut v: Vec<String> = Vec::new();
+        for g in &self.groups {
+            for (n, _) in &g.monomial.powers {
+                if !v.contains(n) {
+                    v.push(n.clone());
+                }
+            }
+        }
+        v
+    }
+
+    /// The scaling of `response`, if it is a scaled response.
+    pub fn scaled(&self, response: &str) -> Option<&ScaledResponse> {
+        self.scaled.iter().find(|s| s.response == response)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mbgc_sr::eval::Evaluator;
+
+    fn k() -> Monomial {
+        Monomial {
+            coefficient: 1.0 / 9.81e-3,
+            powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
+        }
+    }
+
+    fn eval(prog: &[Node], x: &[f64]) -> f64 {
+        let cols: Vec<Vec<f64>> = x.iter().map(|&v| vec![v]).collect();
+        let mut out = [0.0];
+        assert!(Evaluator::new().eval(prog, &cols, &mut out));
+        out[0]
+    }
+
+    #[test]
+    fn programs_compute_the_monomial_and_its_log() {
+        let var = |n: &str| ["E", "rho", "d"].iter().position(|m| *m == n).unwrap() as u16;
+        let x = [5e6, 2600.0, 8.0];
+        let m = k();
+        let want = 5e6 / (2600.0 * 9.81e-3 * 8.0);
+        let got = m.value(|n| x[var(n) as usize]);
+        assert!((got / want - 1.0).abs() < 1e-14, "{got} {want}");
+        assert!((eval(&m.ln_program(&var), &x) - want.ln()).abs() < 1e-12);
+        assert!((eval(&m.program(&var), &x) / want - 1.0).abs() < 1e-12);
+        let rho = Monomial {
+            coefficient: 1.0,
+            powers: vec![("rho".into(), 1.0)],
+        };
+        assert_eq!(rho.program(&var), vec![Node::Var(1)]);
+        let sq = Monomial {
+            coefficient: 2.0,
+            powers: vec![("d".into(), 2.0), ("E".into(), -0.5)],
+        };
+        let want = 2.0 * 64.0 / 5e6f64.sqrt();
+        assert!((eval(&sq.program(&var), &x) / want - 1.0).abs() < 1e-12);
+        assert!((m.log_derivative("rho", 2600.0) + 1.0 / 2600.0).abs() < 1e-18);
+        assert_eq!(m.log_derivative("nu", 0.3), 0.0);
+        assert_eq!(m.text(), "101.9 E / (rho d)");
+    }
+}

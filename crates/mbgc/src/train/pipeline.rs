@@ -1,0 +1,583 @@
+//! The `train` pipeline as one library call: designs, campaigns and the fit under an output
+//! directory, each stage resumed from the files the last call left. What happens is told to a
+//! [`TrainObserver`] (the command line prints it and draws progress bars; a program may log it
+//! or ignore it).
+
+use std::path::{Path, PathBuf};
+
+use super::extend::{self, Extension};
+use super::stages::{
+    ensure_design, fit_inputs, plan, samplers, seeds, ExtendsRecord, TrainPaths, TrainRecord,
+};
+use crate::campaign::{
+    experiment_by_name, run_campaign, CampaignOptions, ExperimentSettings, ObserverHandle, Shard,
+};
+use crate::error::{read_to_string, write_atomic, Error, Result};
+use crate::export::{export, Format};
+use crate::metamodel::{fit, FitSettings, Metamodel, TrainingTable};
+use crate::space::Space;
+use mbgc_dem::contact::{ModelClass, Pair};
+use mbgc_sr as gp;
+
+/// The stages of a train, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrainStage {
+    /// Projecting the extended model's designs onto the new space (`extends` only).
+    Extend,
+    /// Creating or extending the training and validation designs.
+    Sample,
+    /// Running (or resuming) the DEM campaigns.
+    Simulate,
+    /// Fitting the metamodel.
+    Fit,
+}
+
+impl std::fmt::Display for TrainStage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TrainStage::Extend => "0/3 extend",
+            TrainStage::Sample => "1/3 sample",
+            TrainStage::Simulate => "2/3 simulate",
+            TrainStage::Fit => "3/3 fit",
+        })
+    }
+}
+
+/// Told what a train does. Every method has a default that does nothing.
+pub trait TrainObserver {
+    /// A stage's news, one line (a design extended, a campaign resumed, a provisional fit).
+    fn note(&self, _stage: TrainStage, _text: &str) {}
+    /// The observer of the campaign about to run into `table` (a progress bar), if any.
+    fn campaign(&self, _table: &Path) -> Option<ObserverHandle> {
+        None
+    }
+    /// A generation of the fit of `response` finished.
+    fn fit_progress(&self, _response: &str, _progress: &gp::Progress) {}
+}
+
+/// An observer that ignores everything.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl TrainObserver for Silent {}
+
+/// What to train: the space, the experiment, the sizes of the designs, where the files go and
+/// how the equations are fitted. Build with [`TrainRequest::new`] and set the public fields.
+#[derive(Debug, Clone)]
+pub struct TrainRequest {
+    /// The parameter-space file (its `[model] class` is the default model class); the train
+    /// record names it, so an extension can read it again.
+    pub space: PathBuf,
+    /// The experiment's name, as `mbgc simulate --experiment` takes it.
+    pub experiment: String,
+    /// Training runs (an FSSF-f design; a larger `n` than an earlier train extends it).
+    pub n: usize,
+    /// Validation runs: a separate uniform random design, never trained on (0: none).
+    pub validation: usize,
+    /// The directory that receives `sampling/`, `training_data/` and `models/`.
+    pub out_dir: PathBuf,
+    /// Name of the designs, tables and model (default: the experiment's, `-` as `_`).
+    pub name: Option<String>,
+    /// Seed of the training design and runs; the validation set uses `seed + 1`.
+    pub seed: u64,
+    /// Worker threads, one run each.
+    pub threads: usize,
+    /// Simulate only this shard of both tables, then stop (no fit).
+    pub shard: Option<Shard>,
+    /// Size factor of the experiment's box (default: the experiment's).
+    pub box_scale: Option<f64>,
+    /// Effects of the contact law (default: the space's class, else seed 004's).
+    pub model_class: Option<ModelClass>,
+    /// Responses to fit (default: the experiment's calibration responses).
+    pub responses: Vec<String>,
+    /// Fit in the raw inputs even where the experiment has dimensionless groups.
+    pub no_similarity: bool,
+    /// Add effects to the model trained under this name in the same directory and seed.
+    pub extends: Option<String>,
+    /// Stop after the simulate stage.
+    pub no_fit: bool,
+    /// Skip the simulate stage and fit the rows the tables hold now (a provisional model).
+    pub partial: bool,
+    /// Draw the parity plots and residual histograms into `models/<name>_figures/`.
+    pub figures: bool,
+    /// The genetic-programming settings of the fit (its seed is set to `seed`).
+    pub config: gp::Config,
+}
+
+impl TrainRequest {
+    /// Train `n` runs of `experiment` over the space in `space`, into the current directory,
+    /// seed 1, one thread, no validation set, figures drawn, the default GP settings.
+    pub fn new(space: PathBuf, experiment: &str, n: usize) -> TrainRequest {
+        TrainRequest {
+            space,
+            experiment: experiment.to_string(),
+            n,
+            validation: 0,
+            out_dir: PathBuf::from("."),
+            name: None,
+            seed: 1,
+            threads: 1,
+            shard: None,
+            box_scale: None,
+            model_class: None,
+            responses: Vec::new(),
+            no_similarity: false,
+            extends: None,
+            no_fit: false,
+            partial: false,
+            figures: true,
+            config: gp::Config::default(),
+        }
+    }
+}
+
+/// How a train ended.
+#[derive(Debug, Clone)]
+pub enum TrainOutcome {
+    /// The model was fitted and saved (with its `.rs` and `.tex` exports).
+    Fitted {
+        /// The saved model.
+        model: Box<Metamodel>,
+        /// Where everything was written.
+        paths: TrainPaths,
+        /// The figures drawn.
+        figures: Vec<PathBuf>,
+        /// What the fit warned of.
+        warnings: Vec<String>,
+    },
+    /// A shard's runs are done; the shards are to be merged and the train run again.
+    ShardDone(Shard),
+    /// The runs are done and no fit was asked for.
+    Simulated(TrainPaths),
+}
+
+/// Runs (or resumes) a train: sample, simulate, fit.
+pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOutcome> {
+    if req.n < 5 {
+        return Err(Error::invalid(format!(
+            "--n {}: expected at least 5 training runs",
+            req.n
+        )));
+    }
+    if req.threads == 0 {
+        return Err(Error::invalid("--threads: expected at least 1"));
+    }
+    if req.partial && (req.no_fit || req.shard.is_some()) {
+        return Err(Error::invalid(
+            "--partial fits the rows there are: it cannot be combined with --no-fit or --shard",
+        ));
+    }
+    if req.extends.is_some() && req.shard.is_some() {
+        return Err(Error::invalid(
+            "--extends cannot be combined with --shard: extend first, then shard",
+        ));
+    }
+    let space = Space::from_file(&req.space)?;
+    let class = req.model_class.or(space.model_class);
+    let settings = ExperimentSettings {
+        box_scale: req.box_scale,
+        model_class: class,
+        ..Default::default()
+    };
+    let experiment = experiment_by_name(&req.experiment, &settings)?;
+    let name = req
+        .name
+        .clone()
+        .unwrap_or_else(|| req.experiment.replace('-', "_"));
+    if name.is_empty() || name.contains(['/', '\\']) {
+        return Err(Error::invalid(format!(
+            "--name {name:?}: expected a plain file name"
+        )));
+    }
+    // "." is written as nothing, so that paths read as in a hand-run `mbgc simulate`.
+    let dir = if req.out_dir == Path::new(".") {
+        PathBuf::new()
+    } else {
+        req.out_dir.clone()
+    };
+    let paths = TrainPaths::new(&dir, &name);
+    let similarity = if req.no_similarity {
+        None
+    } else {
+        experiment.similarity()
+    };
+    let responses: Vec<String> = if req.responses.is_empty() {
+        experiment
+            .calibration_responses()
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    } else {
+        let known = experiment.responses();
+        for r in &req.responses {
+            if !known.contains(&r.as_str()) {
+                return Err(Error::invalid(format!(
+                    "--responses {r}: not a response of {} (it has: {})",
+                    req.experiment,
+                    known.join(", ")
+                )));
+            }
+        }
+        req.responses.clone()
+    };
+
+    // Stage 0 of an extension: the old designs projected onto the new space's effect-off face.
+    let (seed, vseed) = seeds(req.seed);
+    let extension = match &req.extends {
+        None => None,
+        Some(from) => Some(prepare_extension(
+            req,
+            &dir,
+            from,
+            &name,
+            &space,
+            class,
+            experiment.pairs(),
+            observer,
+        )?),
+    };
+
+    // Stage 1: the designs.
+    let (fssf, random) = samplers();
+    let changed = |before: usize, after: usize| {
+        if before == after {
+            "unchanged".to_string()
+        } else {
+            format!("{} new", after - before)
+        }
+    };
+    let (before, after) = ensure_design(&paths.design, &space, fssf.as_ref(), req.n, seed)?;
+    observer.note(
+        TrainStage::Sample,
+        &format!(
+            "{}: {after} rows (FSSF-f, seed {seed}; {})",
+            paths.design.display(),
+            changed(before, after)
+        ),
+    );
+    let mut tables = vec![(&paths.design, &paths.table, seed, "training")];
+    if req.validation > 0 {
+        let (b, v) = ensure_design(
+            &paths.validation_design,
+            &space,
+            random.as_ref(),
+            req.validation,
+            vseed,
+        )?;
+        observer.note(
+            TrainStage::Sample,
+            &format!(
+                "{}: {v} rows (random, seed {vseed}; {})",
+                paths.validation_design.display(),
+                changed(b, v)
+            ),
+        );
+        tables.push((
+            &paths.validation_design,
+            &paths.validation_table,
+            vseed,
+            "validation",
+        ));
+    }
+
+    // Stage 2: the runs, resumed from the tables.
+    if let Some(parent) = paths.table.parent() {
+        if !parent.as_os_str().is_empty() {
+            std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        }
+    }
+    let mut incomplete = Vec::new();
+    for (design, table, s, what) in &tables {
+        if req.partial {
+            if !table.exists() {
+                return Err(Error::invalid(format!(
+                    "--partial: {} holds no runs yet",
+                    table.display()
+                )));
+            }
+            // Over the whole design: a table written by shards records its own shard only.
+            let st = crate::campaign::status(table, None)?;
+            let rows = crate::sampling::design::Design::read(design, Some(&space))?.len();
+            let missing = rows.saturating_sub(st.done + st.failed);
+            observer.note(
+                TrainStage::Simulate,
+                &format!(
+                    "{} ({what}): skipped (--partial), {missing} rows not yet simulated",
+                    table.display()
+                ),
+            );
+            if missing > 0 {
+                incomplete.push(format!("{}: {missing} rows missing", table.display()));
+            }
+            continue;
+        }
+        let p = plan(experiment.as_ref(), design, *s, &settings, req.shard)?;
+        if let Some((from, ext)) = &extension {
+            let old = TrainPaths::new(&dir, from);
+            let old_table = if *what == "training" {
+                old.table
+            } else {
+                old.validation_table
+            };
+            if !table.exists() && old_table.exists() {
+                let n = extend::copy_table(&old_table, &p, table, ext)?;
+                observer.note(
+                    TrainStage::Simulate,
+                    &format!(
+                        "{} ({what}): copied {n} runs of {} (without {})",
+                        table.display(),
+                        old_table.display(),
+                        ext.added.join(", ")
+                    ),
+                );
+            }
+        }
+        let r = run_campaign(
+            experiment.as_ref(),
+            &p,
+            &CampaignOptions {
+                observer: observer.campaign(table),
+                ..CampaignOptions::new((*table).clone(), req.threads)
+            },
+        )?;
+        observer.note(
+            TrainStage::Simulate,
+            &format!(
+                "{} ({what}): {} already done, ran {} ({} done, {} failed) in {:.0} s",
+                table.display(),
+                r.skipped,
+                r.done + r.failed,
+                r.done,
+                r.failed,
+                r.elapsed_s
+            ),
+        );
+        if req.shard.is_none() {
+            let st = crate::campaign::status(table, Some(design))?;
+            if st.remaining.unwrap_or(0) > 0 {
+                incomplete.push(format!(
+                    "{}: {} rows missing",
+                    table.display(),
+                    st.remaining.unwrap_or(0)
+                ));
+            }
+        }
+    }
+    let record = TrainRecord {
+        mbgc_version: env!("CARGO_PKG_VERSION").into(),
+        space: req.space.display().to_string(),
+        experiment: req.experiment.clone(),
+        model_class: experiment.class().map(|c| c.to_string()),
+        box_scale: req
+            .box_scale
+            .or_else(|| (req.experiment == "shear-box").then_some(10.0)),
+        n: req.n,
+        validation: req.validation,
+        design_method: "fssf-f".into(),
+        validation_method: "random".into(),
+        seed,
+        validation_seed: vseed,
+        responses: responses.clone(),
+        inputs: fit_inputs(
+            &space,
+            &similarity
+                .as_ref()
+                .map(|s| s.absorbed())
+                .unwrap_or_default(),
+        ),
+        groups: similarity
+            .iter()
+            .flat_map(|s| &s.groups)
+            .map(|g| format!("{} = {}", g.name, g.monomial.text()))
+            .collect(),
+        extends: extension.as_ref().map(|(from, e)| ExtendsRecord {
+            from: from.clone(),
+            added: e.added.clone(),
+            off_face: e.off_face.clone(),
+        }),
+    };
+    let record_json = serde_json::to_string_pretty(&record)
+        .map_err(|e| Error::invalid(format!("{}: {e}", paths.record.display())))?;
+    write_atomic(&paths.record, record_json.as_bytes())?;
+    if let Some(k) = req.shard {
+        return Ok(TrainOutcome::ShardDone(k));
+    }
+    if req.no_fit {
+        return Ok(TrainOutcome::Simulated(paths));
+    }
+    if !incomplete.is_empty() && req.partial {
+        observer.note(
+            TrainStage::Fit,
+            &format!(
+                "provisional: {}; train again without --partial to finish them",
+                incomplete.join("; ")
+            ),
+        );
+    } else if !incomplete.is_empty() {
+        return Err(Error::invalid(format!(
+            "not fitting: {}; run train again to finish them",
+            incomplete.join("; ")
+        )));
+    }
+
+    // Stage 3: the fit, checked on the validation table.
+    let mut fit_settings = FitSettings::new(record.inputs.clone(), responses.clone())
+        .test_fraction(0.0)
+        .config(gp::Config {
+            seed: req.seed,
+            ..req.config.clone()
+        })
+        .space(space);
+    fit_settings.model_class = class;
+    fit_settings.similarity = similarity;
+    fit_settings.check()?;
+    let table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
+    if req.validation > 0 {
+        fit_settings.validation = Some(TrainingTable::read_csv(
+            &paths.validation_table,
+            &record.inputs,
+            &responses,
+        )?);
+    }
+    let fitted = fit(&table, &fit_settings, |target, p| {
+        observer.fit_progress(target, p)
+    })?;
+    let figures = if req.figures {
+        crate::plot::fit_figures::fit_figures(&paths.figures, &fitted)?
+    } else {
+        Vec::new()
+    };
+    let model = fitted.model;
+    if let Some(parent) = paths.model.parent() {
+        if !parent.as_os_str().is_empty() {
+            std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        }
+    }
+    model.save(&paths.model)?;
+    for (format, ext) in [(Format::Rust, "rs"), (Format::Latex, "tex")] {
+        write_atomic(
+            &paths.model.with_extension(ext),
+            export(&model, format).as_bytes(),
+        )?;
+    }
+    Ok(TrainOutcome::Fitted {
+        model: Box::new(model),
+        paths,
+        figures,
+        warnings: fitted.warnings,
+    })
+}
+
+/// Checks an extension against the old train's record and, on the first call, writes the new
+/// designs' first rows: the old designs on the added effects' off face.
+#[allow(clippy::too_many_arguments)]
+fn prepare_extension(
+    req: &TrainRequest,
+    dir: &Path,
+    from: &str,
+    name: &str,
+    space: &Space,
+    class: Option<ModelClass>,
+    pairs: &[Pair],
+    observer: &dyn TrainObserver,
+) -> Result<(String, Extension)> {
+    if from == name {
+        return Err(Error::invalid(format!(
+            "--extends {from}: --name must differ from the model it extends"
+        )));
+    }
+    let old = TrainPaths::new(dir, from);
+    let text = read_to_string(&old.record).map_err(|e| {
+        Error::invalid(format!(
+            "--extends {from}: reading {} (written by `mbgc train --name {from}`): {e}",
+            old.record.display()
+        ))
+    })?;
+    let record: TrainRecord = serde_json::from_str(&text).map_err(|e| {
+        Error::input(
+            old.record.display(),
+            "JSON",
+            format!("a train record ({e})"),
+        )
+    })?;
+    if record.experiment != req.experiment {
+        return Err(Error::invalid(format!(
+            "--extends {from}: {from} was trained on {}, not {}",
+            record.experiment, req.experiment
+        )));
+    }
+    if record.seed != req.seed {
+        return Err(Error::invalid(format!(
+            "--seed {}: {from} was trained with --seed {}; an extension keeps it, so that the \
+             copied runs are the rows the new campaign would run",
+            req.seed, record.seed
+        )));
+    }
+    let box_scale = req
+        .box_scale
+        .or_else(|| (req.experiment == "shear-box").then_some(10.0));
+    if record.box_scale != box_scale {
+        return Err(Error::invalid(format!(
+            "--box-scale: {from} was run with {:?}, this train asks for {box_scale:?}",
+            record.box_scale
+        )));
+    }
+    let old_space = Space::from_file(Path::new(&record.space)).map_err(|e| {
+        Error::invalid(format!(
+            "the space of {from} (from {}): {e}",
+            old.record.display()
+        ))
+    })?;
+    let old_class = match &record.model_class {
+        Some(c) => ModelClass::parse(c)?,
+        None => {
+            return Err(Error::invalid(format!(
+                "--extends {from}: its record names no model class"
+            )))
+        }
+    };
+    let new_class = class.unwrap_or_default();
+    let ext = extend::check(&old_space, &old_class, space, &new_class, pairs)?;
+    let paths = TrainPaths::new(dir, name);
+    for (old_design, new_design, n, what) in [
+        (&old.design, &paths.design, req.n, "--n"),
+        (
+            &old.validation_design,
+            &paths.validation_design,
+            req.validation,
+            "--validation",
+        ),
+    ] {
+        if new_design.exists() || !old_design.exists() {
+            continue;
+        }
+        let d = extend::project_design(old_design, &old_space, space, &ext)?;
+        if n <= d.len() {
+            return Err(Error::invalid(format!(
+                "{what} {n}: {from} has {} such runs already; an extension adds runs (pass more \
+                 than {})",
+                d.len(),
+                d.len()
+            )));
+        }
+        if let Some(parent) = new_design.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        }
+        d.write(new_design)?;
+        observer.note(
+            TrainStage::Extend,
+            &format!(
+                "{}: the {} rows of {} with {}",
+                new_design.display(),
+                d.len(),
+                old_design.display(),
+                ext.off_face
+                    .iter()
+                    .map(|(n, v)| format!("{n} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        );
+    }
+    Ok((from.to_string(), ext))
+}

@@ -1,0 +1,189 @@
+//! The stages' building blocks: where a train's files go, the seeds of its random streams, the
+//! designs it creates or extends, the plan of each campaign, the fit's inputs and the record
+//! written beside the tables.
+
+use std::path::{Path, PathBuf};
+
+use crate::campaign::{ExperimentSettings, Plan, Shard};
+use crate::error::{Error, Result};
+use crate::experiments::Experiment;
+use crate::sampling::design::Design;
+use crate::sampling::{extend_design, fssf, random, Sampler};
+use crate::space::Space;
+
+/// The files of a trained metamodel named `name` under `dir`.
+#[derive(Debug, Clone)]
+pub struct TrainPaths {
+    pub design: PathBuf,
+    pub validation_design: PathBuf,
+    pub table: PathBuf,
+    pub validation_table: PathBuf,
+    pub record: PathBuf,
+    pub model: PathBuf,
+    pub figures: PathBuf,
+}
+
+impl TrainPaths {
+    pub fn new(dir: &Path, name: &str) -> TrainPaths {
+        let (s, t, m) = (
+            dir.join("sampling"),
+            dir.join("training_data"),
+            dir.join("models"),
+        );
+        TrainPaths {
+            design: s.join(format!("{name}.csv")),
+            validation_design: s.join(format!("{name}_validation.csv")),
+            table: t.join(format!("{name}.csv")),
+            validation_table: t.join(format!("{name}_validation.csv")),
+            record: t.join(format!("{name}.train.json")),
+            model: m.join(format!("{name}.json")),
+            figures: m.join(format!("{name}_figures")),
+        }
+    }
+}
+
+/// Seeds of the four random streams of a train with seed `seed`: the validation design and its
+/// runs use `seed + 1`, so that they share no random numbers with the training set.
+pub fn seeds(seed: u64) -> (u64, u64) {
+    (seed, seed.wrapping_add(1))
+}
+
+/// Brings the design at `path` to `n` rows: creates it, extends it (its rows stay first,
+/// unchanged), or keeps it. Returns (rows before, rows after). A design with more rows than `n`
+/// is refused: a train never drops simulated rows silently.
+pub fn ensure_design(
+    path: &Path,
+    space: &Space,
+    sampler: &dyn Sampler,
+    n: usize,
+    seed: u64,
+) -> Result<(usize, usize)> {
+    let mut design = if path.exists() {
+        Design::read(path, Some(space))?
+    } else {
+        Design::empty(Some(space), space.dim())
+    };
+    let before = design.len();
+    if before > n {
+        return Err(Error::input(
+            path.display().to_string(),
+            "rows",
+            format!(
+                "at most {n} rows (--n or --validation), found {before}: pass {before} or more \
+                 (a train extends a design, it never drops rows)"
+            ),
+        ));
+    }
+    if before < n {
+        let new = extend_design(sampler, &design.unit, n - before, seed)
+            .map_err(|e| Error::invalid(format!("sampling {}: {e}", path.display())))?;
+        design.append_unit(Some(space), &new);
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        design.write(path)?;
+    }
+    Ok((before, design.len()))
+}
+
+/// The training design's sampler (FSSF-f, sequential: extending it keeps its space filling) and
+/// the validation design's (uniform random: an unbiased sample of the space).
+pub fn samplers() -> (Box<dyn Sampler>, Box<dyn Sampler>) {
+    (Box::new(fssf::Fssf::forward()), Box::new(random::Random))
+}
+
+/// The plan of one table: every design row with the campaign seed.
+pub fn plan(
+    experiment: &dyn Experiment,
+    design: &Path,
+    seed: u64,
+    settings: &ExperimentSettings,
+    shard: Option<Shard>,
+) -> Result<Plan> {
+    Plan::new(experiment, design, &[], seed, settings, shard)
+}
+
+/// Inputs of the fit: every parameter of the space that varies in the design, and the fixed ones
+/// the similarity absorbs (they act through its groups); a fixed parameter nothing absorbs is a
+/// constant and is left out.
+pub fn fit_inputs(space: &Space, absorbed: &[String]) -> Vec<String> {
+    space
+        .parameters
+        .iter()
+        .filter(|p| !p.is_fixed() || absorbed.contains(&p.name))
+        .map(|p| p.name.clone())
+        .collect()
+}
+
+/// What produced a trained model, written beside its tables.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct TrainRecord {
+    pub mbgc_version: String,
+    pub space: String,
+    pub experiment: String,
+    pub model_class: Option<String>,
+    /// The experiment's box scale in effect (shear box: k, the smallest side in d_max).
+    pub box_scale: Option<f64>,
+    pub n: usize,
+    pub validation: usize,
+    pub design_method: String,
+    pub validation_method: String,
+    pub seed: u64,
+    pub validation_seed: u64,
+    pub responses: Vec<String>,
+    pub inputs: Vec<String>,
+    pub groups: Vec<String>,
+    /// The trained model this one extends with effects (`--extends`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extends: Option<ExtendsRecord>,
+}
+
+/// What an extension added to which model, and where the copied runs lie.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct ExtendsRecord {
+    /// The name of the extended train.
+    pub from: String,
+    pub added: Vec<String>,
+    /// Each added parameter at the value where the old runs lie.
+    pub off_face: Vec<(String, f64)>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SPACE: &str = "name = \"t\"\n[parameters]\na = { min = 0.0, max = 1.0 }\n\
+                         b = { min = 1.0, max = 10.0, scale = \"log\" }\n\
+                         c = { min = 0.0, max = 2.0, fixed = 1.0 }\n";
+
+    #[test]
+    fn a_design_is_created_extended_and_never_cut() {
+        let dir = tempfile::tempdir().unwrap();
+        let space = Space::from_toml_str(SPACE, "s.toml").unwrap();
+        let path = dir.path().join("sampling/d.csv");
+        let (fssf, _) = samplers();
+        assert_eq!(
+            ensure_design(&path, &space, fssf.as_ref(), 8, 1).unwrap(),
+            (0, 8)
+        );
+        let first = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(
+            ensure_design(&path, &space, fssf.as_ref(), 8, 1).unwrap(),
+            (8, 8)
+        );
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), first);
+        assert_eq!(
+            ensure_design(&path, &space, fssf.as_ref(), 12, 1).unwrap(),
+            (8, 12)
+        );
+        let grown = std::fs::read_to_string(&path).unwrap();
+        assert!(grown.starts_with(&first), "the old rows stay first");
+        assert_eq!(grown.lines().count(), 13);
+        let e = ensure_design(&path, &space, fssf.as_ref(), 10, 1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("d.csv") && e.contains("found 12"), "{e}");
+        assert_eq!(fit_inputs(&space, &[]), vec!["a", "b"]);
+        assert_eq!(fit_inputs(&space, &["c".into()]), vec!["a", "b", "c"]);
+    }
+}

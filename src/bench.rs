@@ -1,0 +1,64 @@
+//! `mbgc bench`: benchmarks and reproduction reports that regenerate the files under `docs/`.
+
+use clap::{Args, Subcommand};
+
+use mbgc_studies::{
+    dem_throughput, diagnose_report, gp_vs_gplearn, liggghts_backend, metamodel_report,
+    restitution, sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
+};
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: BenchCommand,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum BenchCommand {
+    /// Seed 004 Figs. 7-8 (MID and COV of every method, 2-D and 10-D, many seeds), the
+    /// extension check and design generation times; writes a Markdown report and a figure.
+    Sampling(sampling_quality::Args),
+    /// DEM throughput on a settled polydisperse box, per core, against LIGGGHTS on the identical
+    /// scene (`--vs liggghts`), with packing fraction and coordination number of both.
+    Dem(dem_throughput::Args),
+    /// Shear box: mbgc against LIGGGHTS replaying the identical runs (low, mid and high
+    /// friction, several seeds), and the cost of a run for several PSDs and moduli.
+    ShearBox(shear_box_vs_liggghts::Args),
+    /// Shear box checked independently: against a LIGGGHTS deck that fills itself (3 frictions x
+    /// 2 PSDs), seed 004's Gravel 8/16 point, box scale, replicate noise, whole-run cost.
+    ShearBoxCheck(shear_box_check::Args),
+    /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
+    /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
+    Gp(gp_vs_gplearn::Args),
+    /// The shipped metamodel (docs/metamodel.md): space, campaign cost, validation against seed
+    /// 004 and the noise floor, equations, Gravel 8/16 calibrated and validated in DEM.
+    Metamodel(metamodel_report::Args),
+    /// Seed 003 Table 4 on DEM impacts: TMCMC of the three normal-force classes (Tsuji,
+    /// Kuwabara-Kono, free exponent) on measured restitution of steel; posteriors, evidences.
+    Restitution(restitution::Args),
+    /// docs/diagnose.md: hidden cohesion, hidden rolling resistance and a control, each
+    /// diagnosed from its measurement file to the error ladder, the strength checked against
+    /// the truth.
+    Diagnose(diagnose_report::Args),
+    /// docs/sensitivity.md: seed 000's power laws, PCA and sensitivity matrix on the hopper's
+    /// 36-run design (from its campaign table), each finding checked; Sobol indices of a model.
+    Sensitivity(sensitivity_report::Args),
+    /// docs/liggghts_backend.md: the shear box of seed 004's size as a campaign on mbgc's
+    /// engine, LIGGGHTS on 1 process and LIGGGHTS on 2 MPI processes; means and time per run.
+    LiggghtsBackend(liggghts_backend::Args),
+}
+
+pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
+    match &a.what {
+        BenchCommand::Sampling(s) => sampling_quality::run(s),
+        BenchCommand::Dem(d) => dem_throughput::run(d),
+        BenchCommand::ShearBox(b) => shear_box_vs_liggghts::run(b),
+        BenchCommand::ShearBoxCheck(b) => shear_box_check::run(b),
+        BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
+        BenchCommand::Metamodel(m) => metamodel_report::run(m),
+        BenchCommand::Restitution(r) => restitution::run(r),
+        BenchCommand::Diagnose(d) => diagnose_report::run(d),
+        BenchCommand::Sensitivity(s) => sensitivity_report::run(s),
+        BenchCommand::LiggghtsBackend(l) => liggghts_backend::run(l),
+    }
+}

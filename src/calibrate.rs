@@ -1,0 +1,261 @@
+//! `mbgc calibrate`: the parameters of a material from its measurements, by inverting a saved
+//! metamodel; every distinct solution, and what the data cannot decide.
+
+use mbgc::outputs::refuse_overwriting_inputs;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use mbgc::calibrate::session::{self, Session, SessionOptions};
+use mbgc::error::write_atomic;
+
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// Material file (measurements, PSD, fixed parameters, bounds, constraints).
+    #[arg(long)]
+    pub material: PathBuf,
+    /// Metamodel written by `mbgc fit` [default: the shipped models/shear_box.json, built into
+    /// mbgc]. Give several (e.g. with and without an effect) with `--bayes` to compare them as
+    /// model classes by their evidence.
+    #[arg(long)]
+    pub model: Vec<PathBuf>,
+    /// Parameters the material file fixes that this run searches instead, comma-separated (e.g.
+    /// `mu_r_pp,mu_r_pw`): to see what the measurements alone can and cannot decide.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub free: Vec<String>,
+    /// L-BFGS starts (Sobol points of the search box).
+    #[arg(long, default_value_t = 64)]
+    pub starts: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Also sample the posterior by TMCMC (measurement sd plus a model-error term sigma |y|).
+    #[arg(long)]
+    pub bayes: bool,
+    /// TMCMC samples per stage.
+    #[arg(long, default_value_t = 2000)]
+    pub samples: usize,
+    /// Upper bound of the uniform prior of the relative model error sigma.
+    #[arg(long, default_value_t = 0.1)]
+    pub sigma_max: f64,
+    /// Print the result as JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Directory for figures: the posterior (corner plot, with `--bayes`) and the set of equally
+    /// good optima (when the data cannot fix every parameter).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Write the best parameter set (all model inputs, first model) as TOML, for `mbgc validate`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--material", &a.material)];
+        inputs.extend(a.model.iter().map(|m| ("--model", m.as_path())));
+        refuse_overwriting_inputs("--out", out, &inputs)?;
+    }
+    let mut material = crate::builtin::material(&a.material)?;
+    for name in &a.free {
+        let before = material.fixed.len();
+        material.fixed.retain(|(n, _)| n != name);
+        if material.fixed.len() == before {
+            anyhow::bail!(
+                "--free {name}: {} does not fix {name} (it fixes: {})",
+                a.material.display(),
+                material
+                    .fixed
+                    .iter()
+                    .map(|(n, _)| n.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
+    let opts = SessionOptions {
+        starts: a.starts,
+        seed: a.seed,
+        bayes: a.bayes,
+        samples: a.samples,
+        sigma_max: a.sigma_max,
+    };
+    opts.check()?;
+    let mut sessions = Vec::new();
+    let models = crate::builtin::models(&a.model)?;
+    for (i, (model, label)) in models.iter().enumerate() {
+        if i > 0 && !a.json {
+            println!();
+        }
+        let s = session::run(&material, model, label, &opts)?;
+        let mut written = Vec::new();
+        if let Some(out) = a.out.as_ref().filter(|_| i == 0) {
+            write_atomic(out, s.calibrated_toml().as_bytes())?;
+            written.push(out.clone());
+        }
+        if let Some(dir) = &a.plot {
+            written.extend(plot(dir, Path::new(label), &s)?);
+        }
+        if !a.json {
+            print_text(&s);
+            for f in &written {
+                println!("wrote {}", f.display());
+            }
+        }
+        sessions.push(s);
+    }
+    if models.len() > 1 && a.bayes {
+        let (ln_z, prob) = session::class_probabilities(&sessions);
+        if a.json {
+            let v = serde_json::json!({
+                "classes": sessions.iter().map(Session::json).collect::<Vec<_>>(),
+                "class_probabilities": prob,
+            });
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        } else {
+            println!("\nModel classes (equal prior probabilities):");
+            for (((_, m), z), p) in models.iter().zip(&ln_z).zip(&prob) {
+                println!("  {m:>40}: log evidence {z:.3}, P(M|D) = {p:.4}");
+            }
+        }
+    } else if a.json {
+        // Exactly one object on standard output, however many models.
+        let v = if sessions.len() == 1 {
+            sessions[0].json()
+        } else {
+            serde_json::json!({ "classes": sessions.iter().map(Session::json).collect::<Vec<_>>() })
+        };
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    }
+    Ok(())
+}
+
+/// The posterior corner plot (with `--bayes`) and the solution set (when the data leave one);
+/// returns the files written.
+fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
+    let stem = model
+        .file_stem()
+        .map_or("model".into(), |s| s.to_string_lossy().to_string());
+    let mut figures = Vec::new();
+    if let (Some(post), Some(frame)) = (&s.posterior, s.posterior_frame()) {
+        let path = dir.join(format!("{stem}_posterior.svg"));
+        let (marks, ranges) = (Some(&frame.marks[..]), Some(&frame.ranges[..]));
+        mbgc::plot::corner::corner(&path, &post.names, &post.draws, marks, ranges)?;
+        figures.push(path);
+    }
+    if let Some(good) = s.solution_set() {
+        let path = dir.join(format!("{stem}_solution_set.svg"));
+        mbgc::plot::corner::corner(&path, &s.free, &good, Some(&s.best().x), Some(&s.bounds))?;
+        figures.push(path);
+    }
+    Ok(figures)
+}
+
+fn print_text(s: &Session) {
+    let cal = &s.calibration;
+    let names = &s.free;
+    println!("{} ({}) with {}", s.material, s.source, s.model);
+    for n in &s.notes {
+        println!("  {n}");
+    }
+    for (n, v) in &s.fixed {
+        println!("  {n} = {v} fixed");
+    }
+    let meas: Vec<String> = s
+        .measured
+        .iter()
+        .map(|t| format!("{} {} +- {}", t.name, t.value, t.sd))
+        .collect();
+    println!("  measured: {}", meas.join(", "));
+    println!(
+        "{} distinct optim{} from {} starts in {:.3} s:",
+        cal.optima.len(),
+        if cal.optima.len() == 1 { "um" } else { "a" },
+        cal.starts,
+        cal.seconds
+    );
+    for (i, o) in cal.optima.iter().enumerate().take(10) {
+        let params: Vec<String> = names
+            .iter()
+            .zip(&o.x)
+            .map(|(n, v)| format!("{n} = {v:.4}"))
+            .collect();
+        let fits: Vec<String> = s
+            .measured
+            .iter()
+            .zip(o.predictions.iter().zip(&o.residuals))
+            .map(|(t, (p, r))| format!("{} {p:.4} ({r:+.2} sd)", t.name))
+            .collect();
+        println!(
+            "  #{} chi2 {:.3e} ({} starts): {}\n      predicted {}",
+            i + 1,
+            o.chi2,
+            o.starts,
+            params.join(", "),
+            fits.join(", ")
+        );
+    }
+    if cal.optima.len() > 10 {
+        println!("  ... {} more (see --json)", cal.optima.len() - 10);
+    }
+    if !s.unused.is_empty() {
+        println!(
+            "Not in any equation of the measured responses (any value in range fits equally): {}",
+            s.unused.join(", ")
+        );
+    }
+    if cal.excess_parameters > 0 {
+        let equal = s.equally_good().len();
+        if equal > 1 {
+            println!(
+                "{equal} of the optima are equally good points of one continuous solution set, \
+                 not separate answers."
+            );
+        }
+        println!(
+            "{} free parameters but {} measurements: the data fix at most {} combinations; the \
+             solutions form a set of dimension >= {}.",
+            names.len(),
+            s.measured.len(),
+            s.measured.len(),
+            cal.excess_parameters
+        );
+    }
+    if !cal.flat_directions.is_empty() {
+        println!("Directions at the best optimum along which the predictions do not change (unit-box steps):");
+        for d in &cal.flat_directions {
+            let comp: Vec<String> = names
+                .iter()
+                .zip(&d.components)
+                .filter(|(_, c)| c.abs() >= 0.05)
+                .map(|(n, c)| format!("{c:+.2} {n}"))
+                .collect();
+            println!(
+                "  {}  (singular value {:.1e})",
+                comp.join(" "),
+                d.singular_value
+            );
+        }
+        println!(
+            "Range of each parameter over the equally good optima (chi2 within 1 of the best):"
+        );
+        for r in &cal.solution_ranges {
+            println!("  {} in [{:.4}, {:.4}]", r.name, r.min, r.max);
+        }
+    }
+    if let Some(post) = &s.posterior {
+        println!(
+            "Posterior (TMCMC, {} samples, {} stages): log evidence {:.3}",
+            post.samples, post.stages, post.ln_evidence
+        );
+        for p in &post.parameters {
+            println!(
+                "  {:>12}: mean {:.4}, COV {:.3}, 5 % {:.4}, 95 % {:.4}",
+                p.name, p.mean, p.cov, p.q05, p.q95
+            );
+        }
+        println!("Posterior-robust predictions (mean +- sd over the posterior):");
+        for r in &post.responses {
+            println!("  {:>12}: {:.4} +- {:.4}", r.name, r.mean, r.sd);
+        }
+    }
+}

@@ -1,0 +1,94 @@
+//! `mbgc predict`: evaluate a saved metamodel on the rows of a table.
+
+use mbgc::outputs::refuse_overwriting_inputs;
+use mbgc_output::say;
+use mbgc_output::Output;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use mbgc::error::write_atomic;
+use mbgc::metamodel::{table::read_columns, Metamodel};
+
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// Model file written by `mbgc fit`.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Table with (at least) the model's input columns.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Output CSV: the input rows with one column per response appended.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Standard output holds one JSON object; text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
+    refuse_overwriting_inputs(
+        "--out",
+        &a.out,
+        &[("--model", &a.model), ("--data", &a.data)],
+    )?;
+    let model = Metamodel::load(&a.model)?;
+    let names = model.input_names();
+    let cols = read_columns(&a.data, &names)?;
+    let rows = cols.records.len();
+    let preds: Vec<Vec<f64>> = model
+        .responses
+        .iter()
+        .map(|r| model.predict(r, &cols.values))
+        .collect();
+    let mut outside = Vec::new();
+    for row in 0..rows {
+        let x: Vec<f64> = cols.values.iter().map(|c| c[row]).collect();
+        if let Some((name, v, d)) = model.outside_domain(&x).first() {
+            outside.push(format!(
+                "line {}: {name} = {v} outside [{}, {}]",
+                row + 2,
+                d[0],
+                d[1]
+            ));
+        }
+    }
+    let mut header = cols.header.clone();
+    for r in &model.responses {
+        let mut name = r.name.clone();
+        while header.contains(&name) {
+            name = format!("{name}_predicted");
+        }
+        header.push(name);
+    }
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&header)?;
+    for (row, rec) in cols.records.iter().enumerate() {
+        let mut fields = rec.clone();
+        fields.extend(preds.iter().map(|p| format!("{:?}", p[row])));
+        w.write_record(&fields)?;
+    }
+    let bytes = w.into_inner().context("writing CSV")?;
+    write_atomic(&a.out, &bytes)?;
+    let nan = preds.iter().flatten().filter(|v| !v.is_finite()).count();
+    if !outside.is_empty() {
+        eprintln!(
+            "warning: {} of {rows} rows lie outside the model's valid domain (extrapolation); first: {}",
+            outside.len(),
+            outside[0]
+        );
+    }
+    if nan > 0 {
+        eprintln!("warning: {nan} predictions are not finite (written as NaN)");
+    }
+    say!(out, "wrote {} ({rows} rows)", a.out.display());
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "rows": rows,
+        "responses": model.responses.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(),
+        "outside_domain": outside.len(),
+        "non_finite": nan,
+    }))
+}

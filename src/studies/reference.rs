@@ -1,7 +1,0 @@
-//! The reference codes a study can compare mbgc with.
-
-/// `--vs`: run the identical case in this code too.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Reference {
-    Liggghts,
-}

@@ -1,0 +1,230 @@
+//! `mbgc train`: sample (FSSF-f) -> simulate -> fit, every stage resumable (`mbgc::train`).
+
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use mbgc::campaign::{ObserverHandle, Shard};
+use mbgc::dem::contact::ModelClass;
+use mbgc::train::{train, TrainObserver, TrainOutcome, TrainRequest, TrainStage};
+
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Parameter space (its `[model] class` is the default model class).
+    #[arg(long, value_name = "TOML")]
+    pub space: PathBuf,
+    #[arg(long, help = crate::simulate::experiment_help())]
+    pub experiment: String,
+    /// Training runs (an FSSF-f design; a larger n than an earlier train extends it).
+    #[arg(long)]
+    pub n: usize,
+    /// Validation runs: a separate uniform random design, never trained on (0: none).
+    #[arg(long, default_value_t = 0)]
+    pub validation: usize,
+    /// Directory that receives sampling/, training_data/ and models/.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out_dir: PathBuf,
+    /// Name of the designs, tables and model [default: the experiment, e.g. shear_box].
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Seed of the training design and runs; the validation set uses seed + 1.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads, one run each [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Simulate only the rows with row % N == K - 1 of both tables, then stop (no fit): for job
+    /// arrays; gather the shards with `mbgc campaign merge`, then train again to fit.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Size factor of the experiment's box (shear box: k) [default: the experiment's].
+    #[arg(long, value_name = "K")]
+    pub box_scale: Option<f64>,
+    /// Effects of the contact law [default: the space's [model] class, else seed 004's].
+    #[arg(long, value_name = "EFFECTS", value_parser = crate::simulate::parse_model_class)]
+    pub model_class: Option<ModelClass>,
+    /// Responses to fit, comma-separated [default: the experiment's measured ones].
+    #[arg(long, value_delimiter = ',')]
+    pub responses: Vec<String>,
+    /// Fit in the raw inputs even where the experiment has dimensionless groups.
+    #[arg(long)]
+    pub no_similarity: bool,
+    /// Add effects to the model trained under this name (same --out-dir and --seed): --space is
+    /// its space plus the added effects' parameters, each with a range holding the value that
+    /// switches it off. Its runs become the new design's first rows on that face and are copied,
+    /// not rerun; only the new rows are simulated. --name must differ.
+    #[arg(long, value_name = "NAME", conflicts_with = "shard")]
+    pub extends: Option<String>,
+    /// Stop after the simulate stage.
+    #[arg(long)]
+    pub no_fit: bool,
+    /// Skip the simulate stage and fit on the rows the tables hold now (a campaign still running,
+    /// e.g. in the background or as shards): a provisional model; it records how many rows it saw.
+    #[arg(long, conflicts_with_all = ["no_fit", "shard"])]
+    pub partial: bool,
+    #[arg(long, default_value_t = 5000)]
+    pub population: usize,
+    /// Generations of the fit: more than `fit`'s gplearn-like 20, since a trained model is made
+    /// once and used many times (300 took about 3 min on 2 cores for the shear box's 2 responses
+    /// at 240 rows).
+    #[arg(long, default_value_t = 300)]
+    pub generations: usize,
+    /// Penalty per node on the normalised error 1 - R^2 of the fit. Keep it below the noise's
+    /// share of the variance: a node must pay for itself (shear box: noise about 0.1 % of the
+    /// bulk density's variance, so 1e-4 rather than `fit`'s generic 1e-3).
+    #[arg(long, default_value_t = 1e-4)]
+    pub parsimony: f64,
+    /// Longest tree (nodes) of the fit.
+    #[arg(long, default_value_t = 64)]
+    pub max_length: usize,
+    /// Independent searches per response (seeds seed, seed + 1, ...) whose Pareto fronts are
+    /// merged before the equation is picked: one search's error varies with its seed (shear
+    /// angle at 297 rows: validation RMSE 1.68 to 1.75 deg over two seeds).
+    #[arg(long, default_value_t = 4)]
+    pub restarts: usize,
+    /// How the equation is picked from the Pareto front: `cv` (the smallest 5-fold
+    /// cross-validated error: the model is inverted at new points, so accuracy there decides) or
+    /// `best` (PySR's knee, smaller equations).
+    #[arg(long, default_value = "cv", value_parser = crate::fit::parse_selection)]
+    pub select: mbgc::gp::select::Selection,
+    /// Wall-clock limit per response of the fit, e.g. 10m (results then depend on machine speed).
+    #[arg(long, value_parser = crate::fit::parse_duration)]
+    pub time_limit: Option<f64>,
+}
+
+pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
+    let threads = match a.threads {
+        Some(0) => anyhow::bail!("--threads: expected at least 1"),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let req = TrainRequest {
+        validation: a.validation,
+        out_dir: a.out_dir.clone(),
+        name: a.name.clone(),
+        seed: a.seed,
+        threads,
+        shard: a.shard.as_deref().map(Shard::parse).transpose()?,
+        box_scale: a.box_scale,
+        model_class: a.model_class,
+        responses: a.responses.clone(),
+        no_similarity: a.no_similarity,
+        extends: a.extends.clone(),
+        no_fit: a.no_fit,
+        partial: a.partial,
+        figures: true,
+        config: mbgc::gp::Config {
+            population: a.population,
+            generations: a.generations,
+            time_limit: a.time_limit,
+            parsimony: a.parsimony,
+            max_length: a.max_length,
+            restarts: a.restarts,
+            selection: a.select,
+            ..mbgc::gp::Config::default()
+        },
+        ..TrainRequest::new(a.space.clone(), &a.experiment, a.n)
+    };
+    let observer = Printer::new(a.generations);
+    let outcome = train(&req, &observer);
+    observer.bar.finish_and_clear();
+    match outcome? {
+        TrainOutcome::ShardDone(k) => eprintln!(
+            "shard {k} done; merge the shards' tables with `mbgc campaign merge`, then run train \
+             again without --shard to fit"
+        ),
+        TrainOutcome::Simulated(_) => {}
+        TrainOutcome::Fitted {
+            model,
+            paths,
+            warnings,
+            ..
+        } => {
+            for w in &warnings {
+                eprintln!("warning: {w}");
+            }
+            if model.data.skipped_rows + model.data.no_value_rows > 0 {
+                eprintln!(
+                    "{}: {} failed runs and {} without a value left out of the fit",
+                    paths.table.display(),
+                    model.data.skipped_rows,
+                    model.data.no_value_rows
+                );
+            }
+            for r in &model.responses {
+                let v = r
+                    .validation
+                    .map(|m| format!("validation R2 {:.5} RMSE {:.4e}", m.r2, m.rmse))
+                    .unwrap_or_else(|| "no validation set".into());
+                eprintln!(
+                    "{} = {}\n    size {}, train R2 {:.5} RMSE {:.4e}, {v}",
+                    r.name,
+                    r.grouped
+                        .as_ref()
+                        .filter(|g| g.equation != r.equation)
+                        .map(|g| format!("{} with {} = {}", r.equation, g.fitted, g.equation))
+                        .unwrap_or_else(|| r.equation.clone()),
+                    r.size,
+                    r.train.r2,
+                    r.train.rmse
+                );
+            }
+            eprintln!(
+                "wrote {} (+ .rs, .tex, {})",
+                paths.model.display(),
+                paths.figures.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The command line's view of a train: each stage's news on standard error, a bar per campaign
+/// and one for the fit's generations.
+struct Printer {
+    bar: ProgressBar,
+    current: RefCell<String>,
+}
+
+impl Printer {
+    fn new(generations: usize) -> Printer {
+        let bar = ProgressBar::hidden();
+        bar.set_length(generations as u64);
+        bar.set_style(
+            ProgressStyle::with_template("[3/3 fit] {prefix:>14} [{bar:30}] gen {pos}/{len} {msg}")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        Printer {
+            bar,
+            current: RefCell::new(String::new()),
+        }
+    }
+}
+
+impl TrainObserver for Printer {
+    fn note(&self, stage: TrainStage, text: &str) {
+        eprintln!("[{stage}] {text}");
+    }
+
+    fn campaign(&self, _table: &Path) -> Option<ObserverHandle> {
+        Some(crate::campaign_progress::bar())
+    }
+
+    fn fit_progress(&self, response: &str, p: &mbgc::gp::Progress) {
+        let mut current = self.current.borrow_mut();
+        if *current != response {
+            if current.is_empty() {
+                self.bar
+                    .set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            }
+            *current = response.to_string();
+            self.bar.reset();
+            self.bar.set_prefix(current.clone());
+        }
+        self.bar.set_position(p.generation as u64 + 1);
+        self.bar.set_message(format!("1-R2 {:.3e}", p.best_nmse));
+    }
+}
