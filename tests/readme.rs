@@ -1,6 +1,7 @@
 //! The README's promises: it opens with the two commands a newcomer needs, and the first one
-//! works; and the guide's table of effects is `mbgc effects`' output, so it cannot drift from the
-//! registry. (The guide's and the README's other snippets are tested by `tests/guide.rs`.)
+//! works; it and the guide state the Rust version `Cargo.toml` declares; and the guide's table of
+//! effects is `mbgc effects`' output, so it cannot drift from the registry. (The guide's and the
+//! README's other snippets are tested by `tests/guide.rs`.)
 
 use std::process::Command;
 
@@ -57,4 +58,20 @@ fn the_readme_opens_with_the_two_commands_a_newcomer_needs_and_the_first_works()
         String::from_utf8_lossy(&out.stdout).contains("mu_pp"),
         "the calibration names the sliding friction it found"
     );
+}
+
+#[test]
+fn the_readme_and_the_guide_state_the_workspace_rust_version() {
+    let manifest = std::fs::read_to_string(format!("{ROOT}/Cargo.toml")).unwrap();
+    let manifest: toml::Table = toml::from_str(&manifest).unwrap();
+    let version = manifest["workspace"]["package"]["rust-version"]
+        .as_str()
+        .expect("[workspace.package] rust-version");
+    for doc in ["README.md", "docs/guide/src/installation.md"] {
+        let text = std::fs::read_to_string(format!("{ROOT}/{doc}")).unwrap();
+        assert!(
+            text.contains(&format!("{version} or newer")),
+            "{doc} does not say that Rust {version} or newer is needed (Cargo.toml's rust-version)"
+        );
+    }
 }

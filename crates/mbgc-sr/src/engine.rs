@@ -79,8 +79,8 @@ pub struct Config {
     pub stop_patience: usize,
     /// Wall-clock limit in seconds (makes the result depend on machine speed).
     pub time_limit: Option<f64>,
-    /// Seed of every random choice: with no `time_limit`, the result depends on it alone, not on
-    /// the number of threads.
+    /// Seed of every random choice: with no `time_limit`, the result is a function of the data,
+    /// the settings and this seed, whatever the number of threads.
     pub seed: u64,
     /// Independent searches (seeds `seed`, `seed + 1`, ...) whose Pareto fronts are merged
     /// before the equation is picked: one search's result varies with its seed, and the merged

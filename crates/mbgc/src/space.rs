@@ -36,7 +36,8 @@ pub enum Scale {
 /// One named, bounded input of the metamodel, as checked from a `[parameters]` entry.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parameter {
-    /// Identifier used as CSV column and equation variable (letter first, then letters, digits, `_`).
+    /// Identifier used as CSV column and equation variable (letter first, then letters, digits,
+    /// `_`).
     pub name: String,
     /// Physical unit as written in the file (SI, e.g. `Pa`, `kg/m^3`; `-` when dimensionless or
     /// omitted); informational only, never converted.
@@ -93,7 +94,8 @@ impl Parameter {
 pub struct Space {
     /// Optional human-readable title from the file's `name` key.
     pub name: Option<String>,
-    /// All parameters, free and fixed, in file order; the free ones span the unit cube in this order.
+    /// All parameters, free and fixed, in file order; the free ones span the unit cube in this
+    /// order.
     pub parameters: Vec<Parameter>,
     /// The `[model] class` of the file; `None`: seed 004's default class.
     pub model_class: Option<ModelClass>,
@@ -227,7 +229,8 @@ impl Space {
         self.parameters.iter().filter(|p| !p.is_fixed())
     }
 
-    /// Names of all parameters, fixed ones included, in file order: the columns of a physical design.
+    /// Names of all parameters, fixed ones included, in file order: the columns of a physical
+    /// design.
     pub fn names(&self) -> Vec<&str> {
         self.parameters.iter().map(|p| p.name.as_str()).collect()
     }

@@ -11,21 +11,33 @@ use super::tmcmc::{tmcmc, TmcmcOptions, TmcmcResult, UniformBox};
 use crate::error::{Error, Result};
 use serde::Serialize;
 
+/// Posterior statistics of one parameter or predicted response over the equally weighted samples.
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Summary {
+    /// The parameter's or response's name (`sigma` for the relative model error).
     pub name: String,
+    /// Posterior mean, in the quantity's unit.
     pub mean: f64,
+    /// Posterior standard deviation (1/n normalisation), same unit.
     pub sd: f64,
     /// Coefficient of variation sd / |mean|.
     pub cov: f64,
+    /// 5 % quantile (nearest order statistic).
     pub q05: f64,
+    /// 95 % quantile: with `q05`, a 90 % credible interval.
     pub q95: f64,
 }
 
+/// The TMCMC posterior of one calibration (Ching & Chen 2007 as used by Hadjidoukas et al. 2014,
+/// "seed 003"): parameter and response summaries and the evidence of the model class.
 #[derive(Clone, Debug, Serialize)]
 pub struct Posterior {
+    /// Equally weighted posterior samples drawn.
     pub samples: usize,
+    /// Tempering stages TMCMC needed to go from prior to posterior.
     pub stages: usize,
+    /// Natural log of the evidence p(data | model class), the prior-averaged likelihood: compare
+    /// it across model classes (see [`class_probabilities`]).
     pub ln_evidence: f64,
     /// Free parameters, then `sigma` (relative model error).
     pub parameters: Vec<Summary>,

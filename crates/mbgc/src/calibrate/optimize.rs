@@ -83,13 +83,19 @@ impl<O: Objective + ?Sized> Gradient for Transformed<'_, O> {
     }
 }
 
+/// A local minimum of the calibration objective, reached by one or more starts.
 #[derive(Clone, Debug, Serialize)]
 pub struct Optimum {
     /// Free parameters (physical units), in [`Problem::free`] order.
     pub x: Vec<f64>,
+    /// chi^2 = sum of squared normalised residuals, the constraint penalty excluded: below about 1
+    /// per measured response, the model matches the measurements within their sd.
     pub chi2: f64,
+    /// Sum of squared constraint and group-domain violations (0: feasible).
     pub violation: f64,
+    /// The model's predictions of the measured responses, in [`Problem::targets`] order.
     pub predictions: Vec<f64>,
+    /// Normalised residuals `(prediction - measured) / sd`, same order.
     pub residuals: Vec<f64>,
     /// Starts that ended here.
     pub starts: usize,
@@ -160,6 +166,8 @@ pub fn starts(dim: usize, n: usize, seed: u64) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// A direction in parameter space along which the measured responses barely change: a
+/// combination of parameters the data cannot determine.
 #[derive(Clone, Debug, Serialize)]
 pub struct Direction {
     /// Singular value (change of the normalised residuals per unit step in unit coordinates).
@@ -168,15 +176,22 @@ pub struct Direction {
     pub components: Vec<f64>,
 }
 
+/// The interval a free parameter spans over the equally good optima.
 #[derive(Clone, Debug, Serialize)]
 pub struct Range {
+    /// The parameter's name.
     pub name: String,
+    /// Smallest value among the equally good optima (physical units; +inf if there are none).
     pub min: f64,
+    /// Largest value among them (-inf if there are none).
     pub max: f64,
 }
 
+/// The result of a multi-start calibration: every distinct optimum and, when the measurements
+/// cannot fix every free parameter, a description of the solution set.
 #[derive(Clone, Debug, Serialize)]
 pub struct Calibration {
+    /// Names of the free parameters, the order of every `x`.
     pub parameters: Vec<String>,
     /// Distinct optima, best first.
     pub optima: Vec<Optimum>,
@@ -189,7 +204,9 @@ pub struct Calibration {
     /// Range of each free parameter over the optima as good as the best (chi^2 within 1): the
     /// spread of the solution set found by the starts.
     pub solution_ranges: Vec<Range>,
+    /// L-BFGS starts requested (Sobol points of the unit cube).
     pub starts: usize,
+    /// Wall-clock time of the whole search, s.
     pub seconds: f64,
 }
 
@@ -235,7 +252,9 @@ fn flat_directions(p: &Problem, x: &[f64]) -> Vec<Direction> {
     out
 }
 
-/// Multi-start calibration.
+/// Multi-start calibration: L-BFGS from `n_starts` scrambled Sobol points (seeded by `seed`) in
+/// parallel, at most 500 iterations each. Optima within 0.02 of each other in unit coordinates
+/// and with chi^2 equal to 1e-3 (relative) are one solution; the result lists them best first.
 pub fn calibrate(p: &Problem, n_starts: usize, seed: u64) -> Calibration {
     let t = std::time::Instant::now();
     let n = p.dim();

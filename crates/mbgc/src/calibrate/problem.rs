@@ -10,23 +10,40 @@ use mbgc_dem::contact::Pair;
 /// A measured response the fit must match.
 #[derive(Clone, Debug)]
 pub struct Target {
+    /// Index of the response in the model's `responses`.
     pub response: usize,
+    /// The response's name.
     pub name: String,
+    /// The measured value, in the response's unit.
     pub value: f64,
+    /// Standard deviation of the measurement (same unit, > 0): the residual's scale in chi^2.
     pub sd: f64,
 }
 
+/// The inversion of a metamodel for one material: minimise chi^2 = sum ((g_i(x) - y_i) / sd_i)^2
+/// over the free parameters in their box, the fixed ones (material values, PSD) held. The box is
+/// physical; the optimiser's starts and the flat directions live on the unit cube that
+/// [`Problem::from_unit`] maps onto it.
 #[derive(Clone, Debug)]
 pub struct Problem<'m> {
+    /// The metamodel being inverted.
     pub model: &'m Metamodel,
-    /// Every model input; fixed entries hold their value.
+    /// Every model input name, in model order.
     pub names: Vec<String>,
+    /// A full input vector in model order: fixed entries hold their value, free ones the middle
+    /// of their range (overwritten by [`Problem::full`]).
     pub base: Vec<f64>,
     /// Indices (into `names`) of the searched parameters.
     pub free: Vec<usize>,
+    /// Lower bound of each free parameter (physical units): the material's `[bounds]`, else the
+    /// model's domain.
     pub lower: Vec<f64>,
+    /// Upper bound of each free parameter, as `lower`.
     pub upper: Vec<f64>,
+    /// The measured responses the model must match.
     pub targets: Vec<Target>,
+    /// The material's linear constraints, each with its terms as `(index into names,
+    /// coefficient)`; `sum + constant <= 0` must hold.
     pub constraints: Vec<(Constraint, Vec<(usize, f64)>)>,
     /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
     pub notes: Vec<String>,
@@ -105,6 +122,10 @@ fn check_class(model: &Metamodel, material: &Material) -> Result<()> {
 }
 
 impl<'m> Problem<'m> {
+    /// The problem of `material` against `model`. Refuses, among others, a measured response the
+    /// model lacks,
+    /// a model class that does not match, and fixed values, PSD parameters or bounds outside
+    /// the model's domain (an [`Error::OutOfDomain`]: the equations would extrapolate).
     pub fn new(model: &'m Metamodel, material: &Material) -> Result<Problem<'m>> {
         let file = material.source.as_str();
         check_class(model, material)?;
@@ -309,10 +330,12 @@ impl<'m> Problem<'m> {
         })
     }
 
+    /// Number of free parameters.
     pub fn dim(&self) -> usize {
         self.free.len()
     }
 
+    /// Names of the free parameters, in search order.
     pub fn free_names(&self) -> Vec<&str> {
         self.free.iter().map(|&k| self.names[k].as_str()).collect()
     }

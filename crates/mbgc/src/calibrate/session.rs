@@ -93,14 +93,18 @@ impl SessionOptions {
 /// A measured response as the session matched it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Measurement {
+    /// The response's name.
     pub name: String,
+    /// The measured value, in the response's unit.
     pub value: f64,
+    /// Its standard deviation, same unit.
     pub sd: f64,
 }
 
 /// The result of one session. Plain data: it no longer borrows the model.
 #[derive(Clone, Debug)]
 pub struct Session {
+    /// The material's name (its `name`, else the file stem).
     pub material: String,
     /// The material file.
     pub source: String,
@@ -112,17 +116,21 @@ pub struct Session {
     pub notes: Vec<String>,
     /// The material's fixed parameters, in file order.
     pub fixed: Vec<(String, f64)>,
+    /// The measured responses matched, in the material's order.
     pub measured: Vec<Measurement>,
-    /// The searched parameters and their box.
+    /// The searched parameters, in search order.
     pub free: Vec<String>,
+    /// The search box, `(lower, upper)` per free parameter in physical units.
     pub bounds: Vec<(f64, f64)>,
     /// Every model input at the best optimum (fixed ones included), in model order.
     pub best_inputs: Vec<(String, f64)>,
-    /// Distinct optima, best first (never empty).
+    /// The multi-start result: distinct optima best first (never empty), flat directions and
+    /// solution ranges.
     pub calibration: Calibration,
     /// Free parameters absent from every equation of the measured responses: any value in
     /// range fits equally.
     pub unused: Vec<String>,
+    /// The TMCMC posterior, when [`SessionOptions::bayes`] asked for one.
     pub posterior: Option<Posterior>,
     /// The `sigma_max` the posterior was sampled with (the range of its `sigma` axis).
     pub sigma_max: f64,
@@ -131,7 +139,9 @@ pub struct Session {
 /// Axis ranges and the marked point of a corner plot.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
+    /// `(min, max)` of each axis: the free parameters, then sigma when it was sampled.
     pub ranges: Vec<(f64, f64)>,
+    /// The marked value on each axis (the best optimum; the posterior mean of sigma).
     pub marks: Vec<f64>,
 }
 
@@ -226,6 +236,7 @@ pub fn run(
 }
 
 impl Session {
+    /// The best optimum (lowest chi^2): the calibrated parameter set.
     pub fn best(&self) -> &Optimum {
         &self.calibration.optima[0]
     }
@@ -282,7 +293,6 @@ impl Session {
         t
     }
 
-    /// The machine-readable record of `mbgc calibrate --json`.
     /// The machine-readable result (`calibrate --json`): `solutions` best first, each with every
     /// model input by name (fixed ones included), the predicted responses and the objective;
     /// with a posterior, per parameter its mean, COV and 5/95 % quantiles, and the

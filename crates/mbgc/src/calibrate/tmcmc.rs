@@ -42,7 +42,9 @@ pub trait Prior: Sync {
 /// Independent uniform prior on the box `[lower, upper]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct UniformBox {
+    /// Lower bound per dimension (finite).
     pub lower: Vec<f64>,
+    /// Upper bound per dimension (finite, above the lower one).
     pub upper: Vec<f64>,
 }
 
@@ -110,7 +112,9 @@ impl Prior for UniformBox {
 /// Independent Gaussian prior `N(mean_k, sd_k^2)` per dimension.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GaussianPrior {
+    /// Mean per dimension.
     pub mean: Vec<f64>,
+    /// Standard deviation per dimension (> 0).
     pub sd: Vec<f64>,
 }
 
@@ -180,6 +184,8 @@ pub struct TmcmcOptions {
     pub cov_target: f64,
     /// Maximum number of tempering stages before giving up.
     pub max_stages: usize,
+    /// Seed of every random stream (prior draws, resampling, each chain): equal seeds give equal
+    /// results on any number of threads.
     pub seed: u64,
     /// Initial proposal scale; `<= 0` or non-finite means `2.4 / sqrt(dim)`.
     pub initial_beta: f64,
@@ -224,6 +230,7 @@ pub struct TmcmcResult {
     pub ln_likelihood: Vec<f64>,
     /// Natural log of the model evidence.
     pub ln_evidence: f64,
+    /// Diagnostics of each tempering stage, in order (the last reaches `p = 1`).
     pub stages: Vec<StageInfo>,
 }
 

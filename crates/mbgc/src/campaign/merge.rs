@@ -41,8 +41,9 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
 }
 
 /// Refuses tables whose sidecars say they were run as different campaigns (another seed, `--set`,
-/// box scale, model class, backend, MPI processes, experiment or design size): their rows would not collide by run id, so nothing
-/// else would notice. Tables without a sidecar (already merged) are not compared.
+/// box scale, model class, backend, MPI processes, experiment or design size): their rows would not
+/// collide by run id, so nothing else would notice. Tables without a sidecar (already merged) are
+/// not compared.
 fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
     let mut first: Option<(&PathBuf, Meta)> = None;
     for path in inputs {

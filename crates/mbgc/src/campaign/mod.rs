@@ -8,8 +8,8 @@
 //! - [`runner`]: worker threads, one appending writer, resume.
 //! - [`columns`]: the table's column schema; [`table`]: its lines, and reading it back (incomplete last line).
 //! - [`slurm`]: a campaign as a Slurm job array and its merge job.
-//! - [`merge`](mod@merge) and [`status`](mod@status); [`decks`]: decks written for users who run the external code
-//!   themselves, and their results imported.
+//! - [`merge`](mod@merge) and [`status`](mod@status); [`decks`]: decks written for users who
+//!   run the external code themselves, and their results imported.
 
 pub mod backend;
 pub mod columns;

@@ -575,7 +575,8 @@ pub struct Fit {
 
 /// TMCMC's evidence estimate and posterior draws.
 pub struct Evidence {
-    /// Natural log of the model evidence (marginal likelihood) under the uniform prior on the bounds.
+    /// Natural log of the model evidence (marginal likelihood) under the uniform prior on the
+    /// bounds.
     pub ln_evidence: f64,
     /// Posterior draws of theta, one `Vec` per draw, in `names` order.
     pub draws: Vec<Vec<f64>>,

@@ -250,7 +250,8 @@ impl Geometry {
 pub struct DischargeSeries {
     /// Sample times since the shutter opened, s, every millisecond times sqrt(scale).
     pub time_s: Vec<f64>,
-    /// Mass discharged by each sample time, kg (particle centres one d_max below the orifice plane).
+    /// Mass discharged by each sample time, kg (particle centres one d_max below the orifice
+    /// plane).
     pub mass_kg: Vec<f64>,
 }
 

@@ -370,8 +370,8 @@ pub struct Flank {
     pub intercept: f64,
     /// R^2 of the line (1 for a perfectly flat flank, NaN with fewer than 3 points).
     pub r2: f64,
-    /// Largest gap between the least-squares quadratic and the line, relative to the height the line
-    /// spans: 0 for a straight flank.
+    /// Largest gap between the least-squares quadratic and the line, relative to the height the
+    /// line spans: 0 for a straight flank.
     pub curvature: f64,
 }
 

@@ -320,7 +320,8 @@ pub fn write_case(dir: &Path, case: &LiggghtsCase) -> Result<()> {
     crate::error::write_atomic(&dir.join(INPUT_FILE), input_script(case).as_bytes())
 }
 
-/// Writes the case into `dir`, runs LIGGGHTS from [`super::find_binary`] there and reads the results.
+/// Writes the case into `dir`, runs LIGGGHTS from [`super::find_binary`] there and reads the
+/// results.
 pub fn run(dir: &Path, case: &LiggghtsCase) -> Result<LiggghtsResult> {
     run_with_binary(&require_binary()?, dir, case)
 }

@@ -337,12 +337,15 @@ fn pick(col: &[f64], idx: &[usize]) -> Vec<f64> {
     idx.iter().map(|&i| col[i]).collect()
 }
 
+/// Columns of numbers, `columns[k][row]`.
+type Columns = Vec<Vec<f64>>;
+
 /// The rows of one fit: which are trained on, which held out, and the validation set.
 struct Rows<'a> {
     train: &'a [usize],
     test: &'a [usize],
     /// The validation table's columns (inputs then targets) and its scaled inputs.
-    validation: Option<(Vec<Vec<f64>>, Vec<Vec<f64>>)>,
+    validation: Option<(Columns, Columns)>,
 }
 
 /// Fits one response and scores it.

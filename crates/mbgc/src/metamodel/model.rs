@@ -8,6 +8,7 @@ use mbgc_sr::{self as gp, Node};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The `format` tag every model file carries; a JSON file without it is not a metamodel.
 pub const FORMAT: &str = "mbgc-metamodel";
 /// Deepest equation tree a model file may hold (`mbgc fit` limits trees to 64 nodes).
 pub const MAX_TREE_DEPTH: usize = 512;
@@ -31,6 +32,7 @@ fn tree_depth(program: &[Node]) -> usize {
     }
     deepest
 }
+/// Version of the model-file layout this library writes and reads; other versions are refused.
 pub const VERSION: u32 = 1;
 
 /// How a physical input becomes the equation's variable: `(t(x) - offset) / width`, with `t` the
@@ -39,12 +41,29 @@ pub const VERSION: u32 = 1;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Transform {
+    /// The physical value itself (an input the space fixes, an absorbed input, a fit without a
+    /// space file).
     Identity,
-    Linear { offset: f64, width: f64 },
-    Log { offset: f64, width: f64 },
+    /// `(x - offset) / width`: a linear-scale parameter mapped to [0, 1] over its space bounds.
+    Linear {
+        /// The lower bound of the parameter, in its physical unit.
+        offset: f64,
+        /// Upper minus lower bound, in the physical unit.
+        width: f64,
+    },
+    /// `(ln x - offset) / width`: a log-scale parameter (moduli, groups spanning decades) mapped
+    /// to [0, 1]; `x` must be positive.
+    Log {
+        /// `ln` of the lower end of the range (a space bound, or a group's smallest value in
+        /// the data).
+        offset: f64,
+        /// `ln(upper) - ln(lower)`, the width of the range in natural-log units.
+        width: f64,
+    },
 }
 
 impl Transform {
+    /// The equation's variable for the physical value `x` (not finite for `x <= 0` under `Log`).
     #[inline]
     pub fn apply(&self, x: f64) -> f64 {
         match self {
@@ -55,9 +74,12 @@ impl Transform {
     }
 }
 
+/// One input of the metamodel: a DEM parameter (or PSD parameter) as the equations read it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Input {
+    /// The parameter's name in the space file and the training table (`mu_pp`, `E_p`, `d50`).
     pub name: String,
+    /// How the physical value is scaled before the equations see it.
     pub transform: Transform,
     /// Smallest and largest value in the data the model was fitted on: its valid domain.
     pub domain: [f64; 2],
@@ -78,21 +100,29 @@ fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f6
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
+/// Accuracy of an equation on a set of rows, in the response's physical unit.
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct Metrics {
+    /// Rows scored.
     pub rows: usize,
     // NaN (R^2 of a single test row) is written as JSON null, and must read back.
+    /// Coefficient of determination `1 - SS_res / SS_tot`; NaN when the observed values do not
+    /// vary (a single row). Negative when the equation is worse than the rows' mean.
     #[serde(deserialize_with = "nan_if_null")]
     pub r2: f64,
+    /// Root-mean-square residual, in the response's unit: compare it with the measurement's sd.
     #[serde(deserialize_with = "nan_if_null")]
     pub rmse: f64,
+    /// Mean absolute residual, in the response's unit.
     #[serde(deserialize_with = "nan_if_null")]
     pub mae: f64,
+    /// Largest absolute residual, in the response's unit: the worst run the equation misses.
     #[serde(deserialize_with = "nan_if_null")]
     pub max_abs_error: f64,
 }
 
 impl Metrics {
+    /// Scores `predicted` against `observed` (same length); all zero for no rows.
     pub fn of(observed: &[f64], predicted: &[f64]) -> Metrics {
         let n = observed.len();
         if n == 0 {
@@ -119,12 +149,18 @@ impl Metrics {
 /// Residual (observed - predicted) quantiles.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Quantile {
+    /// Probability level in [0, 1] (0 and 1: the smallest and largest residual).
     pub q: f64,
+    /// The residual at that level, in the response's unit.
     pub residual: f64,
 }
 
+/// Levels at which a model file records its residual distribution: extremes, 5/95 %, quartiles
+/// and median.
 pub const QUANTILES: [f64; 7] = [0.0, 0.05, 0.25, 0.5, 0.75, 0.95, 1.0];
 
+/// The residuals `observed - predicted` at each level of [`QUANTILES`], linearly interpolated
+/// between order statistics; empty for no rows.
 pub fn residual_quantiles(observed: &[f64], predicted: &[f64]) -> Vec<Quantile> {
     let mut r: Vec<f64> = observed.iter().zip(predicted).map(|(y, p)| y - p).collect();
     if r.is_empty() {
@@ -146,37 +182,62 @@ pub fn residual_quantiles(observed: &[f64], predicted: &[f64]) -> Vec<Quantile> 
         .collect()
 }
 
+/// One equation of the Pareto front of size against error that GP returned for a response: the
+/// simplest equation at each accuracy, kept so a user can trade readability for accuracy.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FrontMember {
+    /// Nodes of the equation as GP fitted it (over the groups, when fitted in groups): its
+    /// complexity.
     pub size: usize,
+    /// R^2 on the training rows in the fitted response (with a similarity, the dimensionless one).
     pub train_r2: f64,
+    /// R^2 on the held-out test rows, in the physical response; `None` without test rows or where
+    /// the equation is not finite on one of them.
     pub test_r2: Option<f64>,
     /// 1 - the cross-validated normalised error, when the selection rule computed it (in the
     /// fitted response: with a similarity, the dimensionless one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cv_r2: Option<f64>,
+    /// The equation in the input symbols (Python/sympy syntax, constants exact).
     pub equation: String,
+    /// The equation as a postfix program over the transformed inputs.
     pub program: Vec<Node>,
 }
 
+/// The fitted equation of one response (a bulk measurement such as the shear angle or bulk
+/// density) with its accuracy, its Pareto front and how it was found.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ResponseModel {
+    /// The response's column name in the training table and a material's `[measured]` key.
     pub name: String,
     /// The equation in the input symbols (Python/sympy syntax, constants exact).
     pub equation: String,
     /// The equation as a postfix program over the transformed inputs (what predictions evaluate).
     pub program: Vec<Node>,
+    /// Nodes of the selected equation as GP fitted it (before groups and factor are written
+    /// out): its position on the Pareto front.
     pub size: usize,
     /// Inputs the equation reads.
     pub uses: Vec<String>,
+    /// Accuracy on the rows the equation was fitted to.
     pub train: Metrics,
+    /// Accuracy on the held-out test rows (`None` with a test fraction of 0).
     pub test: Option<Metrics>,
+    /// Distribution of the training residuals at the levels of [`QUANTILES`].
     pub train_residual_quantiles: Vec<Quantile>,
+    /// Distribution of the test residuals (empty without test rows).
     pub test_residual_quantiles: Vec<Quantile>,
+    /// The non-dominated equations of size against error, smallest first; the selected one is
+    /// among them.
     pub pareto_front: Vec<FrontMember>,
+    /// The rule that picked the equation from the front, in words.
     pub selection_rule: String,
+    /// GP populations evaluated (the most of any restart; fewer than asked when the error
+    /// converged).
     pub generations: usize,
+    /// Nodes times rows evaluated, constant tuning included: the machine-independent cost.
     pub node_evals: u64,
+    /// Wall-clock time of the search, s.
     pub seconds: f64,
     /// With a similarity: the equation as fitted, in the groups and the dimensionless response
     /// (what `program` computes once the groups and the factor are written out).
@@ -190,7 +251,11 @@ pub struct ResponseModel {
 /// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GroupedEquation {
+    /// Name of the fitted (dimensionless) response, e.g. `phi` for bulk density over rho_p; the
+    /// response's own name when it was fitted unscaled.
     pub fitted: String,
+    /// The equation GP fitted, over the scaled symbols of the inputs it was offered (`mu_pp_u`)
+    /// and of the groups (`K_p_u`).
     pub equation: String,
     /// `response = factor * fitted` (None: the response itself was fitted).
     pub factor: Option<Monomial>,
@@ -200,36 +265,57 @@ pub struct GroupedEquation {
 /// the data (the model's valid domain in that group).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GroupDomain {
+    /// The group: its name, meaning and monomial in the inputs (e.g. K_p = E_p / (rho_p g d50)).
     pub group: Group,
     /// `u = (ln G - offset) / width` is the variable the fitted equation read.
     pub transform: Transform,
+    /// Smallest and largest value of the group over the data: calibration keeps it inside.
     pub domain: [f64; 2],
 }
 
+/// Which data a model was fitted to and how the rows were split, so a fit can be traced and
+/// repeated.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DataSource {
+    /// The training table's path (or the label of a table built in memory).
     pub file: String,
     /// FNV-1a 64 of the file's bytes, hex.
     pub fnv1a64: String,
+    /// Usable rows (finished runs with every value).
     pub rows: usize,
+    /// Rows the equations were fitted to.
     pub train_rows: usize,
+    /// Rows held out for the test metrics (a seeded shuffle).
     pub test_rows: usize,
+    /// The requested held-out share, in [0, 0.9].
     pub test_fraction: f64,
+    /// Campaign rows left out because their run did not finish.
     pub skipped_rows: usize,
     /// Finished runs without a value of some response (NaN), left out.
     #[serde(default)]
     pub no_value_rows: usize,
 }
 
+/// A global metamodel: one readable equation per response of a calibration experiment, valid over
+/// the box its DEM runs covered. It replaces the DEM in calibration (microseconds instead of
+/// hours per evaluation) and is saved and loaded as one JSON file.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Metamodel {
+    /// Always [`FORMAT`].
     pub format: String,
+    /// Always [`VERSION`].
     pub version: u32,
+    /// The program and version that wrote the file (`mbgc 0.1.0`).
     pub created_by: String,
+    /// The inputs in the order the equations number their variables and predictions take them.
     pub inputs: Vec<Input>,
+    /// One fitted equation per response.
     pub responses: Vec<ResponseModel>,
+    /// The GP settings of the fit, so it can be repeated.
     pub settings: gp::Config,
+    /// The GP seed (also the seed of the train/test shuffle).
     pub seed: u64,
+    /// The training table and its split.
     pub data: DataSource,
     /// The model class of the DEM runs the model was fitted on (comma-separated effects); null
     /// when the data did not say (a table not from DEM runs, or a model file written before
@@ -253,7 +339,9 @@ pub struct Metamodel {
 /// A parameter held at one value in every training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Constant {
+    /// The parameter's name in the space.
     pub name: String,
+    /// Its value in every run, in the parameter's physical unit.
     pub value: f64,
 }
 
@@ -358,19 +446,23 @@ impl Metamodel {
         Ok(m)
     }
 
+    /// Writes the model as pretty-printed JSON, atomically (readers never see half a file).
     pub fn save(&self, path: &Path) -> Result<()> {
         let text = serde_json::to_string_pretty(self).map_err(|e| Error::invalid(e.to_string()))?;
         write_atomic(path, text.as_bytes())
     }
 
+    /// The inputs' names, in model order.
     pub fn input_names(&self) -> Vec<String> {
         self.inputs.iter().map(|i| i.name.clone()).collect()
     }
 
+    /// The variable names the equations use, in model order (`name_u` for a scaled input).
     pub fn symbols(&self) -> Vec<String> {
         self.inputs.iter().map(Input::symbol).collect()
     }
 
+    /// The equation of the response called `name`.
     pub fn response(&self, name: &str) -> Option<&ResponseModel> {
         self.responses.iter().find(|r| r.name == name)
     }

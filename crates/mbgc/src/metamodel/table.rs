@@ -8,6 +8,7 @@ use std::path::Path;
 /// Named numeric columns of a table.
 #[derive(Clone, Debug)]
 pub struct Columns {
+    /// Every column name of the table, in file order.
     pub header: Vec<String>,
     /// `values[k][row]` for the k-th requested name.
     pub values: Vec<Vec<f64>>,

@@ -14,8 +14,9 @@ use crate::error::{Error, Result};
 pub struct Series<'a> {
     /// Name of the model class, shown in the legend.
     pub label: &'a str,
-    /// (d50 in mm, standardised residual z) per sample for [`residuals_against_d50`]; for [`ladder`],
-    /// one point per sample in sample order, of which only the RMS residual (second value) is drawn.
+    /// (d50 in mm, standardised residual z) per sample for [`residuals_against_d50`]; for
+    /// [`ladder`], one point per sample in sample order, of which only the RMS residual (second
+    /// value) is drawn.
     pub points: Vec<(f64, f64)>,
 }
 

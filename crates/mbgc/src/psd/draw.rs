@@ -44,7 +44,8 @@ pub fn truncated_q3(dist: &Distribution, (d_min, d_max): (f64, f64), x: f64) -> 
 /// A drawn particle set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParticleSet {
-    /// Particle diameters in drawing order, mm; their number density is q0 ∝ q3 / x^3 on [d_min, d_max].
+    /// Particle diameters in drawing order, mm; their number density is q0 ∝ q3 / x^3 on [d_min,
+    /// d_max].
     pub diameters_mm: Vec<f64>,
     /// Lower end of the size range used, mm; no drawn diameter is smaller.
     pub d_min: f64,

@@ -25,7 +25,8 @@ pub struct Metrics {
     pub cov: f64,
     /// Squared centered L2 discrepancy (Hickernell 1998); smaller is more uniform.
     pub cd: f64,
-    /// Squared wrap-around L2 discrepancy, which treats the cube as a torus; smaller is more uniform.
+    /// Squared wrap-around L2 discrepancy, which treats the cube as a torus; smaller is more
+    /// uniform.
     pub wd: f64,
 }
 

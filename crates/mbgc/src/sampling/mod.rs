@@ -29,8 +29,8 @@ pub enum Method {
     /// Fully sequential space-filling, forward variant (Shang & Apley 2020): greedy maximin over a
     /// fixed scrambled-Sobol candidate set; the method the MBGC paper recommends.
     FssfF,
-    /// FSSF forward-reflected: as FSSF-f, but each candidate's mirror image in the nearest cube face
-    /// counts as a design point, which keeps points off the boundary.
+    /// FSSF forward-reflected: as FSSF-f, but each candidate's mirror image in the nearest cube
+    /// face counts as a design point, which keeps points off the boundary.
     FssfFr,
     /// Monte Carlo intersite-projected-threshold (Crombecq et al. 2011): space-filling and
     /// non-collapsing in every 1-D projection, but close to random sampling in high dimension.
@@ -39,10 +39,11 @@ pub enum Method {
     Sobol,
     /// Halton sequence with random digit permutations, extensible like Sobol.
     Halton,
-    /// Classic Latin hypercube: one point per stratum in every dimension; one-shot, cannot be extended.
+    /// Classic Latin hypercube: one point per stratum in every dimension; one-shot, cannot be
+    /// extended.
     Lhs,
-    /// Latin hypercube improved by coordinate swaps towards maximin distance (Morris-Mitchell phi_50);
-    /// one-shot.
+    /// Latin hypercube improved by coordinate swaps towards maximin distance (Morris-Mitchell
+    /// phi_50); one-shot.
     LhsMaximin,
     /// Independent uniform points: the baseline every space-filling method must beat.
     Random,

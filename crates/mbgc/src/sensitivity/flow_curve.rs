@@ -23,7 +23,8 @@ pub struct Constant {
     /// The estimate, in the constant's unit (FR0 in the data's flow-rate unit, K in s, n
     /// dimensionless); always > 0.
     pub value: f64,
-    /// The 95 % interval [low, high], mapped back from the log scale, so not symmetric about `value`.
+    /// The 95 % interval [low, high], mapped back from the log scale, so not symmetric about
+    /// `value`.
     pub ci95: [f64; 2],
 }
 

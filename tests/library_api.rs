@@ -1,0 +1,236 @@
+//! The library as a program calls it, without the command line: a fit from columns in memory,
+//! options checked by the library, errors a caller can match on, and `train` with an observer.
+
+use std::cell::RefCell;
+use std::path::Path;
+
+use mbgc::calibrate::session::{self, SessionOptions};
+use mbgc::gp::Config;
+use mbgc::material::Material;
+use mbgc::metamodel::{fit, FitSettings, Metamodel, TrainingTable};
+use mbgc::train::{train, TrainObserver, TrainOutcome, TrainRequest, TrainStage};
+use mbgc::Error;
+
+/// y = 0.2 + 0.5 a + 0.3 b on a 6 x 6 grid of the unit square.
+fn plane() -> TrainingTable {
+    let (mut a, mut b, mut y) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..6 {
+        for j in 0..6 {
+            let (x1, x2) = (i as f64 / 5.0, j as f64 / 5.0);
+            a.push(x1);
+            b.push(x2);
+            y.push(0.2 + 0.5 * x1 + 0.3 * x2);
+        }
+    }
+    TrainingTable::from_columns(
+        "plane",
+        vec![("a".into(), a), ("b".into(), b), ("y".into(), y)],
+    )
+    .unwrap()
+}
+
+fn settings() -> FitSettings {
+    FitSettings::new(vec!["a".into(), "b".into()], vec!["y".into()])
+        .test_fraction(0.0)
+        .config(Config {
+            population: 300,
+            generations: 10,
+            seed: 3,
+            ..Config::default()
+        })
+}
+
+fn model() -> Metamodel {
+    fit(&plane(), &settings(), |_, _| {}).unwrap().model
+}
+
+#[test]
+fn a_fit_in_memory_equals_the_fit_of_the_same_table_read_from_a_file() {
+    let table = plane();
+    let fitted = fit(&table, &settings(), |_, _| {}).unwrap();
+    assert!(
+        fitted.model.responses[0].train.r2 > 0.999,
+        "{:?}",
+        fitted.model.responses[0]
+    );
+    assert_eq!(fitted.splits.len(), 1);
+    assert_eq!(fitted.splits[0].train.observed.len(), 36);
+    assert!(fitted.splits[0].test.is_none());
+    // The same numbers through a CSV file: the same equation (only the data's name and
+    // fingerprint differ).
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("plane.csv");
+    let mut csv = String::from("a,b,y\n");
+    for r in 0..table.rows() {
+        let v: Vec<String> = table.columns.iter().map(|c| c.1[r].to_string()).collect();
+        csv.push_str(&(v.join(",") + "\n"));
+    }
+    std::fs::write(&path, csv).unwrap();
+    let read = TrainingTable::read_csv(&path, &["a".into(), "b".into()], &["y".into()]).unwrap();
+    let from_file = fit(&read, &settings(), |_, _| {}).unwrap();
+    assert_eq!(
+        from_file.model.responses[0].equation,
+        fitted.model.responses[0].equation
+    );
+    assert_ne!(from_file.model.data.fnv1a64, fitted.model.data.fnv1a64);
+}
+
+#[test]
+fn a_table_in_memory_is_checked_as_a_file_would_be() {
+    let short = TrainingTable::from_columns(
+        "t",
+        vec![("a".into(), vec![1.0, 2.0]), ("y".into(), vec![1.0])],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        short.contains("t: column y") && short.contains("2 values"),
+        "{short}"
+    );
+    let nan = TrainingTable::from_columns("t", vec![("a".into(), vec![1.0, f64::NAN])])
+        .unwrap_err()
+        .to_string();
+    assert!(nan.contains("column a, row 2"), "{nan}");
+    let missing = fit(
+        &plane(),
+        &FitSettings::new(vec!["a".into()], vec!["z".into()]),
+        |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(missing.contains("plane: column z"), "{missing}");
+}
+
+#[test]
+fn settings_are_checked_by_the_library_before_anything_runs() {
+    let e = fit(&plane(), &settings().test_fraction(0.95), |_, _| {}).unwrap_err();
+    assert!(e.to_string().contains("--test-fraction"), "{e}");
+    let e = settings().test_fraction(0.95).check().unwrap_err();
+    assert!(matches!(e, Error::Invalid(_)));
+
+    let m = model();
+    let material =
+        Material::from_toml_str("[measured]\ny = { value = 0.6, sd = 0.01 }\n", "m.toml").unwrap();
+    // Zero starts from Rust is refused by name, not reported as a model without finite values.
+    let e = session::run(&material, &m, "plane", &SessionOptions::default().starts(0))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--starts 0"), "{e}");
+    let e = session::run(
+        &material,
+        &m,
+        "plane",
+        &SessionOptions {
+            bayes: true,
+            samples: 3,
+            ..SessionOptions::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("--samples 3"), "{e}");
+}
+
+#[test]
+fn calibration_errors_say_what_went_wrong_by_their_kind() {
+    let m = model();
+    let measured = "[measured]\ny = { value = 0.6, sd = 0.01 }\n";
+    // A fixed value outside the fitted domain [0, 1] of b.
+    let outside =
+        Material::from_toml_str(&format!("{measured}[fixed]\nb = 1.5\n"), "o.toml").unwrap();
+    let e = session::run(&outside, &m, "plane", &SessionOptions::default()).unwrap_err();
+    assert!(
+        matches!(&e, Error::OutOfDomain { file, field, .. } if file == "o.toml" && field == "fixed.b"),
+        "{e:?}"
+    );
+    // Constraints no point of the box meets.
+    let impossible = Material::from_toml_str(
+        &format!("{measured}[constraints]\nexpr = [\"a + b >= 3\"]\n"),
+        "c.toml",
+    )
+    .unwrap();
+    let e = session::run(&impossible, &m, "plane", &SessionOptions::default()).unwrap_err();
+    assert!(matches!(e, Error::Infeasible(_)), "{e:?}");
+    // A material the model fits: the best optimum reproduces the measurement.
+    let fine = Material::from_toml_str(&format!("{measured}[fixed]\nb = 0.5\n"), "f.toml").unwrap();
+    let s = session::run(&fine, &m, "plane", &SessionOptions::default()).unwrap();
+    let a = s.best().x[0];
+    assert!((a - 0.5).abs() < 0.02, "a = {a}");
+}
+
+/// Records what a train tells its observer.
+#[derive(Default)]
+struct Log {
+    notes: RefCell<Vec<(TrainStage, String)>>,
+    generations: RefCell<usize>,
+}
+
+impl TrainObserver for Log {
+    fn note(&self, stage: TrainStage, text: &str) {
+        self.notes.borrow_mut().push((stage, text.to_string()));
+    }
+    fn fit_progress(&self, _response: &str, _p: &mbgc::gp::Progress) {
+        *self.generations.borrow_mut() += 1;
+    }
+}
+
+#[test]
+fn train_runs_as_a_library_call_and_reports_to_its_observer() {
+    let dir = tempfile::tempdir().unwrap();
+    let space = dir.path().join("space.toml");
+    std::fs::write(
+        &space,
+        "name = \"t\"\n[parameters]\nx = { min = 0.0, max = 1.0 }\ny = { min = 0.0, max = 1.0 }\n",
+    )
+    .unwrap();
+    let req = TrainRequest {
+        out_dir: dir.path().to_path_buf(),
+        responses: vec!["f".into()],
+        validation: 4,
+        figures: false,
+        config: Config {
+            population: 200,
+            generations: 3,
+            ..Config::default()
+        },
+        ..TrainRequest::new(space.clone(), "sleep-test", 10)
+    };
+    let log = Log::default();
+    let TrainOutcome::Fitted {
+        model,
+        paths,
+        figures,
+        ..
+    } = train(&req, &log).unwrap()
+    else {
+        panic!("expected a fitted model");
+    };
+    assert!(figures.is_empty());
+    assert!(paths.model.exists() && paths.model.with_extension("rs").exists());
+    assert!(
+        !Path::new(&paths.figures).exists(),
+        "figures were not asked for"
+    );
+    assert_eq!(model.data.rows, 10);
+    assert!(model.responses[0].validation.is_some());
+    let notes = log.notes.borrow();
+    for stage in [TrainStage::Sample, TrainStage::Simulate] {
+        assert_eq!(
+            notes.iter().filter(|(s, _)| *s == stage).count(),
+            2,
+            "{stage}: {notes:?}"
+        );
+    }
+    assert!(*log.generations.borrow() >= 3);
+    // Options a train cannot honour are refused by the library.
+    let bad = TrainRequest {
+        threads: 0,
+        ..req.clone()
+    };
+    assert!(train(&bad, &log)
+        .unwrap_err()
+        .to_string()
+        .contains("--threads"));
+    let few = TrainRequest { n: 3, ..req };
+    assert!(train(&few, &log).unwrap_err().to_string().contains("--n 3"));
+}
