@@ -1,5 +1,5 @@
 //! `mbgc effects`: the physical effects a model class can switch on, with their parameters
-//! (names, units, allowed ranges), as a Markdown table (the README's is this output) or JSON.
+//! (names, units, allowed ranges), as a Markdown table (the guide's, docs/guide/src/dem-engine.md, is this output) or JSON.
 
 use clap::Args;
 

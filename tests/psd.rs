@@ -216,7 +216,7 @@ fn example_sieve_file_fits_lognormal_near_paper_values() {
 }
 
 /// The least-squares optimum of each model on the example file, as printed by
-/// `mbgc psd fit examples/sieve_gravel_8_16.csv` and listed in the README: the fit is a unique
+/// `mbgc psd fit examples/sieve_gravel_8_16.csv` and listed in the guide's PSD chapter (docs/guide/src/psd.md): the fit is a unique
 /// minimum, so any solver that reaches it must reproduce these digits.
 #[test]
 fn example_sieve_fits_reproduce_the_published_table() {

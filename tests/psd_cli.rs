@@ -39,7 +39,7 @@ fn fit_json_is_the_whole_stdout_with_best_models_and_metamodel_inputs() {
         assert!(params.values().all(|p| p.as_f64().is_some_and(|x| x > 0.0)));
         let r2 = m["r2"].as_f64().expect("r2");
         let mse = m["mse"].as_f64().expect("mse");
-        // The command's JSON carries the same fits as the README's table (to its digits).
+        // The command's JSON carries the same fits as the guide's PSD table (docs/guide/src/psd.md, to its digits).
         let (want_r2, want_mse) = match m["model"].as_str() {
             Some("ggs") => (0.98449, 2.33e-3),
             Some("rrsb") => (0.99629, 5.57e-4),

@@ -34,7 +34,7 @@ struct Case {
 }
 
 /// The local models of the cohesion walk-through: version 1 (no cohesion) and version 2, made
-/// from it by `mbgc train --extends diagnose_local` (README, "Adding an effect").
+/// from it by `mbgc train --extends diagnose_local` (the guide's diagnosis chapter, docs/guide/src/diagnosis.md).
 const LOCAL: &[&str] = &[
     "models/diagnose_local.json",
     "models/diagnose_local_sjkr.json",

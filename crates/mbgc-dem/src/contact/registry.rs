@@ -4,9 +4,10 @@
 //! power-law dashpots, the tangential variants): the force loop is compiled once per distinct
 //! combination of kernels, not per effect.
 //!
-//! Registering an effect is one line here (after writing its file; see the README, "Adding a
-//! physical effect"). The slot enums ([`NormalKind`](super::NormalKind), ...) and the dispatch
-//! ([`with_law!`](crate::with_law)) are generated from this list.
+//! Registering an effect is one line here (after writing its file; see "Add a physical effect"
+//! in the guide, docs/guide/src/extending.md). The slot enums
+//! ([`NormalKind`](super::NormalKind), ...) and the dispatch ([`with_law!`](crate::with_law)) are
+//! generated from this list.
 
 /// Calls `$callback! { { $args } normal [...] tangential [...] rolling [...] cohesion [...] }`.
 #[doc(hidden)]

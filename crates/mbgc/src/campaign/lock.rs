@@ -12,7 +12,27 @@ use crate::error::{Error, Result};
 #[derive(Debug)]
 pub struct TableLock {
     _file: File,
+    /// The table itself, locked too when it exists: a hard link elsewhere names the same file
+    /// under another lock file.
+    _table: Option<File>,
     path: PathBuf,
+}
+
+/// The table's own path with symlinks and `..` resolved (its folder's, when the table does not
+/// exist yet), so that every name of one table leads to one lock file.
+fn resolved(table: &Path) -> Result<PathBuf> {
+    if table.exists() {
+        return std::fs::canonicalize(table).map_err(|e| Error::io(table, e));
+    }
+    let name = table
+        .file_name()
+        .ok_or_else(|| Error::invalid(format!("{}: not a file path", table.display())))?;
+    match table.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if dir.exists() => Ok(std::fs::canonicalize(dir)
+            .map_err(|e| Error::io(dir, e))?
+            .join(name)),
+        _ => Ok(table.to_path_buf()),
+    }
 }
 
 /// The lock file of a table: `<table>.lock`.
@@ -25,7 +45,17 @@ pub fn lock_path(table: &Path) -> PathBuf {
 impl TableLock {
     /// Takes the lock of `table`, or fails at once (never waits) when another process holds it.
     pub fn acquire(table: &Path) -> Result<TableLock> {
-        let path = lock_path(table);
+        // A device, a FIFO or a directory is no table: reading it would never end or block.
+        if let Ok(meta) = std::fs::metadata(table) {
+            if !meta.is_file() {
+                return Err(Error::invalid(format!(
+                    "{}: exists and is not a regular file: expected a campaign table (a CSV \
+                     file) to create or resume",
+                    table.display()
+                )));
+            }
+        }
+        let path = lock_path(&resolved(table)?);
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
@@ -35,17 +65,37 @@ impl TableLock {
             .write(true)
             .open(&path)
             .map_err(|e| Error::io(&path, e))?;
-        match file.try_lock() {
-            Ok(()) => Ok(TableLock { _file: file, path }),
-            Err(TryLockError::WouldBlock) => Err(Error::invalid(format!(
+        let busy = |path: &Path| {
+            Error::invalid(format!(
                 "{}: another mbgc process is writing this table (it holds {}); wait for it to \
                  finish, or give this run another --out (shards: one table each, then `mbgc \
                  campaign merge`)",
                 table.display(),
                 path.display()
-            ))),
-            Err(TryLockError::Error(e)) => Err(Error::io(&path, e)),
+            ))
+        };
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(TryLockError::WouldBlock) => return Err(busy(&path)),
+            Err(TryLockError::Error(e)) => return Err(Error::io(&path, e)),
         }
+        let table_file = match OpenOptions::new().read(true).open(table) {
+            Ok(f) => {
+                match f.try_lock() {
+                    Ok(()) => {}
+                    Err(TryLockError::WouldBlock) => return Err(busy(table)),
+                    Err(TryLockError::Error(e)) => return Err(Error::io(table, e)),
+                }
+                Some(f)
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => return Err(Error::io(table, e)),
+        };
+        Ok(TableLock {
+            _file: file,
+            _table: table_file,
+            path,
+        })
     }
 
     /// The lock file held, next to the table.
@@ -71,5 +121,42 @@ mod tests {
         );
         drop(first);
         TableLock::acquire(&table).unwrap();
+    }
+
+    /// Another name of the same table (a symlink, a hard link, a path through `..`) is the
+    /// same table: its writer is refused too.
+    #[test]
+    fn every_name_of_a_table_shares_its_lock() {
+        let dir = tempfile::tempdir().unwrap();
+        let table = dir.path().join("run.csv");
+        std::fs::write(&table, "run_id\n").unwrap();
+        let sub = dir.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        let first = TableLock::acquire(&table).unwrap();
+        let soft = dir.path().join("soft.csv");
+        std::os::unix::fs::symlink(&table, &soft).unwrap();
+        let hard = sub.join("hard.csv");
+        std::fs::hard_link(&table, &hard).unwrap();
+        for other in [soft, hard, sub.join("../run.csv")] {
+            let e = TableLock::acquire(&other).unwrap_err().to_string();
+            assert!(
+                e.contains("another mbgc process"),
+                "{}: {e}",
+                other.display()
+            );
+        }
+        drop(first);
+        TableLock::acquire(&sub.join("hard.csv")).unwrap();
+    }
+
+    #[test]
+    fn a_device_or_a_fifo_is_no_table() {
+        for target in ["/dev/full", "/dev/null"] {
+            let e = TableLock::acquire(Path::new(target))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
+        assert!(!Path::new("/dev/full.lock").exists());
     }
 }

@@ -115,7 +115,7 @@ pub fn read_table(path: &Path) -> Result<Table> {
     }
     let mut complete_len = bytes.len();
     if let Some(last) = raw.last() {
-        let start = last.position().map(|p| p.byte() as usize).unwrap_or(0);
+        let start = record_start(&bytes, last);
         let trim = |b: &[u8]| b.trim_ascii_end().to_vec();
         let whole = bytes.ends_with(b"\n")
             && (raw.len() == 1 || last.len() == raw[0].len())
@@ -138,7 +138,7 @@ pub fn read_table(path: &Path) -> Result<Table> {
     };
     let mut out = Vec::new();
     for r in records {
-        let line = r.position().map(|p| p.line()).unwrap_or(0);
+        let line = record_line(&bytes, &r);
         if r.len() != header.len() {
             return Err(Error::input(
                 &file,
@@ -162,6 +162,24 @@ pub fn read_table(path: &Path) -> Result<Table> {
     })
 }
 
+/// Where a record's text starts. The csv reader ends a record at the `\r` of a CRLF line end
+/// (files from Windows, or git's autocrlf) and reports the next one as starting at the `\n`;
+/// that byte still belongs to the line before.
+fn record_start(bytes: &[u8], rec: &ByteRecord) -> usize {
+    let start = rec.position().map_or(0, |p| p.byte() as usize);
+    if start > 0 && bytes.get(start) == Some(&b'\n') && bytes[start - 1] == b'\r' {
+        start + 1
+    } else {
+        start
+    }
+}
+
+/// The file line a record starts on (1-based), counted as an editor counts it, CRLF or not.
+fn record_line(bytes: &[u8], rec: &ByteRecord) -> u64 {
+    let start = record_start(bytes, rec).min(bytes.len());
+    1 + bytes[..start].iter().filter(|&&b| b == b'\n').count() as u64
+}
+
 /// The index of `name` in a header.
 pub fn column(header: &[String], name: &str) -> Option<usize> {
     header.iter().position(|h| h == name)
@@ -170,6 +188,36 @@ pub fn column(header: &[String], name: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A table whose line ends were turned into CRLF (git's autocrlf) reads as the same table:
+    /// every run complete, nothing to truncate, the lines numbered as an editor shows them.
+    #[test]
+    fn a_crlf_table_is_read_whole_with_its_editor_line_numbers() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        let lf = "a,b\n1,2\n3,4\n5,\n";
+        std::fs::write(&path, lf.replace('\n', "\r\n")).unwrap();
+        let t = read_table(&path).unwrap();
+        assert_eq!(t.partial_len, 0, "{t:?}");
+        assert_eq!(t.records.len(), 3);
+        let lines: Vec<u64> = t.records.iter().map(|r| r.0).collect();
+        assert_eq!(lines, [2, 3, 4]);
+        // An interrupted CRLF append: only its bytes are set aside, the line before keeps its
+        // whole line end.
+        std::fs::write(&path, lf.replace('\n', "\r\n") + "7").unwrap();
+        let t = read_table(&path).unwrap();
+        assert_eq!(t.records.len(), 3);
+        assert_eq!(t.partial_len, 1);
+        // The same lines in LF: the same numbers.
+        std::fs::write(&path, lf).unwrap();
+        let lines: Vec<u64> = read_table(&path)
+            .unwrap()
+            .records
+            .iter()
+            .map(|r| r.0)
+            .collect();
+        assert_eq!(lines, [2, 3, 4]);
+    }
     use crate::campaign::Backend;
     use crate::experiments::{Diagnostics, ParamSet};
 

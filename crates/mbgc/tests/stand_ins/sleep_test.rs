@@ -1,7 +1,7 @@
 //! `sleep-test`: a stand-in experiment for the tests of the campaign machinery (kill and resume,
 //! failures, panics). It is never part of a binary users build: `campaign` includes this file
 //! only under `#[cfg(test)]` or the `stand-ins` feature, which only `cargo test` switches on
-//! (through the package's dev-dependency on itself).
+//! (through the root package's dev-dependency on `mbgc` with that feature).
 //!
 //! Parameters: `x` in [-1e6, 1e6], `y` in [0, 1e6] (negative `y` is "impossible", to test
 //! [`Experiment::check`]), optional `sleep_ms` (default 0), `fail` and `panic` (a value >= 0.5
