@@ -8,6 +8,7 @@ use clap::Args;
 
 use mbgc::calibrate::session::{self, Session, SessionOptions};
 use mbgc::error::write_atomic;
+use mbgc::material::PsdSpec;
 
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
@@ -50,12 +51,24 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
+    let mut material = crate::builtin::material(&a.material)?;
+    // Files reached through the material are inputs too (its sieve analysis).
+    let sieve = format!("the sieve analysis of {}", a.material.display());
+    let mut inputs: Vec<(&str, &Path)> = vec![("--material", &a.material)];
+    inputs.extend(a.model.iter().map(|m| ("--model", m.as_path())));
+    if let Some(PsdSpec::Sieve(p)) = &material.psd {
+        inputs.push((&sieve, p));
+    }
     if let Some(out) = &a.out {
-        let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--material", &a.material)];
-        inputs.extend(a.model.iter().map(|m| ("--model", m.as_path())));
         refuse_overwriting_inputs("--out", out, &inputs)?;
     }
-    let mut material = crate::builtin::material(&a.material)?;
+    if let Some(dir) = &a.plot {
+        for label in model_labels(&a.model) {
+            for f in figure_names(&label) {
+                refuse_overwriting_inputs("--plot", &dir.join(f), &inputs)?;
+            }
+        }
+    }
     for name in &a.free {
         let before = material.fixed.len();
         material.fixed.retain(|(n, _)| n != name);
@@ -129,21 +142,39 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The posterior corner plot (with `--bayes`) and the solution set (when the data leave one);
-/// returns the files written.
-fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
+/// The models' names as the session records them (the built-in one's when none is given).
+fn model_labels(models: &[PathBuf]) -> Vec<PathBuf> {
+    if models.is_empty() {
+        vec![PathBuf::from(crate::builtin::SHEAR_BOX_MODEL)]
+    } else {
+        models.to_vec()
+    }
+}
+
+/// The figure files of a model: its posterior and its solution set.
+fn figure_names(model: &Path) -> [String; 2] {
     let stem = model
         .file_stem()
         .map_or("model".into(), |s| s.to_string_lossy().to_string());
+    [
+        format!("{stem}_posterior.svg"),
+        format!("{stem}_solution_set.svg"),
+    ]
+}
+
+/// The posterior corner plot (with `--bayes`) and the solution set (when the data leave one);
+/// returns the files written.
+fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
+    let [posterior, solution_set] = figure_names(model);
     let mut figures = Vec::new();
     if let (Some(post), Some(frame)) = (&s.posterior, s.posterior_frame()) {
-        let path = dir.join(format!("{stem}_posterior.svg"));
+        let path = dir.join(posterior);
         let (marks, ranges) = (Some(&frame.marks[..]), Some(&frame.ranges[..]));
         mbgc::plot::corner::corner(&path, &post.names, &post.draws, marks, ranges)?;
         figures.push(path);
     }
     if let Some(good) = s.solution_set() {
-        let path = dir.join(format!("{stem}_solution_set.svg"));
+        let path = dir.join(solution_set);
         mbgc::plot::corner::corner(&path, &s.free, &good, Some(&s.best().x), Some(&s.bounds))?;
         figures.push(path);
     }

@@ -43,14 +43,16 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     if !(a.alpha > 0.0 && a.alpha < 1.0) {
         anyhow::bail!("--alpha: expected a level between 0 and 1, got {}", a.alpha);
     }
-    if a.samples < 100 {
+    let max = mbgc::calibrate::tmcmc::MAX_SAMPLES;
+    if !(100..=max).contains(&a.samples) {
         anyhow::bail!(
-            "--samples: expected at least 100 TMCMC samples per stage, got {}",
+            "--samples: expected 100 to {max} TMCMC samples per stage, got {}",
             a.samples
         );
     }
-    if a.starts == 0 {
-        anyhow::bail!("--starts: expected at least 1");
+    let max_starts = mbgc::calibrate::session::MAX_STARTS;
+    if a.starts == 0 || a.starts > max_starts {
+        anyhow::bail!("--starts {}: expected 1 to {max_starts}", a.starts);
     }
     let out = Output::new(a.json);
     let set = MeasurementSet::from_file(&a.measurements)?;

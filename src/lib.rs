@@ -1,4 +1,11 @@
 //! The command line: one file per subcommand, each with its argument struct and a `run`.
+//!
+//! A program that embeds mbgc (to register its own experiment with
+//! `mbgc::campaign::registry::register`) calls [`main`] after registering.
+
+// The argument structs' doc comments are `mbgc --help`'s text, written for the terminal
+// (`<dir>`, `[model]`), not as rustdoc markup.
+#![allow(rustdoc::invalid_html_tags, rustdoc::broken_intra_doc_links)]
 
 use clap::{Parser, Subcommand};
 

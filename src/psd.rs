@@ -98,6 +98,7 @@ fn run_fit(args: &FitArgs) -> anyhow::Result<()> {
     // Refuse a bad figure name before any output.
     if let Some(plot) = &args.plot {
         mbgc::plot::format_of(plot)?;
+        refuse_overwriting_inputs("--plot", plot, &[("the sieve file", &args.sieve)])?;
     }
     let data = SieveData::read(&args.sieve)?;
     let report = fit_all(&data)?;

@@ -12,7 +12,8 @@ use mbgc::campaign::registry::{experiment_by_name, ExperimentSettings};
 use mbgc::dem::contact::ModelClass;
 use mbgc::error::{read_to_string, Error};
 use mbgc::experiments::{ParamSet, RunOptions};
-use mbgc::material::Material;
+use mbgc::material::{Material, PsdSpec};
+use mbgc::outputs::refuse_overwriting_inputs;
 
 #[derive(Debug, Args)]
 pub struct ValidateArgs {
@@ -169,10 +170,17 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
             anyhow::bail!("--tolerance {t}: expected a positive relative deviation such as 0.05");
         }
     }
+    let material = Material::from_file(&a.material)?;
     if let Some(p) = &a.picture {
         check_picture(p)?;
+        let sieve = format!("the sieve analysis of {}", a.material.display());
+        let mut inputs: Vec<(&str, &std::path::Path)> =
+            vec![("--material", &a.material), ("--params", &a.params)];
+        if let Some(PsdSpec::Sieve(s)) = &material.psd {
+            inputs.push((&sieve, s));
+        }
+        refuse_overwriting_inputs("--picture", p, &inputs)?;
     }
-    let material = Material::from_file(&a.material)?;
     let (mut params, predicted, params_class) = read_params(&a.params)?;
     let class = resolve_class(
         a.model_class,

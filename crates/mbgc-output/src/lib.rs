@@ -2,18 +2,24 @@
 //! standard output holds exactly one JSON object and nothing else, so `mbgc ... --json | jq .`
 //! always works; the human-readable text goes to standard error (as do progress bars, always).
 
+#![warn(missing_docs)]
+
 use serde::Serialize;
 
+/// The destination of one command's report, chosen once by `--json`.
 #[derive(Debug, Clone, Copy)]
 pub struct Output {
     json: bool,
 }
 
 impl Output {
+    /// Text to standard output, or (with `json`) the JSON object there and the text to standard
+    /// error.
     pub fn new(json: bool) -> Output {
         Output { json }
     }
 
+    /// Whether `--json` was given: standard output is reserved for the one JSON object.
     pub fn json(&self) -> bool {
         self.json
     }

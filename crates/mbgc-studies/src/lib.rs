@@ -15,7 +15,10 @@
 //!   (docs/sensitivity.md).
 //! - [`liggghts_backend`]: the shear box as a campaign on mbgc, LIGGGHTS and LIGGGHTS under MPI
 //!   (docs/liggghts_backend.md).
-//! - [`reference`]: the reference codes (`--vs`).
+//! - [`reference`](mod@reference): the reference codes (`--vs`).
+
+// The options' doc comments are `mbgc bench --help`'s text, written for the terminal (`<dir>`).
+#![allow(rustdoc::invalid_html_tags)]
 
 pub mod dem_scene;
 pub mod dem_throughput;

@@ -68,6 +68,15 @@ pub struct Args {
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    mbgc::outputs::refuse_overwriting_inputs(
+        "--report",
+        &a.report,
+        &[
+            ("--material", &a.material),
+            ("--noise", &a.noise),
+            ("--validation-record", &a.validation_record),
+        ],
+    )?;
     // "." is written as nothing, so that the paths read as the README's commands.
     let dir = if a.dir == Path::new(".") {
         PathBuf::new()

@@ -16,7 +16,7 @@
 //!   `e_r ~ N(0, sd_r^2 + s_g measured_r^2)` with `s_g = sigma1_sq` for the cnr group and
 //!   `sigma2_sq` for the ctr group. The model-error variance scales with the *measured* value
 //!   (the paper's `Sigma_m = sigma^2 diag(y_hat^2)`), not with the prediction as in
-//!   [`super::bayes`], and the sampled parameters are the variances `sigma^2` themselves (Table 4
+//!   [`mbgc::calibrate::bayes`], and the sampled parameters are the variances `sigma^2` themselves (Table 4
 //!   prints `sigma1 = 0.0045` where the text says the error is 6.7 % = sqrt(0.0045)).
 //! - Each likelihood evaluation runs one DEM impact per measured angle (6 impacts, each giving
 //!   cnr and ctr). An impact that does not end (an overdamped ball that stays on the wall) has
@@ -2480,6 +2480,9 @@ pub struct Args {
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    if let Some(report) = &a.report {
+        mbgc::outputs::refuse_overwriting_inputs("--report", report, &[("--data", &a.data)])?;
+    }
     let settings = StudySettings {
         burn_in: a.burn_in,
         replicates: a.replicates,

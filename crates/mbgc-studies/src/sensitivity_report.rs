@@ -142,6 +142,7 @@ fn yes(b: bool) -> &'static str {
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    mbgc::outputs::refuse_overwriting_inputs("--report", &a.report, &[("--data", &a.data)])?;
     let d = load(&a.data)?;
     std::fs::create_dir_all(&a.figures)?;
     let fig = |n: &str| a.figures.join(n);
@@ -155,7 +156,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     writeln!(w, "Regenerate with `cargo run --release -- bench sensitivity` (reads the campaign table, a few seconds). The table comes from `docs/data/sensitivity/run_seed000.sh`, which runs or resumes the 36 DEM runs (about 3 min each on one core).\n")?;
     let complete = d.rows == 36;
     writeln!(w, "## The design\n")?;
-    writeln!(w, "Seed 000 (Yan et al. 2015) discharges about 14,700 monosized 2 mm spheres from a flat-bottomed cylinder (D 50 mm, orifice 15 mm, 70 mm above a plate) in LIGGGHTS and varies mu_s = 0.05, 0.15, 0.25, 0.5, mu_r = 0.05, 0.25, 0.45 and e = 0.05, 0.45, 0.85 in a full factorial of 36 runs at E = 0.02 GPa. mbgc runs the same design on its own hopper (`src/dem/experiments/hopper.rs`), the same apparatus, with these changes to fit the budget:\n")?;
+    writeln!(w, "Seed 000 (Yan et al. 2015) discharges about 14,700 monosized 2 mm spheres from a flat-bottomed cylinder (D 50 mm, orifice 15 mm, 70 mm above a plate) in LIGGGHTS and varies mu_s = 0.05, 0.15, 0.25, 0.5, mu_r = 0.05, 0.25, 0.45 and e = 0.05, 0.45, 0.85 in a full factorial of 36 runs at E = 0.02 GPa. mbgc runs the same design on its own hopper (`crates/mbgc/src/experiments/hopper.rs`), the same apparatus, with these changes to fit the budget:\n")?;
     writeln!(w, "- the fill is 0.05 kg, about 4,800 particles (a third of the paper's), so a run costs about 3 minutes on one core; the discharge lasts about 1.5 s instead of about 4.5 s;")?;
     writeln!(w, "- E = 2e7 Pa, nu = 0.3, rho_p = 2500 kg/m^3 (the paper gives E, not the density or Poisson's ratio); particle-wall values fixed at the design's centre (e_pw = 0.45, mu_pw = 0.25, mu_r_pw = 0.25), since the paper held its wall values constant without stating them;")?;
     writeln!(w, "- EPSD2 rolling resistance (no rolling dashpot) instead of the paper's EPSD; Hertz-Mindlin as LIGGGHTS 3.8;")?;
@@ -375,7 +376,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         w,
         "## Level 3: the sensitivity matrix over 81 contact states\n"
     )?;
-    writeln!(w, "At each of seed 000's five parameter points (E = 2e7 Pa, e = 0.45) the analytic derivatives of the contact force and torque (`src/sensitivity/contact_derivatives.rs`, checked against mbgc's contact law and against central differences) over v_n, v_t = 1e-4, 0.01, 1 m/s, w = 0.01, 1, 100 rad/s and delta_n = delta_t = 0.1, 1, 10 % of d. EPSD2 has no rolling dashpot, so w enters no term; the rolling rotation is taken as delta_t / R*. Shares are each parameter's column norm over the sum of the norms, in two scalings: relative (p df/dp, comparable across units) and absolute (df/dp, whose size depends on each parameter's unit). `mbgc sensitivity matrix --at E_p=2e7,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45 --set nu_p=0.3,rho_p=2500,d50=2 [--scaling absolute]`.\n")?;
+    writeln!(w, "At each of seed 000's five parameter points (E = 2e7 Pa, e = 0.45) the analytic derivatives of the contact force and torque (`crates/mbgc/src/sensitivity/contact_derivatives.rs`, checked against mbgc's contact law and against central differences) over v_n, v_t = 1e-4, 0.01, 1 m/s, w = 0.01, 1, 100 rad/s and delta_n = delta_t = 0.1, 1, 10 % of d. EPSD2 has no rolling dashpot, so w enters no term; the rolling rotation is taken as delta_t / R*. Shares are each parameter's column norm over the sum of the norms, in two scalings: relative (p df/dp, comparable across units) and absolute (df/dp, whose size depends on each parameter's unit). `mbgc sensitivity matrix --at E_p=2e7,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45 --set nu_p=0.3,rho_p=2500,d50=2 [--scaling absolute]`.\n")?;
     writeln!(w, "| mu_s | mu_r | scaling | translational shares E, e, mu_s, mu_r | rotational shares E, e, mu_s, mu_r |")?;
     writeln!(w, "|---|---|---|---|---|")?;
     let names: Vec<String> = PARAMETERS.iter().map(|s| s.to_string()).collect();

@@ -942,12 +942,12 @@ const PROCEDURE: &str = "## The fill procedure\n\n\
 The real test (Roessler et al. 2019, used by seed 004) fills a box with material, strikes it level \
 with the rim, opens one side and lets the material run out; the bulk density is the mass in the \
 box over its volume, the shear angle the slope of the flank left behind. mbgc's box \
-(`src/dem/experiments/shear_box.rs`, `ShearBox::schedule` holds every number) does this:\n\n\
+(`crates/mbgc/src/experiments/shear_box.rs`, `ShearBox::schedule` holds every number) does this:\n\n\
 1. Box 100 x 100 x 150 mm scaled so that its smallest side is k d_max (seed 004's Eq. 4 with \
 k = 10). Particles: 0.78 box volumes of solid, diameters drawn from the log-normal PSD truncated \
 at its 1 %/99 % mass quantiles.\n\
 2. Pouring: the particles are created at rest at random, non-overlapping positions \
-(random sequential insertion, largest first, `src/dem/insertion.rs`) in a column over the box's \
+(random sequential insertion, largest first, `crates/mbgc-dem/src/insertion.rs`) in a column over the box's \
 base at solid fraction {FILL}, and fall under gravity into the box (walls extended upwards). \
 This stands for material poured from a scoop: a random, isotropic cloud with no layering. \
 (Before issue 13 the particles started on a jittered lattice at solid fraction 0.05-0.13, \
@@ -964,7 +964,7 @@ part inside).\n\
 over its edge are deleted. Rest: at least 4 sqrt(h/g) after opening and 5 checks in a row with no \
 removal, no particle in the box faster than 0.05 sqrt(g d_max) in x-z, rms below the rest speed.\n\
 6. Shear angle: a line fitted through the top of the flank.\n\n\
-The LIGGGHTS deck (`src/liggghts/shear_box_fill.rs`) runs the same schedule with `fix insert/pack` \
+The LIGGGHTS deck (`crates/mbgc/src/liggghts/shear_box_fill.rs`) runs the same schedule with `fix insert/pack` \
 into the same column and `particledistribution/discrete` templates; the time step is 0.25 \
 Rayleigh times of d_min in both.\n";
 

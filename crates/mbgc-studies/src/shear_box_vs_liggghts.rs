@@ -218,7 +218,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let _ = writeln!(s, "## Shear box: mbgc against LIGGGHTS 3.8\n");
         let _ = writeln!(s, "Each run is made by mbgc (its own rest criteria decide when the fill is at rest and when the outflow has \
         stopped), then replayed in LIGGGHTS from the identical particles and positions with the same schedule: fill, strike \
-        off at the rim, relax, remove the flap, remove what fell below the floor every chunk (`src/liggghts/shear_box.rs` \
+        off at the rim, relax, remove the flap, remove what fell below the floor every chunk (`crates/mbgc/src/liggghts/shear_box.rs` \
         writes the data file, the walls as STL meshes (the flap as a plane: LIGGGHTS takes one mesh wall fix) and the input \
         script). Both final states are measured by the same code. Box scale k = {}, E = 5e6 Pa, e = 0.6, rho_p = 2600, \
         d50 = 5 mm, sigma_ln = 0.1, seeds 1..={}. Granular outflow is chaotic: two codes (or two seeds) differ run by run by \
@@ -564,12 +564,12 @@ Checked against LIGGGHTS-PUBLIC 3.8.0 `src/cohesion_model_sjkr.h`, `src/fix_wall
   command, after a wall's mesh or primitive.
 - Area: the same formulas. Sphere-sphere: the intersection circle
   `A = -pi/4 (r-ri-rj)(r+ri-rj)(r-ri+rj)(r+ri+rj) / r^2` (r the centre distance), as
-  `src/dem/step.rs`; sphere-wall: `A = pi (ri^2 - r^2)` with `r = ri - delta` (times the mesh
+  `crates/mbgc-dem/src/step.rs`; sphere-wall: `A = pi (ri^2 - r^2)` with `r = ri - delta` (times the mesh
   `area_ratio`, 1 for these walls), which is mbgc's `pi (2 ri delta - delta^2)`. Force
   `-ced A` along the normal, only while overlapping, in both.
 - Caps: both codes cap the tangential spring (`mu F_n`) and the EPSD2 torque (`mu_r R* F_n`) with
   the normal force before cohesion, the load that presses the contact (LIGGGHTS 3.8's default,
-  `tangential_reduce off`; mbgc's law, `src/dem/contact/law.rs`): the net force would vanish in a
+  `tangential_reduce off`; mbgc's law, `crates/mbgc-dem/src/contact/law.rs`): the net force would vanish in a
   cohesive contact at rest. The deck writes LIGGGHTS' defaults.
 - One difference: with cohesion on, mbgc keeps the stored EPSD2 torque in the tangent plane;
   LIGGGHTS 3.8 leaves it in the lab frame, where a pair rolling round itself turns part of it into
@@ -661,7 +661,7 @@ fn run_cohesion(a: &Args) -> anyhow::Result<()> {
     let _ = writeln!(
         s,
         "Each mbgc run is replayed in LIGGGHTS from the identical initial particles with the same \
-         schedule and the same contact law (`src/liggghts/shear_box.rs`), and both final states are \
+         schedule and the same contact law (`crates/mbgc/src/liggghts/shear_box.rs`), and both final states are \
          measured by the same code; seeds 1..={}. Criterion: seed means within 2 deg (shear angle) \
          and 2 % (bulk density). Differences are means of the per-seed differences +- their \
          standard error.\n",

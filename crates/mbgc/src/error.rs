@@ -7,19 +7,29 @@ use std::path::Path;
 
 use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
 
+/// Every failure of the library, by what the caller can do about it: fix an input, fix the file
+/// system, change the request, or try another model.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad content in a user-supplied file or argument.
     #[error("{file}: {field}: {expected}")]
     Input {
+        /// The file (or label of in-memory data) holding the bad value.
         file: String,
+        /// Where in it: a TOML key path, a CSV column and row, a JSON field.
         field: String,
+        /// What was expected there, and usually what was found.
         expected: String,
     },
     /// The file could not be read or written. The OS error is part of the message and not a
     /// `source`, or `{:#}` (anyhow's chain) would print it twice.
     #[error("{file}: {cause}")]
-    Io { file: String, cause: std::io::Error },
+    Io {
+        /// The path that failed.
+        file: String,
+        /// The operating system's error.
+        cause: std::io::Error,
+    },
     /// A request that cannot be satisfied (bad combination of options, impossible size, ...).
     #[error("{0}")]
     Invalid(String),
@@ -44,6 +54,7 @@ pub enum Error {
     Infeasible(String),
 }
 
+/// `Result` with the library's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// The engine reads no files: its refusals are requests it cannot run, as the library's are.
@@ -56,6 +67,7 @@ impl From<mbgc_dem::Error> for Error {
 }
 
 impl Error {
+    /// An [`Error::Input`] naming the file, the field and what was expected.
     pub fn input(
         file: impl Display,
         field: impl Into<String>,
@@ -68,6 +80,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Io`] for `file`.
     pub fn io(file: &Path, source: std::io::Error) -> Self {
         Error::Io {
             file: file.display().to_string(),
@@ -88,6 +101,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Invalid`] with `msg`, which should name the option and the allowed values.
     pub fn invalid(msg: impl Into<String>) -> Self {
         Error::Invalid(msg.into())
     }

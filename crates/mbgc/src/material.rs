@@ -24,21 +24,31 @@ use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 use crate::model_table::{refuse_inactive_parameters, ModelTable};
 use mbgc_dem::contact::ModelClass;
 
+/// A bulk measurement of the material, an entry of `[measured]`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Measured {
+    /// The response it measures, named as the metamodel names it (`shear_angle`).
     pub response: String,
+    /// The measured value, in the response's unit (degrees, kg/m^3, ...).
     pub value: f64,
+    /// Standard deviation of the measurement, same unit, > 0 (replicate scatter): it weighs the
+    /// response in chi^2 and the likelihood.
     pub sd: f64,
 }
 
+/// The material's particle size distribution, which fixes the metamodel's `d50` and `sigma_ln`
+/// inputs when it has them.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PsdSpec {
     /// Sieve analysis (path resolved against the material file's folder).
     Sieve(PathBuf),
     /// Sieve analysis already in memory (a program's own data, or a built-in example's).
     SieveData(crate::psd::SieveData),
+    /// The log-normal parameters given directly.
     LogNormal {
+        /// Median particle diameter, mm (> 0).
         d50_mm: f64,
+        /// Standard deviation of ln(diameter), dimensionless (> 0; 0.26 for the gravel 8/16 above).
         sigma_ln: f64,
     },
 }
@@ -50,8 +60,11 @@ pub const MIN_RELATIVE_SD: f64 = 1e-9;
 /// `mu_pp + 0.5*mu_r_pp <= 1`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constraint {
+    /// The inequality as written (trimmed), for messages.
     pub text: String,
+    /// `(parameter, coefficient)` pairs, scaled so the largest |coefficient| is 1.
     pub terms: Vec<(String, f64)>,
+    /// The constant term, on the same scale.
     pub constant: f64,
 }
 
@@ -63,14 +76,23 @@ impl Constraint {
     }
 }
 
+/// A bulk material to calibrate: its measurements and what is known of it, read from a material
+/// file (see the module example).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
+    /// Display name: the file's `name`, else the file stem.
     pub name: String,
+    /// The file path or label given when reading; errors name it.
     pub source: String,
+    /// The size distribution, if the file has `[psd]`.
     pub psd: Option<PsdSpec>,
+    /// The measured responses (at least one), in file order.
     pub measured: Vec<Measured>,
+    /// Parameters known for the material (`[fixed]`), in physical units: not calibrated.
     pub fixed: Vec<(String, f64)>,
+    /// `[min, max]` narrowing the search of a parameter inside the model's domain.
     pub bounds: Vec<(String, [f64; 2])>,
+    /// Linear inequalities between parameters that every solution must satisfy.
     pub constraints: Vec<Constraint>,
     /// The `[model] class` the material declares it needs; `None`: whatever the metamodel's.
     pub model_class: Option<ModelClass>,
@@ -491,6 +513,7 @@ impl MaterialFile {
 }
 
 impl Material {
+    /// Reads a material file; a relative sieve path is taken relative to the file's folder.
     pub fn from_file(path: &Path) -> Result<Material> {
         let text = read_to_string(path)?;
         let mut m = Material::from_toml_str(&text, &path.display().to_string())?;
@@ -502,6 +525,8 @@ impl Material {
         Ok(m)
     }
 
+    /// A material from the text of a material file; `source` names it in errors and gives the
+    /// default name. A sieve path stays as written.
     pub fn from_toml_str(text: &str, source: &str) -> Result<Material> {
         from_toml::<MaterialFile>(text, source)?.validate(source)
     }

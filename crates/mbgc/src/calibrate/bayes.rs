@@ -28,8 +28,9 @@ pub struct Summary {
     pub q95: f64,
 }
 
-/// The TMCMC posterior of one calibration (Ching & Chen 2007 as used by Hadjidoukas et al. 2014,
-/// "seed 003"): parameter and response summaries and the evidence of the model class.
+/// The posterior of one calibration, sampled by TMCMC (Ching & Chen 2007, as Hadjidoukas et al.
+/// 2014, "seed 003", use it for DEM) under the prediction-error model above: parameter and
+/// response summaries and the evidence of the model class.
 #[derive(Clone, Debug, Serialize)]
 pub struct Posterior {
     /// Equally weighted posterior samples drawn.

@@ -123,9 +123,8 @@ fn check_class(model: &Metamodel, material: &Material) -> Result<()> {
 
 impl<'m> Problem<'m> {
     /// The problem of `material` against `model`. Refuses, among others, a measured response the
-    /// model lacks,
-    /// a model class that does not match, and fixed values, PSD parameters or bounds outside
-    /// the model's domain (an [`Error::OutOfDomain`]: the equations would extrapolate).
+    /// model lacks, a model class that does not match, and fixed values, PSD parameters or bounds
+    /// outside the model's domain (an [`Error::OutOfDomain`]: the equations would extrapolate).
     pub fn new(model: &'m Metamodel, material: &Material) -> Result<Problem<'m>> {
         let file = material.source.as_str();
         check_class(model, material)?;

@@ -73,9 +73,10 @@ impl SessionOptions {
             )));
         }
         if self.bayes {
-            if self.samples < 10 {
+            let max = super::tmcmc::MAX_SAMPLES;
+            if !(10..=max).contains(&self.samples) {
                 return Err(Error::invalid(format!(
-                    "--samples {}: expected at least 10 TMCMC samples per stage",
+                    "--samples {}: expected 10 to {max} TMCMC samples per stage",
                     self.samples
                 )));
             }

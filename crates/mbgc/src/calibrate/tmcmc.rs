@@ -285,6 +285,10 @@ impl TmcmcResult {
     }
 }
 
+/// Most samples per stage: 1e6 samples of a 12-dimensional posterior hold about 100 MB per
+/// stage; more would exhaust memory long before the estimate improved.
+pub const MAX_SAMPLES: usize = 1_000_000;
+
 /// Samples the posterior `prior * exp(ln_likelihood)` and estimates its log-evidence.
 ///
 /// `ln_likelihood` returns `-inf` for impossible points (NaN is treated as `-inf`; `+inf` is an
@@ -300,8 +304,11 @@ pub fn tmcmc<F: Fn(&[f64]) -> f64 + Sync>(
     }
     prior.validate()?;
     let n = opts.samples;
-    if n < 10 {
-        return Err(format!("tmcmc: samples = {n}, at least 10 are needed"));
+    if !(10..=MAX_SAMPLES).contains(&n) {
+        return Err(format!(
+            "tmcmc: samples = {n}; expected 10 to {MAX_SAMPLES} per stage (each stage keeps \
+             them all with their likelihoods)"
+        ));
     }
     if opts.chain_length == 0 {
         return Err("tmcmc: chain_length must be at least 1".into());
@@ -806,7 +813,7 @@ mod tests {
             },
         )
         .unwrap_err();
-        assert!(e.contains("at least 10"), "{e}");
+        assert!(e.contains("expected 10 to"), "{e}");
         let bad = UniformBox {
             lower: vec![0.0, 1.0],
             upper: vec![1.0, 1.0],

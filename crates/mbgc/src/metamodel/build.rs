@@ -1,7 +1,7 @@
 //! Fitting a metamodel to a table in memory: split, scale, one GP run per response, metrics.
 //! The rows come as a [`TrainingTable`] and the settings as checked [`FitSettings`]; the result
 //! is the model plus each response's observed and predicted values, from which the caller may
-//! draw figures ([`crate::plot::parity::fit_figures`]) or not.
+//! draw figures ([`crate::plot::fit_figures::fit_figures`]) or not.
 
 use super::fit_settings::FitSettings;
 use super::model::{

@@ -48,6 +48,11 @@ pub struct Indices {
     pub dropped: usize,
 }
 
+/// Fewest bootstrap resamples: the 2.5 % and 97.5 % quantiles need some below and above them.
+pub const MIN_BOOTSTRAP: usize = 40;
+/// Most bootstrap resamples: beyond this the intervals do not change, only the time grows.
+pub const MAX_BOOTSTRAP: usize = 100_000;
+
 /// Rows of points, `[row][input]`.
 pub type Rows = Vec<Vec<f64>>;
 
@@ -117,6 +122,13 @@ pub fn estimate(
     bootstrap: usize,
     seed: u64,
 ) -> Result<Indices> {
+    if !(MIN_BOOTSTRAP..=MAX_BOOTSTRAP).contains(&bootstrap) {
+        return Err(Error::invalid(format!(
+            "sobol indices: --bootstrap {bootstrap}; expected {MIN_BOOTSTRAP} to {MAX_BOOTSTRAP} \
+             resamples (a 95 % percentile interval needs a few dozen; each costs a pass over the \
+             base points)"
+        )));
+    }
     let n = ya.len();
     let keep: Vec<usize> = (0..n)
         .filter(|&j| ya[j].is_finite() && yb[j].is_finite() && yab.iter().all(|y| y[j].is_finite()))

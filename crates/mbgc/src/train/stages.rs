@@ -14,16 +14,24 @@ use crate::space::Space;
 /// The files of a trained metamodel named `name` under `dir`.
 #[derive(Debug, Clone)]
 pub struct TrainPaths {
+    /// `sampling/<name>.csv`: the training design (FSSF-f, extended in place).
     pub design: PathBuf,
+    /// `sampling/<name>_validation.csv`: the random validation design.
     pub validation_design: PathBuf,
+    /// `training_data/<name>.csv`: the campaign table of the training runs.
     pub table: PathBuf,
+    /// `training_data/<name>_validation.csv`: the campaign table of the validation runs.
     pub validation_table: PathBuf,
+    /// `training_data/<name>.train.json`: the [`TrainRecord`].
     pub record: PathBuf,
+    /// `models/<name>.json`: the fitted metamodel.
     pub model: PathBuf,
+    /// `models/<name>_figures/`: parity plots and residual histograms of the fit.
     pub figures: PathBuf,
 }
 
 impl TrainPaths {
+    /// The layout under `dir` for the train called `name`.
     pub fn new(dir: &Path, name: &str) -> TrainPaths {
         let (s, t, m) = (
             dir.join("sampling"),
@@ -118,20 +126,34 @@ pub fn fit_inputs(space: &Space, absorbed: &[String]) -> Vec<String> {
 /// What produced a trained model, written beside its tables.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct TrainRecord {
+    /// Version of mbgc that ran the train.
     pub mbgc_version: String,
+    /// The space file, as given.
     pub space: String,
+    /// The calibration experiment (`shear-box`, ...).
     pub experiment: String,
+    /// The experiment's model class (comma-separated effects); `None` for an experiment without
+    /// a contact law.
     pub model_class: Option<String>,
     /// The experiment's box scale in effect (shear box: k, the smallest side in d_max).
     pub box_scale: Option<f64>,
+    /// Rows of the training design (DEM runs to fit on).
     pub n: usize,
+    /// Rows of the validation design (0: none).
     pub validation: usize,
+    /// Sampler of the training design (`fssf-f`).
     pub design_method: String,
+    /// Sampler of the validation design (`random`).
     pub validation_method: String,
+    /// Seed of the training design and its runs.
     pub seed: u64,
+    /// Seed of the validation design and its runs (`seed + 1`).
     pub validation_seed: u64,
+    /// The responses fitted.
     pub responses: Vec<String>,
+    /// The fit's inputs (see [`fit_inputs`]).
     pub inputs: Vec<String>,
+    /// The dimensionless groups fitted in, as `name = monomial` (empty without a similarity).
     pub groups: Vec<String>,
     /// The trained model this one extends with effects (`--extends`), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -143,6 +165,7 @@ pub struct TrainRecord {
 pub struct ExtendsRecord {
     /// The name of the extended train.
     pub from: String,
+    /// The effects the extension added.
     pub added: Vec<String>,
     /// Each added parameter at the value where the old runs lie.
     pub off_face: Vec<(String, f64)>,
