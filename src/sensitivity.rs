@@ -171,8 +171,27 @@ pub fn run(a: &SensitivityArgs) -> anyhow::Result<()> {
     }
 }
 
-/// `name=value` pairs; the error names the option.
+/// `name=value` pairs; the error names the option. A name given twice is refused: the last
+/// value would otherwise win without a word.
 fn pairs(option: &str, items: &[String]) -> anyhow::Result<Vec<(String, f64)>> {
+    let list: Vec<(String, f64)> = pairs_as_given(option, items)?;
+    unique(option, list.iter().map(|(n, _)| n.as_str()))?;
+    Ok(list)
+}
+
+/// Each name once in a list option (`--target y,y` would count one column as two replicates).
+fn unique<'a>(option: &str, names: impl IntoIterator<Item = &'a str>) -> anyhow::Result<()> {
+    let mut seen: Vec<&str> = Vec::new();
+    for n in names {
+        if seen.contains(&n) {
+            anyhow::bail!("{option}: {n} is given twice; expected each name once");
+        }
+        seen.push(n);
+    }
+    Ok(())
+}
+
+fn pairs_as_given(option: &str, items: &[String]) -> anyhow::Result<Vec<(String, f64)>> {
     items
         .iter()
         .flat_map(|s| s.split(','))
@@ -221,6 +240,8 @@ struct PowerLawReport {
 
 fn power_law_cmd(a: &PowerLawArgs) -> anyhow::Result<()> {
     let out = Output::new(a.json);
+    unique("--inputs", a.inputs.iter().map(String::as_str))?;
+    unique("--target", a.target.iter().map(String::as_str))?;
     if let Some(n) = a.target.iter().find(|t| a.inputs.contains(t)) {
         anyhow::bail!("--target {n}: also an input");
     }
@@ -340,6 +361,8 @@ struct FlowCurveRow {
 
 fn flow_curve_cmd(a: &FlowCurveArgs) -> anyhow::Result<()> {
     let out = Output::new(a.json);
+    let rows: Vec<String> = a.rows.iter().map(usize::to_string).collect();
+    unique("--rows", rows.iter().map(String::as_str))?;
     let mut names = vec!["row".to_string(), "flow_bin_width".to_string()];
     names.extend(FLOW_BIN_NAMES.iter().map(|s| s.to_string()));
     let cols = read_columns_keeping_nan(&a.data, &names, 2)?;
@@ -394,6 +417,14 @@ fn flow_curve_cmd(a: &FlowCurveArgs) -> anyhow::Result<()> {
     }
     if report.is_empty() {
         anyhow::bail!("{}: no done row matched --rows", a.data.display());
+    }
+    // A command whose every row failed has produced nothing: say so by the exit status too.
+    if report.iter().all(|r| r.fit.is_none()) {
+        out.object(&serde_json::json!({ "data": a.data.display().to_string(), "model": "FR(t) = FR0 / (1 + (t/K)^n)", "rows": report }))?;
+        anyhow::bail!(
+            "{}: no row's flow-rate curve could be fitted (reasons above)",
+            a.data.display()
+        );
     }
     out.object(&serde_json::json!({ "data": a.data.display().to_string(), "model": "FR(t) = FR0 / (1 + (t/K)^n)", "rows": report }))
 }
@@ -568,6 +599,12 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
     for (i, at) in a.at.iter().enumerate() {
         let mut vals = set.clone();
         for (n, v) in pairs("--at", std::slice::from_ref(at))? {
+            if set.contains_key(&n) {
+                anyhow::bail!(
+                    "--at {n}: also given by --set; expected each value once (--set for what \
+                     all points share, --at for what differs)"
+                );
+            }
             vals.insert(n, v);
         }
         for n in vals.keys() {
@@ -595,11 +632,31 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
             summarise(&names, &m)
         };
         let at: Vec<(String, f64)> = names.iter().cloned().zip(p.values()).collect();
+        let (translational, rotational) = (
+            summary(Equation::Translational),
+            summary(Equation::Rotational),
+        );
+        if translational
+            .norms
+            .iter()
+            .chain(&rotational.norms)
+            .any(|v| !v.is_finite())
+        {
+            anyhow::bail!(
+                "--at #{} ({}): the contact law's derivatives overflow or are undefined there \
+                 (a norm is not finite); expected a physical point (E_p up to about 1e12 Pa)",
+                i + 1,
+                at.iter()
+                    .map(|(n, v)| format!("{n}={v:e}"))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            );
+        }
         let point = MatrixPoint {
             at,
             states: states.len(),
-            translational: summary(Equation::Translational),
-            rotational: summary(Equation::Rotational),
+            translational,
+            rotational,
             sliding_fraction: frac(&|r| r.sliding),
             rolling_cap_fraction: frac(&|r| r.rolling_at_cap),
         };
@@ -714,6 +771,7 @@ fn sobol_cmd(a: &SobolArgs) -> anyhow::Result<()> {
             a.bootstrap
         );
     }
+    unique("--responses", a.responses.iter().map(String::as_str))?;
     let responses: Vec<String> = if a.responses.is_empty() {
         model.responses.iter().map(|r| r.name.clone()).collect()
     } else {
@@ -861,6 +919,7 @@ fn local_cmd(a: &LocalArgs) -> anyhow::Result<()> {
             })
         })
         .collect();
+    unique("--fixed", a.fixed.iter().map(String::as_str))?;
     let l = local::at_point(&model, &x, &responses, &sigma, &a.fixed)?;
     say!(
         out,

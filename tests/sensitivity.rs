@@ -301,3 +301,65 @@ fn matrix_pca_and_local_run_and_refuse_unknown_names() {
     let sum: f64 = shares.iter().map(|x| x.as_f64().unwrap()).sum();
     assert!((sum - 1.0).abs() < 1e-9, "{sum}");
 }
+
+/// Nothing silently wrong: a point where the contact law is undefined, a name given twice in a
+/// list (counted twice, or the last value winning), a value given by both --at and --set, and a
+/// flow record that determines no curve are refused, not answered with NaN or exit 0.
+#[test]
+fn invalid_points_duplicates_and_flat_records_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = "nu_p=0.3,rho_p=2500,d50=2";
+    for (at, set) in [
+        ("E_p=1e308,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45", set),
+        (
+            "E_p=2e7,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45",
+            "nu_p=-1,rho_p=2500,d50=2",
+        ),
+        ("E_p=2e7,e_pp=0.45,mu_pp=0.5,mu_pp=0.25,mu_r_pp=0.45", set),
+        (
+            "E_p=2e7,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45",
+            "nu_p=0.3,rho_p=2500,d50=2,mu_pp=0.3",
+        ),
+    ] {
+        let e = fails(&["sensitivity", "matrix", "--at", at, "--set", set]);
+        assert!(e.contains("--at"), "{at} / {set}: {e}");
+    }
+    let table = dir.path().join("t.csv");
+    std::fs::write(&table, "a,y,z\n1,2,3\n2,4,5\n3,5,6\n4,7,8\n5,9,9\n").unwrap();
+    let e = fails(&[
+        "sensitivity",
+        "power-law",
+        "--data",
+        s(&table),
+        "--inputs",
+        "a",
+        "--target",
+        "y,y",
+    ]);
+    assert!(e.contains("--target: y is given twice"), "{e}");
+    let e = fails(&[
+        "sensitivity",
+        "sobol",
+        "--model",
+        "models/diagnose_local.json",
+        "--samples",
+        "64",
+        "--responses",
+        "shear_angle,shear_angle",
+    ]);
+    assert!(e.contains("--responses: shear_angle is given twice"), "{e}");
+    // A hopper record whose rate never changes, and one that is all zero.
+    let flow = dir.path().join("flow.csv");
+    let mut text = String::from("row,status,flow_bin_width");
+    for k in 1..=8 {
+        text.push_str(&format!(",flow_rate_t{k}"));
+    }
+    text.push_str("\n0,done,0.15,0.04,0.04,0.04,0.04,0.04,0.04,0.04,0.04\n");
+    text.push_str("1,done,0.15,0,0,0,0,0,0,0,0\n");
+    std::fs::write(&flow, text).unwrap();
+    let e = fails(&["sensitivity", "flow-curve", "--data", s(&flow)]);
+    assert!(
+        e.contains("no row's flow-rate curve could be fitted"),
+        "{e}"
+    );
+}

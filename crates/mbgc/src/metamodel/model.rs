@@ -443,7 +443,113 @@ impl Metamodel {
                 }
             }
         }
+        m.check_names_and_domains(&file)?;
         Ok(m)
+    }
+
+    /// A hand-edited or foreign model file must still mean one thing: every input and response
+    /// named once (a prediction looks them up by name), every domain an interval of finite
+    /// numbers that its scaling can take, at least one input and one response.
+    fn check_names_and_domains(&self, file: &str) -> Result<()> {
+        if self.inputs.is_empty() {
+            return Err(Error::input(
+                file,
+                "inputs",
+                "at least one input, found none",
+            ));
+        }
+        if self.responses.is_empty() {
+            return Err(Error::input(
+                file,
+                "responses",
+                "at least one response, found none",
+            ));
+        }
+        let inputs: Vec<&str> = self.inputs.iter().map(|i| i.name.as_str()).collect();
+        let responses: Vec<&str> = self.responses.iter().map(|r| r.name.as_str()).collect();
+        for (what, names) in [("inputs", &inputs), ("responses", &responses)] {
+            for (k, n) in names.iter().enumerate() {
+                if n.trim().is_empty() {
+                    return Err(Error::input(
+                        file,
+                        format!("{what}[{k}].name"),
+                        "a name, found an empty one",
+                    ));
+                }
+                if names[..k].contains(n) {
+                    return Err(Error::input(
+                        file,
+                        format!("{what}[{k}].name"),
+                        format!("each name once, but {n} appears twice"),
+                    ));
+                }
+            }
+        }
+        if let Some(r) = responses.iter().find(|r| inputs.contains(r)) {
+            return Err(Error::input(
+                file,
+                format!("responses.{r}"),
+                format!("a response that is not also an input, but {r} is both"),
+            ));
+        }
+        for i in &self.inputs {
+            let [lo, hi] = i.domain;
+            let field = format!("inputs.{}.domain", i.name);
+            if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+                return Err(Error::input(
+                    file,
+                    field,
+                    format!("[min, max] of finite numbers with min <= max, found [{lo}, {hi}]"),
+                ));
+            }
+            match i.transform {
+                Transform::Identity => {}
+                Transform::Linear { offset, width } | Transform::Log { offset, width } => {
+                    if !(offset.is_finite() && width.is_finite() && width != 0.0) {
+                        return Err(Error::input(
+                            file,
+                            format!("inputs.{}.transform", i.name),
+                            format!(
+                                "a finite offset and a finite non-zero width, found offset \
+                                 {offset}, width {width}"
+                            ),
+                        ));
+                    }
+                    if matches!(i.transform, Transform::Log { .. }) && lo <= 0.0 {
+                        return Err(Error::input(
+                            file,
+                            field,
+                            format!("positive values for a log-scaled input, found min {lo}"),
+                        ));
+                    }
+                }
+            }
+        }
+        for g in &self.groups {
+            let [lo, hi] = g.domain;
+            if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+                return Err(Error::input(
+                    file,
+                    format!("groups.{}.domain", g.group.name),
+                    format!(
+                        "[min, max] with 0 < min <= max (a log-scaled group), found [{lo}, {hi}]"
+                    ),
+                ));
+            }
+        }
+        for (k, c) in self.constants.iter().enumerate() {
+            if !c.value.is_finite()
+                || inputs.contains(&c.name.as_str())
+                || self.constants[..k].iter().any(|o| o.name == c.name)
+            {
+                return Err(Error::input(
+                    file,
+                    format!("constants.{}", c.name),
+                    "a finite value of a parameter that is neither an input nor another constant",
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Writes the model as pretty-printed JSON, atomically (readers never see half a file).

@@ -70,8 +70,10 @@ impl Properties {
             radius: 0.5e-3 * v("d50")?,
             density: v("rho_p")?,
         };
+        // nu = -1 makes the effective modulus E / (2 (1 - nu^2)) infinite.
         let ok = p.youngs_modulus > 0.0
-            && (-1.0..0.5).contains(&p.poisson)
+            && p.poisson > -1.0
+            && p.poisson < 0.5
             && p.restitution > 0.0
             && p.restitution <= 1.0
             && p.mu_s >= 0.0

@@ -96,6 +96,13 @@ pub fn fit(t: &[f64], y: &[f64]) -> Result<FlowCurveFit> {
             "flow-rate curve: no positive flow rate to fit",
         ));
     }
+    let low = y.iter().copied().fold(f64::INFINITY, f64::min);
+    if peak - low <= 1e-9 * peak {
+        return Err(Error::invalid(format!(
+            "flow-rate curve: the rate is constant ({peak}) over the record: it does not decline, \
+             so K and n are not determined"
+        )));
+    }
     // K: the first time after the peak at which the rate is below half of it.
     let ipeak = y.iter().position(|&v| v == peak).unwrap_or(0);
     let k0 = (ipeak..t.len())
@@ -120,10 +127,21 @@ pub fn fit(t: &[f64], y: &[f64]) -> Result<FlowCurveFit> {
         value: e.values[k].exp(),
         ci95: [e.ci95[k][0].exp(), e.ci95[k][1].exp()],
     };
+    let (fr0, k, n) = (c(0), c(1), c(2));
+    for (name, p) in [("FR0", &fr0), ("K", &k), ("n", &n)] {
+        let [lo, hi] = p.ci95;
+        if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+            return Err(Error::invalid(format!(
+                "flow-rate curve: {name} = {:.4e} has no finite 95 % interval ([{lo:.4e}, \
+                 {hi:.4e}]): the points do not determine it",
+                p.value
+            )));
+        }
+    }
     Ok(FlowCurveFit {
-        fr0: c(0),
-        k: c(1),
-        n: c(2),
+        fr0,
+        k,
+        n,
         rmse: (e.sse / t.len() as f64).sqrt(),
         points: t.len(),
     })
@@ -132,6 +150,17 @@ pub fn fit(t: &[f64], y: &[f64]) -> Result<FlowCurveFit> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A flat or empty record determines no curve: an error, never a fit with a zero-width
+    /// interval.
+    #[test]
+    fn constant_or_zero_flow_is_refused() {
+        let t: Vec<f64> = (0..8).map(|k| 0.1 + 0.2 * k as f64).collect();
+        let e = fit(&t, &[0.04; 8]).unwrap_err().to_string();
+        assert!(e.contains("constant"), "{e}");
+        let e = fit(&t, &[0.0; 8]).unwrap_err().to_string();
+        assert!(e.contains("no positive flow rate"), "{e}");
+    }
 
     #[test]
     fn recovers_the_constants_of_a_noisy_curve() {

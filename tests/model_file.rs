@@ -1,0 +1,78 @@
+//! A model file that loads means one thing: a hand-edited or foreign file whose inputs or
+//! responses are named twice, whose domains are no intervals or that has nothing to predict is
+//! refused with the field named, instead of predicting from the wrong column.
+
+use mbgc::metamodel::Metamodel;
+use serde_json::{json, Value};
+
+fn tiny() -> Value {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/tiny_model.json"
+    ))
+    .unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+fn load(v: &Value) -> Result<Metamodel, String> {
+    Metamodel::from_json_str(&v.to_string(), "m.json").map_err(|e| e.to_string())
+}
+
+#[test]
+fn the_shipped_files_still_load() {
+    load(&tiny()).unwrap();
+    for f in [
+        "shear_box",
+        "diagnose_local",
+        "diagnose_local_sjkr",
+        "shear_box_cohesion_local",
+    ] {
+        let path = format!("{}/models/{f}.json", env!("CARGO_MANIFEST_DIR"));
+        Metamodel::load(std::path::Path::new(&path)).unwrap();
+    }
+}
+
+#[test]
+fn broken_models_are_refused_by_field() {
+    let edits: Vec<(&str, Box<dyn Fn(&mut Value)>, &str)> = vec![
+        (
+            "an input named twice",
+            Box::new(|m| m["inputs"][1]["name"] = json!("x")),
+            "inputs[1].name",
+        ),
+        (
+            "a response named twice",
+            Box::new(|m| {
+                let r = m["responses"][0].clone();
+                m["responses"].as_array_mut().unwrap().push(r);
+            }),
+            "responses[1].name",
+        ),
+        (
+            "an empty response name",
+            Box::new(|m| m["responses"][0]["name"] = json!("")),
+            "responses[0].name",
+        ),
+        (
+            "a domain [1, 0]",
+            Box::new(|m| m["inputs"][0]["domain"] = json!([1.0, 0.0])),
+            "inputs.x.domain",
+        ),
+        (
+            "no responses",
+            Box::new(|m| m["responses"] = json!([])),
+            "responses",
+        ),
+        (
+            "a response that is an input",
+            Box::new(|m| m["responses"][0]["name"] = json!("z")),
+            "responses.z",
+        ),
+    ];
+    for (what, edit, field) in edits {
+        let mut m = tiny();
+        edit(&mut m);
+        let e = load(&m).expect_err(what);
+        assert!(e.contains("m.json") && e.contains(field), "{what}: {e}");
+    }
+}
