@@ -942,3 +942,35 @@ fn absurd_sizes_and_meaningless_options_are_refused_at_once() {
         "{e}"
     );
 }
+
+/// Every bench study takes --json (the guide promises it): one JSON object on standard output,
+/// naming the report it wrote.
+#[test]
+fn report_studies_take_json_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("s.md");
+    let figures = dir.path().join("figures");
+    let o = common::mbgc(&[
+        "bench",
+        "sensitivity",
+        "--report",
+        report.to_str().unwrap(),
+        "--figures",
+        figures.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert_eq!(v["report"], report.to_str().unwrap());
+    assert_eq!(v["runs"], 36);
+    assert!(report.exists());
+    for study in [
+        "diagnose",
+        "shear-box-check",
+        "metamodel",
+        "liggghts-backend",
+    ] {
+        let help = common::ok(&["bench", study, "--help"]);
+        assert!(help.contains("--json"), "bench {study} has no --json");
+    }
+}

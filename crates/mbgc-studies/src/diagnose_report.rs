@@ -22,6 +22,10 @@ pub struct Args {
     /// Directory of the figures (one subdirectory per case).
     #[cfg_attr(feature = "cli", arg(long, default_value = "docs/figures/diagnose"))]
     pub figures: PathBuf,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
 }
 
 struct Case {
@@ -191,7 +195,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         HOW
     );
     write_atomic(&a.report, text.as_bytes())?;
-    eprintln!("wrote {}", a.report.display());
+    crate::report_written(
+        a.json,
+        &a.report,
+        serde_json::json!({ "seed": a.seed, "samples": a.samples }),
+    );
     Ok(())
 }
 

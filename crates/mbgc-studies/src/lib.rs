@@ -33,3 +33,17 @@ pub mod sensitivity_report;
 pub mod shear_box_check;
 pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;
+
+/// Tells where a study's report went: a line on standard error, and with `--json` one JSON
+/// object on standard output (`report`, then the study's own fields), as every command does.
+pub fn report_written(json: bool, report: &std::path::Path, fields: serde_json::Value) {
+    eprintln!("wrote {}", report.display());
+    if json {
+        let mut obj = serde_json::Map::new();
+        obj.insert("report".into(), report.display().to_string().into());
+        if let serde_json::Value::Object(m) = fields {
+            obj.extend(m);
+        }
+        println!("{}", serde_json::Value::Object(obj));
+    }
+}

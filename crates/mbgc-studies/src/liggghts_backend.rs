@@ -32,6 +32,10 @@ pub struct Args {
     pub dir: PathBuf,
     #[cfg_attr(feature = "cli", arg(long, default_value = "docs/liggghts_backend.md"))]
     pub report: PathBuf,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
 }
 
 /// docs/shear_box.md's point c at sigma_ln 0.15.
@@ -252,6 +256,6 @@ fn write_report(a: &Args) -> anyhow::Result<()> {
         )?;
     }
     write_atomic(&a.report, w.as_bytes())?;
-    eprintln!("wrote {}", a.report.display());
+    crate::report_written(a.json, &a.report, serde_json::json!({ "seeds": a.seeds }));
     Ok(())
 }

@@ -65,6 +65,10 @@ pub struct Args {
     pub validation_record: PathBuf,
     #[cfg_attr(feature = "cli", arg(long, default_value = "docs/metamodel.md"))]
     pub report: PathBuf,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -171,7 +175,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     write_atomic(&a.report, w.as_bytes())?;
-    eprintln!("wrote {}", a.report.display());
+    crate::report_written(a.json, &a.report, serde_json::json!({ "model": a.name }));
     Ok(())
 }
 

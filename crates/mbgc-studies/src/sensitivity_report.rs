@@ -38,6 +38,10 @@ pub struct Args {
     pub model: PathBuf,
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
     pub seed: u64,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
 }
 
 const INPUTS: [&str; 3] = ["e_pp", "mu_pp", "mu_r_pp"];
@@ -605,7 +609,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         writeln!(w, "## Discussion\n\n{discussion}")?;
     }
     write_atomic(&a.report, md.as_bytes())?;
-    println!("wrote {} ({} of 36 runs)", a.report.display(), d.rows);
+    crate::report_written(
+        a.json,
+        &a.report,
+        serde_json::json!({ "runs": d.rows, "of": 36 }),
+    );
     Ok(())
 }
 

@@ -67,6 +67,10 @@ pub struct Args {
     /// Markdown report (docs/shear_box.md).
     #[cfg_attr(feature = "cli", arg(long))]
     pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
 }
 
 /// The parameter sets: low (a), middle (c) and high (b) friction at sigma_ln 0.15, the same at
@@ -441,7 +445,18 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let before = read_rows(&table.with_file_name(COST_BEFORE))?;
     let text = report(&rows, &before);
     match &a.report {
-        Some(path) => std::fs::write(path, &text).with_context(|| path.display().to_string())?,
+        Some(path) => {
+            mbgc::error::write_atomic(path, text.as_bytes())?;
+            crate::report_written(a.json, path, serde_json::json!({ "runs": rows.len() }));
+        }
+        // With --json the report text goes to standard error, the object to standard output.
+        None if a.json => {
+            eprint!("{text}");
+            println!(
+                "{}",
+                serde_json::json!({ "report": null, "runs": rows.len() })
+            );
+        }
         None => print!("{text}"),
     }
     if !failures.is_empty() {
