@@ -32,9 +32,12 @@ fn the_shipped_files_still_load() {
     }
 }
 
+/// An edit of a model file.
+type Edit = Box<dyn Fn(&mut Value)>;
+
 #[test]
 fn broken_models_are_refused_by_field() {
-    let edits: Vec<(&str, Box<dyn Fn(&mut Value)>, &str)> = vec![
+    let edits: Vec<(&str, Edit, &str)> = vec![
         (
             "an input named twice",
             Box::new(|m| m["inputs"][1]["name"] = json!("x")),
