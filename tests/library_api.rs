@@ -234,3 +234,44 @@ fn train_runs_as_a_library_call_and_reports_to_its_observer() {
     let few = TrainRequest { n: 3, ..req };
     assert!(train(&few, &log).unwrap_err().to_string().contains("--n 3"));
 }
+
+/// A material whose fixed values put the stiffness group outside the shipped model's range is
+/// told so by name, value and range (it used to read "the constraints [] cannot be met"), and
+/// names the model lacks are said to be missing, not listed as if expected.
+#[test]
+fn out_of_range_groups_and_unknown_names_are_explained() {
+    let model = Metamodel::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/models/shear_box.json"
+    )))
+    .unwrap();
+    let gravel =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/gravel.toml"))
+            .unwrap()
+            .replace(
+                "sieve = \"sieve_gravel_8_16.csv\"",
+                "d50_mm = 2.0\nsigma_ln = 0.26",
+            );
+    let fine = Material::from_toml_str(&gravel, "fine.toml").unwrap();
+    let e = session::run(&fine, &model, "shear_box", &SessionOptions::default()).unwrap_err();
+    let text = e.to_string();
+    assert!(matches!(e, Error::OutOfDomain { .. }), "{e:?}");
+    assert!(
+        text.contains("K_p = 101.9 E_p / (rho_p d50)") && text.contains("[9.8272e3, 1.9436e5]"),
+        "{text}"
+    );
+    let unknown = Material::from_toml_str(
+        "[measured]\nangle_of_repose = { value = 30, sd = 1 }\n",
+        "u.toml",
+    )
+    .unwrap();
+    let e = session::run(&unknown, &model, "shear_box", &SessionOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "measured.angle_of_repose: not a response of the model; expected one of: shear_angle"
+        ),
+        "{e}"
+    );
+}

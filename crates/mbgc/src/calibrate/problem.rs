@@ -141,7 +141,10 @@ impl<'m> Problem<'m> {
                     Error::input(
                         file,
                         format!("measured.{}", m.response),
-                        format!("a response of the model (it has: {})", known.join(", ")),
+                        format!(
+                            "not a response of the model; expected one of: {}",
+                            known.join(", ")
+                        ),
                     )
                 })?;
             targets.push(Target {
@@ -158,7 +161,10 @@ impl<'m> Problem<'m> {
                 Error::input(
                     file,
                     field,
-                    format!("a parameter of the model (it has: {})", names.join(", ")),
+                    format!(
+                        "not a parameter of the model; expected one of: {}",
+                        names.join(", ")
+                    ),
                 )
             })
         };
@@ -384,6 +390,24 @@ impl<'m> Problem<'m> {
                     v.max(0.0).powi(2)
                 })
                 .sum::<f64>()
+    }
+
+    /// The dimensionless groups outside the model's range at `free`: each group's name, its
+    /// formula, its value there and the range of the training runs.
+    pub fn groups_outside(&self, free: &[f64]) -> Vec<(String, String, f64, [f64; 2])> {
+        let x = self.full(free);
+        (0..self.model.groups.len())
+            .filter(|&g| self.group_excess(g, &x) != 0.0)
+            .map(|g| {
+                let gd = &self.model.groups[g];
+                (
+                    gd.group.name.clone(),
+                    gd.group.monomial.text(),
+                    self.model.group_value(&gd.group, &x),
+                    gd.domain,
+                )
+            })
+            .collect()
     }
 
     /// How far group `g` lies outside its domain at `x`, in ln units, signed: positive above the

@@ -166,6 +166,30 @@ pub fn run(
         ));
     };
     if best.violation > 1e-8 {
+        // The groups first: a material whose fixed values put a group outside the training
+        // range has no point in the box, whatever the constraints.
+        let outside = problem.groups_outside(&best.x);
+        if !outside.is_empty() {
+            let what: Vec<String> = outside
+                .iter()
+                .map(|(name, text, v, [lo, hi])| {
+                    format!(
+                        "{name} = {text} is {v:.4e} at best, outside the model's range [{lo:.4e}, \
+                         {hi:.4e}]"
+                    )
+                })
+                .collect();
+            return Err(Error::out_of_domain(
+                &material.source,
+                "fixed",
+                format!(
+                    "values that keep the model's dimensionless groups inside the range of its \
+                     training runs, but {}; change the fixed values the group is made of (within \
+                     its range) or use a model trained over this range",
+                    what.join("; ")
+                ),
+            ));
+        }
         let list: Vec<&str> = problem
             .constraints
             .iter()

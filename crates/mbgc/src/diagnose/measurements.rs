@@ -286,7 +286,10 @@ impl SetFile {
                     return Err(Error::input(
                         file,
                         format!("{field}.{table}.{n}"),
-                        format!("a parameter of {effect} ({})", own.join(", ")),
+                        format!(
+                            "not a parameter of {effect}; expected one of: {}",
+                            own.join(", ")
+                        ),
                     ));
                 }
             }

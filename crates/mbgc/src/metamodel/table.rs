@@ -58,7 +58,7 @@ fn read(path: &Path, names: &[String], first_response: usize, keep_nan: bool) ->
             Error::input(
                 &file,
                 format!("column {n}"),
-                format!("a column named {n} (the header has: {})", header.join(", ")),
+                format!("no such column; expected one of: {}", header.join(", ")),
             )
         })?;
         idx.push(i);

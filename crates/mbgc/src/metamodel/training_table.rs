@@ -120,7 +120,7 @@ impl TrainingTable {
                     &self.source,
                     format!("column {name}"),
                     format!(
-                        "a column named {name} (the table has: {})",
+                        "no such column; expected one of: {}",
                         self.columns
                             .iter()
                             .map(|c| c.0.as_str())
