@@ -188,7 +188,16 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     settings.space = a.space.as_deref().map(Space::from_file).transpose()?;
     settings.model_class = a.model_class;
     settings.similarity = match &a.similarity {
-        Some(name) => Some(similarity_of(name, a.model_class)?),
+        Some(name) => {
+            let sim = similarity_of(name, a.model_class)?;
+            // A group whose inputs the space all fixes is a constant, not a fitting variable.
+            Some(match &settings.space {
+                Some(space) => {
+                    sim.without_constant_groups(|n| space.get(n).is_some_and(|p| p.is_fixed()))
+                }
+                None => sim,
+            })
+        }
         None => None,
     };
     // Checked before any file is read, as the settings would be checked inside the fit.

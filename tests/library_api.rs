@@ -275,3 +275,76 @@ fn out_of_range_groups_and_unknown_names_are_explained() {
         "{e}"
     );
 }
+
+/// Train refuses what would fail or mislead only after hours of DEM: GP settings that cannot
+/// fit, cross-validation on too few runs, and a space other than the one the designs under
+/// this name were made for.
+#[test]
+fn train_refuses_before_simulating_and_never_extends_a_design_of_another_space() {
+    let dir = tempfile::tempdir().unwrap();
+    let space = dir.path().join("space.toml");
+    let text =
+        "name = \"t\"\n[parameters]\nx = { min = 0.0, max = 1.0 }\ny = { min = 0.0, max = 1.0 }\n";
+    std::fs::write(&space, text).unwrap();
+    let req = TrainRequest {
+        out_dir: dir.path().to_path_buf(),
+        responses: vec!["f".into()],
+        figures: false,
+        config: Config {
+            population: 200,
+            generations: 3,
+            ..Config::default()
+        },
+        ..TrainRequest::new(space.clone(), "sleep-test", 10)
+    };
+    let none = TrainRequest {
+        config: Config {
+            generations: 0,
+            ..req.config.clone()
+        },
+        ..req.clone()
+    };
+    let e = train(&none, &mbgc::train::Silent).unwrap_err().to_string();
+    assert!(e.contains("generations"), "{e}");
+    let few = TrainRequest {
+        n: 8,
+        config: Config {
+            selection: mbgc::gp::select::Selection::CrossValidation,
+            ..req.config.clone()
+        },
+        ..req.clone()
+    };
+    let e = train(&few, &mbgc::train::Silent).unwrap_err().to_string();
+    assert!(e.contains("--n 8") && e.contains("cross-validation"), "{e}");
+    assert!(
+        !dir.path().join("sampling").exists(),
+        "nothing may be sampled before refusing"
+    );
+
+    train(&req, &mbgc::train::Silent).unwrap();
+    std::fs::write(&space, text.replace("max = 1.0 }\ny", "max = 2.0 }\ny")).unwrap();
+    let e = train(&TrainRequest { n: 12, ..req }, &mbgc::train::Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("another space") && e.contains("x: 0.0..2.0"),
+        "{e}"
+    );
+}
+
+/// A group whose inputs the space all fixes (K_w when E_w, rho_p and d50 are fixed) is a
+/// constant, not a fitting variable: it is dropped, and its inputs are no longer absorbed
+/// unless another group or a scaled response needs them.
+#[test]
+fn a_group_of_fixed_inputs_is_a_constant() {
+    use mbgc::experiments::shear_box::ShearBox;
+    use mbgc::experiments::Experiment;
+    let sim = ShearBox::default().similarity().unwrap();
+    let fixed = ["E_w", "rho_p", "d50"];
+    let kept = sim.without_constant_groups(|n| fixed.contains(&n));
+    let names: Vec<&str> = kept.groups.iter().map(|g| g.name.as_str()).collect();
+    assert_eq!(names, ["K_p"]);
+    assert!(!kept.absorbed().contains(&"E_w".to_string()));
+    // rho_p still scales the bulk density, so it stays an input the fit reads.
+    assert!(kept.needed_inputs().contains(&"rho_p".to_string()));
+}

@@ -168,6 +168,9 @@ impl Config {
         if self.init_depth.0 > self.init_depth.1 {
             return Err("init_depth: expected min <= max".into());
         }
+        if self.generations == 0 {
+            return Err("generations: expected at least 1 (0 would return a random tree)".into());
+        }
         if self.restarts == 0 {
             return Err("restarts: expected at least 1".into());
         }

@@ -152,6 +152,29 @@ pub struct Similarity {
 }
 
 impl Similarity {
+    /// The similarity without the groups whose every input `is_fixed`: such a group is one
+    /// number over the whole campaign, a constant rather than a fitting variable, and a range of
+    /// one point outside which every prediction would be refused. Its inputs stop being absorbed.
+    pub fn without_constant_groups(mut self, is_fixed: impl Fn(&str) -> bool) -> Similarity {
+        self.groups
+            .retain(|g| !g.monomial.powers.iter().all(|(n, _)| is_fixed(n)));
+        self
+    }
+
+    /// Every input the similarity reads: those its groups absorb and those its scaled responses'
+    /// factors are made of (a fixed one must still be an input, or the factor has no value).
+    pub fn needed_inputs(&self) -> Vec<String> {
+        let mut v = self.absorbed();
+        for s in &self.scaled {
+            for (n, _) in &s.factor.powers {
+                if !v.contains(n) {
+                    v.push(n.clone());
+                }
+            }
+        }
+        v
+    }
+
     /// Inputs that act only through the groups: the equations are fitted without them.
     pub fn absorbed(&self) -> Vec<String> {
         let mut v: Vec<String> = Vec::new();

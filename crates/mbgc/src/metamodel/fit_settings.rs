@@ -127,12 +127,17 @@ impl FitSettings {
         self.config
             .check()
             .map_err(|e| Error::invalid(format!("GP settings: {e}")))?;
-        let absorbed = self.absorbed();
-        for a in &absorbed {
+        let needed = self
+            .similarity
+            .as_ref()
+            .map(Similarity::needed_inputs)
+            .unwrap_or_default();
+        for a in &needed {
             if !self.inputs.contains(a) {
                 return Err(Error::invalid(format!(
-                    "--inputs: the experiment's groups are made of {}, so {a} must be an input",
-                    absorbed.join(", ")
+                    "--inputs: the experiment's groups and scaled responses are made of {}, so \
+                     {a} must be an input",
+                    needed.join(", ")
                 )));
             }
         }

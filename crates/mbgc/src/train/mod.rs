@@ -15,5 +15,6 @@ mod stages;
 
 pub use pipeline::{train, Silent, TrainObserver, TrainOutcome, TrainRequest, TrainStage};
 pub use stages::{
-    ensure_design, fit_inputs, plan, samplers, seeds, ExtendsRecord, TrainPaths, TrainRecord,
+    ensure_design, fit_inputs, plan, samplers, seeds, space_parameters, ExtendsRecord, TrainPaths,
+    TrainRecord,
 };

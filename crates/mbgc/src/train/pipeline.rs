@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use super::extend::{self, Extension};
 use super::stages::{
-    ensure_design, fit_inputs, plan, samplers, seeds, ExtendsRecord, TrainPaths, TrainRecord,
+    ensure_design, fit_inputs, plan, samplers, seeds, space_parameters, ExtendsRecord, TrainPaths,
+    TrainRecord,
 };
 use crate::campaign::{
     experiment_by_name, run_campaign, CampaignOptions, ExperimentSettings, ObserverHandle, Shard,
@@ -172,6 +173,23 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             "--extends cannot be combined with --shard: extend first, then shard",
         ));
     }
+    // The fit's settings are checked before any run: a train must not simulate for hours and
+    // then refuse to fit.
+    if !req.no_fit && req.shard.is_none() {
+        req.config
+            .check()
+            .map_err(|e| Error::invalid(format!("GP settings: {e}")))?;
+        let need = 2 * gp::select::FOLDS;
+        if req.config.selection == gp::select::Selection::CrossValidation && req.n < need {
+            return Err(Error::invalid(format!(
+                "--n {}: the equation is picked by {}-fold cross-validation (--select cv), \
+                 which needs at least {need} training runs; pass --n {need} or more, or \
+                 --select best",
+                req.n,
+                gp::select::FOLDS
+            )));
+        }
+    }
     let space = Space::from_file(&req.space)?;
     let class = req.model_class.or(space.model_class);
     let settings = ExperimentSettings {
@@ -199,7 +217,9 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     let similarity = if req.no_similarity {
         None
     } else {
-        experiment.similarity()
+        experiment
+            .similarity()
+            .map(|s| s.without_constant_groups(|n| space.get(n).is_some_and(|p| p.is_fixed())))
     };
     let responses: Vec<String> = if req.responses.is_empty() {
         experiment
@@ -237,7 +257,8 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         )?),
     };
 
-    // Stage 1: the designs.
+    // Stage 1: the designs, made for this space only.
+    refuse_another_space(&paths, &space, &req.space)?;
     let (fssf, random) = samplers();
     let changed = |before: usize, after: usize| {
         if before == after {
@@ -382,7 +403,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             &space,
             &similarity
                 .as_ref()
-                .map(|s| s.absorbed())
+                .map(|s| s.needed_inputs())
                 .unwrap_or_default(),
         ),
         groups: similarity
@@ -395,6 +416,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             added: e.added.clone(),
             off_face: e.off_face.clone(),
         }),
+        space_parameters: Some(space_parameters(&space)),
     };
     let record_json = serde_json::to_string_pretty(&record)
         .map_err(|e| Error::invalid(format!("{}: {e}", paths.record.display())))?;
@@ -466,6 +488,42 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         figures,
         warnings: fitted.warnings,
     })
+}
+
+/// A train resumed under a name whose designs were made for another space (a widened range, a
+/// parameter fixed or freed) is refused: its rows would be taken as a sample of the new space.
+fn refuse_another_space(paths: &TrainPaths, space: &Space, file: &Path) -> Result<()> {
+    if !paths.record.exists() {
+        return Ok(());
+    }
+    let text = read_to_string(&paths.record)?;
+    let record: TrainRecord = serde_json::from_str(&text).map_err(|e| {
+        Error::input(
+            paths.record.display(),
+            "JSON",
+            format!("a train record ({e})"),
+        )
+    })?;
+    let Some(before) = record.space_parameters else {
+        return Ok(());
+    };
+    let now = space_parameters(space);
+    if before != now {
+        let changed: Vec<String> = now
+            .iter()
+            .filter(|p| !before.contains(p))
+            .chain(before.iter().filter(|p| !now.contains(p)))
+            .cloned()
+            .collect();
+        return Err(Error::invalid(format!(
+            "{}: the designs under this name were made for another space (differing: {}); a \
+             train extends its designs only in the space they fill: give another --name or \
+             --out-dir",
+            file.display(),
+            changed.join("; ")
+        )));
+    }
+    Ok(())
 }
 
 /// Checks an extension against the old train's record and, on the first call, writes the new

@@ -158,6 +158,24 @@ pub struct TrainRecord {
     /// The trained model this one extends with effects (`--extends`), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extends: Option<ExtendsRecord>,
+    /// Each parameter of the space as the designs were made for it (`name: min..max scale`, or
+    /// `name = value` when fixed): a later train under the same name with another space would
+    /// otherwise extend the old designs as if they filled the new one. Absent in records
+    /// written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub space_parameters: Option<Vec<String>>,
+}
+
+/// The parameters of a space as a train record keeps them.
+pub fn space_parameters(space: &Space) -> Vec<String> {
+    space
+        .parameters
+        .iter()
+        .map(|p| match p.fixed {
+            Some(v) => format!("{} = {v:?}", p.name),
+            None => format!("{}: {:?}..{:?} {:?}", p.name, p.min, p.max, p.scale),
+        })
+        .collect()
 }
 
 /// What an extension added to which model, and where the copied runs lie.
