@@ -197,14 +197,22 @@ fn print_text(s: &Session) {
         .map(|t| format!("{} {} +- {}", t.name, t.value, t.sd))
         .collect();
     println!("  measured: {}", meas.join(", "));
+    let fitting = s.fitting().len();
+    let others = cal.optima.len() - fitting;
     println!(
-        "{} distinct optim{} from {} starts in {:.3} s:",
+        "{fitting} of {} distinct optima from {} starts in {:.3} s fit the measurements (chi2 <= \
+         {:.2}, the 95 % level for {} measurement{}):",
         cal.optima.len(),
-        if cal.optima.len() == 1 { "um" } else { "a" },
         cal.starts,
-        cal.seconds
+        cal.seconds,
+        s.fit_threshold(),
+        s.measured.len(),
+        if s.measured.len() == 1 { "" } else { "s" }
     );
     for (i, o) in cal.optima.iter().enumerate().take(10) {
+        if i == fitting && others > 0 {
+            println!("  local minima that do not fit:");
+        }
         let params: Vec<String> = names
             .iter()
             .zip(&o.x)

@@ -100,6 +100,13 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// Entry point of the binary: errors are printed as one readable message, never as a panic.
 pub fn main() -> std::process::ExitCode {
+    // `mbgc ... | head` closes the pipe early: end quietly as other Unix tools do (Rust ignores
+    // SIGPIPE, so the next print would panic with "Broken pipe").
+    #[cfg(unix)]
+    // SAFETY: restoring the default action of one signal before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     match run(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {

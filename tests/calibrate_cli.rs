@@ -299,3 +299,61 @@ fn free_releases_a_fixed_parameter_and_refuses_one_that_is_not_fixed() {
         "{e}"
     );
 }
+
+/// Solutions that fit the measurements are told apart from local minima that do not, in the
+/// text, the JSON and the written file; a file holding one point of a solution set says so.
+#[test]
+fn fitting_solutions_are_told_apart_from_local_minima_and_a_set_is_not_one_answer() {
+    let text = ok(&["calibrate", "--material", "examples/gravel.toml"]);
+    assert!(
+        text.contains("1 of 4 distinct optima")
+            && text.contains("fit the measurements (chi2 <= 5.99"),
+        "{text}"
+    );
+    assert!(text.contains("local minima that do not fit:"), "{text}");
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--material",
+        "examples/gravel.toml",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(v["fitting"], 1);
+    assert_eq!(v["solutions"][0]["fits"], true);
+    assert_eq!(v["solutions"][1]["fits"], false);
+    assert!((v["fit_threshold"].as_f64().unwrap() - 5.991).abs() < 1e-3);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.toml");
+    ok(&[
+        "calibrate",
+        "--material",
+        "examples/gravel.toml",
+        "--free",
+        "mu_r_pp,mu_r_pw",
+        "--out",
+        s(&out),
+    ]);
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        written.lines().nth(1).unwrap().starts_with("# NOT UNIQUE"),
+        "{written}"
+    );
+    written.parse::<toml::Table>().unwrap();
+}
+
+/// `mbgc ... | head` ends quietly: a closed pipe is no panic.
+#[test]
+fn a_closed_pipe_ends_the_command_without_a_panic() {
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args(["effects"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+}

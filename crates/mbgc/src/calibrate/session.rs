@@ -277,6 +277,30 @@ impl Session {
             .collect()
     }
 
+    /// The chi^2 below which an optimum fits the measurements: the 95 % quantile of the chi^2
+    /// distribution with one degree of freedom per measurement (what measurement noise alone
+    /// exceeds one time in twenty).
+    pub fn fit_threshold(&self) -> f64 {
+        let n = self.measured.len().max(1) as f64;
+        statrs::distribution::ChiSquared::new(n)
+            .map(|d| statrs::distribution::ContinuousCDF::inverse_cdf(&d, 0.95))
+            .unwrap_or(f64::INFINITY)
+    }
+
+    /// Whether an optimum fits the measurements (chi^2 within [`Session::fit_threshold`]).
+    pub fn fits(&self, o: &Optimum) -> bool {
+        o.chi2 <= self.fit_threshold()
+    }
+
+    /// The optima that fit the measurements, best first.
+    pub fn fitting(&self) -> Vec<&Optimum> {
+        self.calibration
+            .optima
+            .iter()
+            .filter(|o| self.fits(o))
+            .collect()
+    }
+
     /// The equally good optima when they are worth drawing: the data leave a solution set and
     /// the starts found more than one point of it.
     pub fn solution_set(&self) -> Option<Vec<Vec<f64>>> {
@@ -301,9 +325,29 @@ impl Session {
     /// The best parameter set as the TOML file `mbgc validate` reads.
     pub fn calibrated_toml(&self) -> String {
         let mut t = format!(
-            "# Calibrated by mbgc from {} with {}\nmaterial = {:?}\n\n[parameters]\n",
-            self.source, self.model, self.material
+            "# Calibrated by mbgc from {} with {}\n",
+            self.source, self.model
         );
+        // The file holds one point; say when it is not the answer but one of many, or no answer.
+        let fitting = self.fitting().len();
+        if !self.fits(self.best()) {
+            let _ = writeln!(
+                t,
+                "# The best optimum does NOT fit the measurements (chi2 {:.3e} > {:.2}): check the \
+                 material, the model's domain, or a missing effect (mbgc diagnose).",
+                self.best().chi2,
+                self.fit_threshold()
+            );
+        } else if self.solution_set().is_some() || fitting > 1 {
+            let _ = writeln!(
+                t,
+                "# NOT UNIQUE: {fitting} of the optima fit the measurements ({} free parameters, {} \
+                 measurements); this is the best of them, one point of the solution set.",
+                self.free.len(),
+                self.measured.len()
+            );
+        }
+        let _ = write!(t, "material = {:?}\n\n[parameters]\n", self.material);
         for (n, v) in &self.best_inputs {
             let _ = writeln!(t, "{n} = {v:?}");
         }
@@ -347,6 +391,7 @@ impl Session {
                 serde_json::json!({
                     "params": params,
                     "predicted": predicted,
+                    "fits": self.fits(o),
                     "objective": o.chi2,
                     "constraint_violation": o.violation,
                     "starts": o.starts,
@@ -371,6 +416,8 @@ impl Session {
             "model": self.model,
             "model_class": self.model_class,
             "notes": self.notes,
+            "fit_threshold": self.fit_threshold(),
+            "fitting": self.fitting().len(),
             "solutions": solutions,
             "posterior": posterior,
             "log_evidence": self.posterior.as_ref().map(|p| p.ln_evidence),
