@@ -261,6 +261,15 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             String::new()
         }
     );
+    if s.no_value > 0 {
+        eprintln!(
+            "{}: {} of the {} runs done measured no value of some response (NaN in the table; \
+             a fit leaves them out): look at their warnings column",
+            a_out.display(),
+            s.no_value,
+            s.done
+        );
+    }
     if s.retried > 0 {
         eprintln!(
             "{}: {} failed run(s) of earlier attempts removed and run again",
@@ -279,6 +288,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         "planned": s.planned,
         "skipped": s.skipped,
         "done": s.done,
+        "no_value": s.no_value,
         "failed": s.failed,
         "failed_before": s.failed_before,
         "retried": s.retried,

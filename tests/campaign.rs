@@ -1225,3 +1225,38 @@ fn the_model_class_is_recorded_and_a_resume_with_another_is_refused() {
     let e = fails(&args);
     assert!(e.contains("column k_t") && e.contains("k_t_pw"), "{e}");
 }
+
+/// Done runs that measured no value of a response (NaN) are counted apart: the summary, the
+/// JSON and a warning say how many; they stay done rows (exit 0), and a fit leaves them out.
+#[test]
+fn runs_without_a_value_are_counted_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = write(
+        dir.path(),
+        "d.csv",
+        "x,y,no_value\n0.1,0.2,0\n0.3,0.4,1\n0.5,0.6,0\n0.7,0.8,1\n",
+    );
+    let out = dir.path().join("t.csv");
+    let o = mbgc(&[
+        "simulate",
+        "--design",
+        design.to_str().unwrap(),
+        "--experiment",
+        "sleep-test",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (v["done"].as_u64(), v["no_value"].as_u64()),
+        (Some(4), Some(2)),
+        "{v}"
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("2 of the 4 runs done measured no value"),
+        "{err}"
+    );
+}

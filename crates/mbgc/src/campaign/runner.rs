@@ -71,6 +71,10 @@ pub struct Summary {
     pub retried: usize,
     /// Runs completed and recorded as done in this invocation.
     pub done: usize,
+    /// Of the runs done now, those that measured no value (NaN) of some response: a shear box
+    /// whose material ran out flat has no flank. They are in the table as done, and a fit
+    /// leaves them out.
+    pub no_value: usize,
     /// Runs that ended in an error in this invocation (recorded as failed).
     pub failed: usize,
     /// Bytes of an incomplete last line removed from the table before resuming.
@@ -139,6 +143,7 @@ pub fn run_campaign(
         },
         retried,
         done: 0,
+        no_value: 0,
         failed: 0,
         truncated_bytes,
         threads,
@@ -159,7 +164,7 @@ pub fn run_campaign(
 
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
-    let (tx, rx) = mpsc::channel::<(bool, Result<Vec<u8>>)>();
+    let (tx, rx) = mpsc::channel::<(bool, bool, Result<Vec<u8>>)>();
     let mut write_error = None;
     std::thread::scope(|s| {
         for _ in 0..threads {
@@ -169,15 +174,15 @@ pub fn run_campaign(
                 while !stop.load(Ordering::Relaxed) {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(run) = todo.get(i) else { break };
-                    let (failed, line) = execute(experiment, plan, run, opts);
-                    if tx.send((failed, line)).is_err() {
+                    let (failed, no_value, line) = execute(experiment, plan, run, opts);
+                    if tx.send((failed, no_value, line)).is_err() {
                         break;
                     }
                 }
             });
         }
         drop(tx);
-        for (failed, line) in rx {
+        for (failed, no_value, line) in rx {
             if let Err(e) = line.and_then(|l| append(&mut file, &opts.out, &l)) {
                 // Workers finish the runs in flight, whose lines are then dropped (and redone
                 // on the next start); no new run starts.
@@ -189,6 +194,7 @@ pub fn run_campaign(
                 summary.failed += 1;
             } else {
                 summary.done += 1;
+                summary.no_value += usize::from(no_value);
             }
             if let Some(o) = observer {
                 o.run_recorded(failed);
@@ -462,7 +468,7 @@ fn execute(
     plan: &Plan,
     run: &PlannedRun,
     campaign: &CampaignOptions,
-) -> (bool, Result<Vec<u8>>) {
+) -> (bool, bool, Result<Vec<u8>>) {
     let opts = RunOptions {
         vtk_dir: campaign.vtk_dir.as_ref().map(|d| d.join(&run.run_id)),
         picture: None,
@@ -479,8 +485,14 @@ fn execute(
         Ok(Err(e)) => Err(e.to_string()),
         Err(payload) => Err(format!("panic: {}", panic_message(payload.as_ref()))),
     };
+    let no_value = result.as_ref().is_ok_and(|o| {
+        plan.responses
+            .iter()
+            .any(|r| o.get(r).is_some_and(f64::is_nan))
+    });
     (
         result.is_err(),
+        no_value,
         table::run_line(
             run,
             &plan.model_class_label(),

@@ -4,8 +4,8 @@
 //! (through the root package's dev-dependency on `mbgc` with that feature).
 //!
 //! Parameters: `x` in [-1e6, 1e6], `y` in [0, 1e6] (negative `y` is "impossible", to test
-//! [`Experiment::check`]), optional `sleep_ms` (default 0), `fail` and `panic` (a value >= 0.5
-//! makes the run return an error or panic). Responses: `f = x + 2 y` and `noise`, the row seed
+//! [`Experiment::check`]), optional `sleep_ms` (default 0), `fail`, `panic` and `no_value` (a
+//! value >= 0.5 makes the run return an error, panic, or measure `f` as NaN). Responses: `f = x + 2 y` and `noise`, the row seed
 //! mapped to [0, 1), which shows that seeds reach the experiment. A transient failure (one that a
 //! retry can cure): the run with `x` equal to the environment variable `SLEEP_TEST_FAIL_X` fails.
 
@@ -23,6 +23,7 @@ struct Inputs {
     sleep_ms: f64,
     fail: bool,
     panic: bool,
+    no_value: bool,
 }
 
 fn inputs(p: &ParamSet) -> Result<Inputs> {
@@ -32,6 +33,7 @@ fn inputs(p: &ParamSet) -> Result<Inputs> {
         sleep_ms: p.optional("sleep_ms", 0.0, 0.0, 60_000.0)?,
         fail: p.optional("fail", 0.0, 0.0, 1.0)? >= 0.5,
         panic: p.optional("panic", 0.0, 0.0, 1.0)? >= 0.5,
+        no_value: p.optional("no_value", 0.0, 0.0, 1.0)? >= 0.5,
     })
 }
 
@@ -45,7 +47,7 @@ impl Experiment for SleepTest {
     }
 
     fn optional_parameters(&self) -> Vec<&'static str> {
-        vec!["sleep_ms", "fail", "panic"]
+        vec!["sleep_ms", "fail", "panic", "no_value"]
     }
 
     fn responses(&self) -> Vec<&'static str> {
@@ -81,7 +83,14 @@ impl Experiment for SleepTest {
         }
         Ok(Outcome {
             responses: vec![
-                ("f".into(), i.x + 2.0 * i.y),
+                (
+                    "f".into(),
+                    if i.no_value {
+                        f64::NAN
+                    } else {
+                        i.x + 2.0 * i.y
+                    },
+                ),
                 ("noise".into(), seed as f64 / 18_446_744_073_709_551_616.0),
             ],
             diagnostics: Diagnostics {
