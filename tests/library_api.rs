@@ -348,3 +348,57 @@ fn a_group_of_fixed_inputs_is_a_constant() {
     // rho_p still scales the bulk density, so it stays an input the fit reads.
     assert!(kept.needed_inputs().contains(&"rho_p".to_string()));
 }
+
+/// A score on a handful of rows is flagged, and an equation with more constants than its rows
+/// support is too.
+#[test]
+fn small_test_sets_and_constant_heavy_equations_are_warned_of() {
+    let fitted = fit(&plane(), &settings().test_fraction(0.1), |_, _| {}).unwrap();
+    assert_eq!(fitted.model.data.test_rows, 4);
+    assert!(
+        fitted
+            .warnings
+            .iter()
+            .any(|w| w.contains("only 4 test rows")),
+        "{:?}",
+        fitted.warnings
+    );
+    // 12 rows and a noisy response: whatever equation comes out, each of its constants is
+    // counted against the rows, and one with two or more is flagged.
+    let x: Vec<f64> = (0..12).map(|i| i as f64 / 11.0).collect();
+    let y: Vec<f64> = x
+        .iter()
+        .map(|v| (7.0 * v).sin() + 0.3 * (31.0 * v).cos())
+        .collect();
+    let table =
+        TrainingTable::from_columns("noisy", vec![("a".into(), x), ("y".into(), y)]).unwrap();
+    let f = fit(
+        &table,
+        &FitSettings::new(vec!["a".into()], vec!["y".into()])
+            .test_fraction(0.0)
+            .config(Config {
+                population: 500,
+                generations: 10,
+                parsimony: 0.0,
+                seed: 5,
+                ..Config::default()
+            }),
+        |_, _| {},
+    )
+    .unwrap();
+    let constants = f.model.responses[0]
+        .program
+        .iter()
+        .filter(|n| matches!(n, mbgc::gp::Node::Const(_)))
+        .count();
+    let warned = f
+        .warnings
+        .iter()
+        .any(|w| w.contains("constants fitted to 12 rows"));
+    assert_eq!(
+        warned,
+        constants * 10 > 12,
+        "{constants} constants: {:?}",
+        f.warnings
+    );
+}

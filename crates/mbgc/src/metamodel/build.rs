@@ -17,6 +17,12 @@ use mbgc_sr::{self as gp, expr, Dataset};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 
+/// Rows per fitted constant below which an equation is reported as possibly following the noise
+/// (the usual rule of thumb of ten observations per regression coefficient).
+pub const ROWS_PER_CONSTANT: usize = 10;
+/// Fewest rows whose R^2 is reported without a warning that it says little.
+pub const MIN_SCORED_ROWS: usize = 10;
+
 /// A fitted metamodel and what it was scored on.
 #[derive(Clone, Debug)]
 pub struct Fit {
@@ -429,6 +435,35 @@ fn fit_response(
             "the equation for {target} is not finite on some test rows (they lie outside the \
              training box)"
         ));
+    }
+    // What a reader of the metrics should know: an equation with more constants than its rows
+    // support can follow the noise, and a score on a handful of rows says little.
+    let constants = best
+        .program
+        .iter()
+        .filter(|n| matches!(n, gp::Node::Const(_)))
+        .count();
+    if constants * ROWS_PER_CONSTANT > train.rows() {
+        warnings.push(format!(
+            "the equation for {target} has {constants} constants fitted to {} rows (fewer than \
+             {ROWS_PER_CONSTANT} rows per constant): it may follow the noise; judge it by its \
+             validation or test error, or ask for a shorter one (--max-length, --parsimony)",
+            train.rows()
+        ));
+    }
+    for (set, rows) in [
+        ("test", test.rows()),
+        (
+            "validation",
+            rows.validation.as_ref().map_or(0, |v| v.0[0].len()),
+        ),
+    ] {
+        if rows > 0 && rows < MIN_SCORED_ROWS {
+            warnings.push(format!(
+                "{target}: only {rows} {set} rows; an R^2 on fewer than {MIN_SCORED_ROWS} rows \
+                 says little about the equation's error"
+            ));
+        }
     }
     let test_metrics = (test.rows() > 0).then(|| Metrics::of(&test.y, &test_pred));
     let validation = rows.validation.as_ref().map(|(v, x)| {
