@@ -16,9 +16,12 @@ pub struct SampleArgs {
     /// Design method.
     #[arg(long, value_parser = crate::choice::choice::<Method>(Method::ALL.map(Method::name)))]
     pub method: Method,
-    /// Number of new points.
-    #[arg(long)]
-    pub n: usize,
+    /// Points of a new design (as `train --n`: the design's size).
+    #[arg(long, required_unless_present = "add", conflicts_with = "add")]
+    pub n: Option<usize>,
+    /// Points to add to the design of `--extend` (its size grows by this many).
+    #[arg(long, requires = "extend")]
+    pub add: Option<usize>,
     /// Parameter space (values written in physical units).
     #[arg(long, conflicts_with = "dim", required_unless_present = "dim")]
     pub space: Option<PathBuf>,
@@ -64,13 +67,26 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
         (None, Some(d)) => d,
         (None, None) => unreachable!("clap requires --space or --dim"),
     };
-    if a.n == 0 {
-        anyhow::bail!("--n: expected at least one new point");
+    // One meaning per name: --n is a design's size (here and in `train`), --add the points an
+    // extension adds.
+    let (flag, n) = match (a.n, a.add) {
+        (Some(_), _) if a.extend.is_some() => anyhow::bail!(
+            "--n with --extend: --n is the size of a new design; give the points to add to {} \
+             with --add",
+            a.extend
+                .as_ref()
+                .map_or(String::new(), |p| p.display().to_string())
+        ),
+        (Some(n), _) => ("--n", n),
+        (None, Some(m)) => ("--add", m),
+        (None, None) => unreachable!("clap requires --n or --add"),
+    };
+    if n == 0 {
+        anyhow::bail!("{flag}: expected at least one new point");
     }
-    if a.n.checked_mul(dim).is_none_or(|v| v > MAX_VALUES) {
+    if n.checked_mul(dim).is_none_or(|v| v > MAX_VALUES) {
         anyhow::bail!(
-            "--n {} in {dim} dimensions: expected at most {MAX_VALUES} values in all (n x dim)",
-            a.n
+            "{flag} {n} in {dim} dimensions: expected at most {MAX_VALUES} values in all (n x dim)"
         );
     }
     let mut design = match &a.extend {
@@ -104,7 +120,7 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
         m => m.sampler(),
     };
     let n_old = design.len();
-    let new: Points = extend_design(sampler.as_ref(), &design.unit, a.n, a.seed)
+    let new: Points = extend_design(sampler.as_ref(), &design.unit, n, a.seed)
         .with_context(|| format!("sampling with {}", a.method.name()))?;
     design.append_unit(space.as_ref(), &new);
     design.write(&a.out)?;
@@ -116,7 +132,7 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
         a.out.display(),
         design.len(),
         n_old,
-        a.n,
+        n,
         a.method.name(),
         a.seed,
         dim,
@@ -134,7 +150,7 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
         "seed": a.seed,
         "dim": dim,
         "existing": n_old,
-        "new": a.n,
+        "new": n,
         "n": design.len(),
         "metrics": m,
     }))

@@ -156,7 +156,7 @@ fn no_command_overwrites_its_own_input() {
         "sample",
         "--method",
         "sobol",
-        "--n",
+        "--add",
         "4",
         "--space",
         s(&space),

@@ -133,7 +133,7 @@ fn extend_keeps_old_points_first_and_unchanged() {
         "sample",
         "--method",
         "fssf-f",
-        "--n",
+        "--add",
         "10",
         "--space",
         SPACE,
@@ -172,7 +172,7 @@ fn extend_keeps_old_points_first_and_unchanged() {
         "sample",
         "--method",
         "halton",
-        "--n",
+        "--add",
         "8",
         "--dim",
         "3",
@@ -186,7 +186,7 @@ fn extend_keeps_old_points_first_and_unchanged() {
         "sample",
         "--method",
         "lhs",
-        "--n",
+        "--add",
         "8",
         "--dim",
         "3",
@@ -200,7 +200,7 @@ fn extend_keeps_old_points_first_and_unchanged() {
         "sample",
         "--method",
         "fssf-f",
-        "--n",
+        "--add",
         "8",
         "--dim",
         "4",
@@ -345,4 +345,24 @@ fn dem_bench_prints_the_json_fields() {
     assert_eq!(j["threads"], 2);
     let e = fails(&["bench", "dem", "--particles", "0"]);
     assert!(e.contains("--particles"), "{e}");
+}
+
+/// `--n` means a design's size everywhere (as in `train`); the points an extension adds are
+/// `--add`, and `--n` beside `--extend` is refused instead of being read as new points.
+#[test]
+fn n_is_a_size_and_add_extends() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("d.csv");
+    let ds = d.to_str().unwrap();
+    ok(&[
+        "sample", "--method", "sobol", "--dim", "2", "--n", "8", "--out", ds,
+    ]);
+    let e = fails(&[
+        "sample", "--method", "sobol", "--dim", "2", "--n", "12", "--extend", ds, "--out", ds,
+    ]);
+    assert!(e.contains("--add"), "{e}");
+    ok(&[
+        "sample", "--method", "sobol", "--dim", "2", "--add", "4", "--extend", ds, "--out", ds,
+    ]);
+    assert_eq!(std::fs::read_to_string(&d).unwrap().lines().count(), 1 + 12);
 }
