@@ -103,6 +103,19 @@ fn run_import(a: &ImportArgs) -> anyhow::Result<()> {
         .with_context(context)?;
     let (ready, missing) = ready_runs(&plan, &a.decks);
     let stray = stray_dirs(&plan, &a.decks)?;
+    // Run directories none of which the campaign names: campaign.json or design.csv changed
+    // after the decks were written (each run id hashes the row, seed and settings).
+    if !stray.is_empty() && ready.is_empty() {
+        anyhow::bail!(
+            "{}: {} run directories belong to no run of the campaign that {} and {} describe now, \
+             and no run of it has a result (the run ids differ: were the files edited after \
+             --write-decks?); restore them, or write the decks again",
+            a.decks.display(),
+            stray.len(),
+            CAMPAIGN_FILE,
+            DESIGN_FILE
+        );
+    }
     if !stray.is_empty() {
         eprintln!(
             "{}: {} directories are no run of this campaign and were not read: {}",
@@ -185,11 +198,13 @@ fn run_merge(a: &MergeArgs) -> anyhow::Result<()> {
     }
     say!(
         out,
-        "{}: {} runs from {} tables ({} duplicates dropped)",
+        "{}: {} runs from {} tables ({} duplicates dropped, {} failed runs superseded by their \
+         reruns)",
         a.out.display(),
         s.rows,
         a.tables.len(),
-        s.duplicates
+        s.duplicates,
+        s.superseded_failures
     );
     out.object(&serde_json::json!({
         "out": a.out,

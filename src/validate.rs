@@ -80,7 +80,21 @@ fn check_picture(p: &std::path::Path) -> anyhow::Result<()> {
 }
 
 /// The parameters, the predicted responses and the `[model] class` of a parameter file.
-type ParamsFile = (ParamSet, Vec<(String, f64)>, Option<ModelClass>);
+type ParamsFile = (
+    ParamSet,
+    Vec<(String, f64)>,
+    Option<ModelClass>,
+    Option<Trained>,
+);
+
+/// The experiment and box scale a parameter file's metamodel was trained on (its `[experiment]`
+/// table, written by `calibrate --out`).
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Trained {
+    name: String,
+    box_scale: Option<f64>,
+}
 
 fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
     let file = path.display().to_string();
@@ -112,11 +126,11 @@ fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
         anyhow::bail!(Error::input(&file, "parameters", "a [parameters] table"));
     }
     for key in doc.keys() {
-        if !["parameters", "predicted", "model", "material"].contains(&key.as_str()) {
+        if !["parameters", "predicted", "model", "experiment", "material"].contains(&key.as_str()) {
             anyhow::bail!(Error::input(
                 &file,
                 key,
-                "unknown; expected [parameters], [predicted], [model] or material"
+                "unknown; expected [parameters], [predicted], [model], [experiment] or material"
             ));
         }
     }
@@ -130,7 +144,20 @@ fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
             Some(t.class(&file)?)
         }
     };
-    Ok((ParamSet::from_pairs(&params), table("predicted")?, class))
+    let trained = match doc.get("experiment") {
+        None => None,
+        Some(e) => Some(
+            e.clone()
+                .try_into::<Trained>()
+                .map_err(|e| Error::input(&file, "experiment", e.message()))?,
+        ),
+    };
+    Ok((
+        ParamSet::from_pairs(&params),
+        table("predicted")?,
+        class,
+        trained,
+    ))
 }
 
 /// The class a validation runs: `--model-class`, the parameter file's, the material's, in that
@@ -165,6 +192,9 @@ fn resolve_class(
 
 pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
     let report = Output::new(a.json);
+    if a.threads == 0 {
+        anyhow::bail!("--threads 0: expected at least 1");
+    }
     if let Some(t) = a.tolerance {
         if !(t.is_finite() && t > 0.0) {
             anyhow::bail!("--tolerance {t}: expected a positive relative deviation such as 0.05");
@@ -181,7 +211,30 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         }
         refuse_overwriting_inputs("--picture", p, &inputs)?;
     }
-    let (mut params, predicted, params_class) = read_params(&a.params)?;
+    let (mut params, predicted, params_class, trained) = read_params(&a.params)?;
+    // The DEM must run the experiment, at the scale, the metamodel was trained on.
+    let mut box_scale = a.box_scale;
+    if let Some(t) = &trained {
+        if t.name != a.experiment {
+            anyhow::bail!(
+                "--experiment {}: the model behind {} was trained on {} runs; validating in \
+                 another experiment compares nothing it predicts",
+                a.experiment,
+                a.params.display(),
+                t.name
+            );
+        }
+        match (a.box_scale, t.box_scale) {
+            (Some(k), Some(trained)) if (k - trained).abs() > 1e-9 * trained => anyhow::bail!(
+                "--box-scale {k}: the model behind {} was trained at box scale {trained}; the \
+                 responses depend on the scale (a smaller box reads a steeper angle), so a run at \
+                 {k} does not test it; drop --box-scale or pass {trained}",
+                a.params.display()
+            ),
+            (None, Some(trained)) => box_scale = Some(trained),
+            _ => {}
+        }
+    }
     let class = resolve_class(
         a.model_class,
         (params_class, &a.params),
@@ -198,7 +251,7 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
     let exp = experiment_by_name(
         &a.experiment,
         &ExperimentSettings {
-            box_scale: a.box_scale,
+            box_scale,
             model_class: class,
             ..Default::default()
         },
@@ -221,6 +274,37 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         .into_iter()
         .chain(exp.optional_parameters())
         .collect();
+    // A name the experiment does not read would be carried along and do nothing.
+    for (name, _) in params.iter() {
+        if !known.contains(&name) {
+            anyhow::bail!(Error::input(
+                a.params.display(),
+                format!("parameters.{name}"),
+                format!(
+                    "not a parameter of {}; expected one of: {}",
+                    exp.name(),
+                    known.join(", ")
+                )
+            ));
+        }
+    }
+    // The material's fixed values are measurements or choices the calibration kept; a parameter
+    // file that says otherwise would validate another material.
+    for (name, fixed) in &material.fixed {
+        if let Some(v) = params.get(name) {
+            if (v - fixed).abs() > 1e-12 * fixed.abs().max(1e-300) {
+                anyhow::bail!(Error::input(
+                    a.params.display(),
+                    format!("parameters.{name}"),
+                    format!(
+                        "{fixed}, the value {} fixes, found {v}; calibrate again or remove it \
+                         from one of the files",
+                        a.material.display()
+                    )
+                ));
+            }
+        }
+    }
     for s in &a.set {
         let (k, v) = mbgc::campaign::parse_set(s)?;
         class

@@ -357,3 +357,52 @@ fn a_closed_pipe_ends_the_command_without_a_panic() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// validate runs what the model was trained on or refuses: the box scale the calibrated file
+/// records, parameters the experiment reads, the material's own fixed values, a thread or more.
+#[test]
+fn validate_refuses_what_would_test_another_model_or_do_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("p.toml");
+    ok(&[
+        "calibrate",
+        "--material",
+        "examples/gravel.toml",
+        "--out",
+        s(&params),
+    ]);
+    let text = std::fs::read_to_string(&params).unwrap();
+    assert!(
+        text.contains("[experiment]\nname = \"shear-box\"\nbox_scale = 10.0"),
+        "{text}"
+    );
+    let validate = |p: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "validate",
+            "--material",
+            "examples/gravel.toml",
+            "--params",
+            s(p),
+        ];
+        args.extend_from_slice(extra);
+        fails(&args)
+    };
+    let e = validate(&params, &["--box-scale", "6"]);
+    assert!(
+        e.contains("--box-scale 6") && e.contains("trained at box scale 10"),
+        "{e}"
+    );
+    let e = validate(&params, &["--threads", "0"]);
+    assert!(e.contains("--threads 0"), "{e}");
+    let typo = dir.path().join("typo.toml");
+    std::fs::write(&typo, text.replace("mu_pp = ", "mu_ppp = 0.3\nmu_pp = ")).unwrap();
+    let e = validate(&typo, &[]);
+    assert!(
+        e.contains("parameters.mu_ppp: not a parameter of shear-box"),
+        "{e}"
+    );
+    let other = dir.path().join("other.toml");
+    std::fs::write(&other, text.replace("mu_pw = 0.363", "mu_pw = 0.5")).unwrap();
+    let e = validate(&other, &[]);
+    assert!(e.contains("parameters.mu_pw") && e.contains("0.363"), "{e}");
+}

@@ -1260,3 +1260,94 @@ fn runs_without_a_value_are_counted_apart() {
         "{err}"
     );
 }
+
+/// A failed run in one table and the same run done in another (a rerun that succeeded
+/// elsewhere) merge to the done run, in either order; the summary counts it.
+#[test]
+fn merge_keeps_the_rerun_that_succeeded() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let design = write(d, "d.csv", "x,y\n0.1,0.2\n0.3,0.4\n0.5,0.6\n");
+    let done = d.join("done.csv");
+    simulate_sleep(&design, &done, &[]);
+    let text = std::fs::read_to_string(&done).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let first = lines.next().unwrap();
+    let fields: Vec<&str> = first.split(',').collect();
+    let failed_line = format!(
+        "{},{},failed,{}{}",
+        fields[0],
+        fields[1],
+        fields[3..fields.len() - 1].join(","),
+        ",sleep-test: transient"
+    );
+    let failed = write(d, "failed.csv", &format!("{header}\n{failed_line}\n"));
+    for order in [[&failed, &done], [&done, &failed]] {
+        let out = d.join("merged.csv");
+        let merged = merge(&[order[0].as_path(), order[1].as_path()], &out);
+        let merged = String::from_utf8(merged).unwrap();
+        assert!(!merged.contains(",failed,"), "{merged}");
+        assert_eq!(merged.lines().count(), text.lines().count());
+    }
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "campaign",
+        "merge",
+        s(&failed),
+        s(&done),
+        "--out",
+        s(&d.join("m2.csv")),
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(v["summary"]["superseded_failures"], 1, "{v}");
+}
+
+/// Decks whose campaign.json or design.csv was edited after --write-decks name other runs:
+/// import refuses instead of reporting "0 imported" and exiting 0.
+#[test]
+fn import_refuses_decks_of_an_edited_campaign() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let design = write(d, "d.csv", "mu_pp,rho_p\n0.3,2500\n0.5,2600\n");
+    let decks = d.join("decks");
+    let mut args = vec![
+        "simulate",
+        "--design",
+        s(&design),
+        "--experiment",
+        "shear-box",
+        "--backend",
+        "liggghts",
+        "--write-decks",
+        s(&decks),
+        "--box-scale",
+        "4",
+    ];
+    for kv in [
+        "E_p=4e7",
+        "E_w=4e7",
+        "nu_p=0.25",
+        "e_pp=0.5",
+        "e_pw=0.5",
+        "mu_pw=0.3",
+        "mu_r_pp=0.3",
+        "mu_r_pw=0.3",
+        "d50=8",
+        "sigma_ln=0.2",
+    ] {
+        args.extend(["--set", kv]);
+    }
+    ok(&args);
+    let text = std::fs::read_to_string(decks.join("design.csv")).unwrap();
+    std::fs::write(decks.join("design.csv"), text.replace("\n0.3,", "\n0.35,")).unwrap();
+    let e = fails(&[
+        "campaign",
+        "import",
+        "--decks",
+        s(&decks),
+        "--out",
+        s(&d.join("t.csv")),
+    ]);
+    assert!(e.contains("edited after --write-decks"), "{e}");
+}

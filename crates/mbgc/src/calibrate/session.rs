@@ -113,6 +113,10 @@ pub struct Session {
     pub model: String,
     /// The model class the metamodel was trained on, if it records one.
     pub model_class: Option<String>,
+    /// The experiment the metamodel's training runs measured, if it records one.
+    pub experiment: Option<String>,
+    /// The box scale of those runs, if the experiment has one.
+    pub box_scale: Option<f64>,
     /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
     pub notes: Vec<String>,
     /// The material's fixed parameters, in file order.
@@ -234,6 +238,8 @@ pub fn run(
         source: material.source.clone(),
         model: model_name.to_string(),
         model_class: model.model_class.clone(),
+        experiment: model.experiment.clone(),
+        box_scale: model.box_scale,
         notes: problem.notes.clone(),
         fixed: material.fixed.clone(),
         measured: problem
@@ -358,6 +364,13 @@ impl Session {
         // `mbgc validate` reruns the DEM with the effects the metamodel was trained on.
         if let Some(c) = &self.model_class {
             let _ = write!(t, "\n[model]\nclass = {c:?}\n");
+        }
+        // ... and in the experiment and at the scale its training runs had.
+        if let Some(e) = &self.experiment {
+            let _ = write!(t, "\n[experiment]\nname = {e:?}\n");
+            if let Some(k) = self.box_scale {
+                let _ = writeln!(t, "box_scale = {k:?}");
+            }
         }
         t
     }

@@ -10,7 +10,7 @@ use csv::StringRecord;
 use super::columns::{backend_of, is_pre_class_header, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE};
 use super::lock::TableLock;
 use super::status::Meta;
-use super::table::{self, csv_line, read_table, WALL_TIME_COLUMN};
+use super::table::{self, csv_line, read_table, DONE, FAILED, WALL_TIME_COLUMN};
 use crate::error::{write_atomic, Error, Result};
 
 /// What [`merge`] did.
@@ -20,13 +20,16 @@ pub struct MergeSummary {
     pub rows: usize,
     /// Records seen more than once (kept once).
     pub duplicates: usize,
+    /// Failed runs left out because another table holds the same run done (a rerun that
+    /// succeeded, e.g. with `--retry-failed` on another machine).
+    pub superseded_failures: usize,
     /// Inputs whose incomplete last line was left out.
     pub partial_lines: Vec<PathBuf>,
 }
 
 /// Merges `inputs` into `out` (written atomically; `out` may be one of the inputs). Two records
 /// with the same run id must agree in every column but `wall_time_s` (a measured time), or the
-/// merge is refused; two run ids for the same row mean tables of different campaigns and are
+/// merge is refused, unless one of them failed: a done run supersedes a failed one (a rerun); two run ids for the same row mean tables of different campaigns and are
 /// refused too.
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     // A simulate still appending to `out` would lose its later lines to the rename.
@@ -117,6 +120,7 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
     let mut summary = MergeSummary {
         rows: 0,
         duplicates: 0,
+        superseded_failures: 0,
         partial_lines: Vec::new(),
     };
     for path in inputs {
@@ -209,6 +213,23 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
                              experiment differ)"
                         ),
                     ));
+                }
+            }
+            // Status is the third column of every campaign table.
+            let status = |r: &StringRecord| r.get(2).map(str::to_string).unwrap_or_default();
+            if let Some((_, _, _, r0)) = by_id.get(&id) {
+                let (before, now) = (status(r0), status(&r));
+                // A rerun: the done run supersedes the failed one; two failures are one failure.
+                if before == FAILED || now == FAILED {
+                    if before == FAILED && now == DONE {
+                        by_id.insert(id.clone(), (row, file.clone(), line, r));
+                        summary.superseded_failures += 1;
+                    } else if before == DONE {
+                        summary.superseded_failures += 1;
+                    } else {
+                        summary.duplicates += 1;
+                    }
+                    continue;
                 }
             }
             match by_id.get(&id) {

@@ -108,6 +108,15 @@ fn no_box_scale(name: &str, s: &ExperimentSettings, why: &str) -> Result<()> {
     }
 }
 
+/// The box scale an experiment runs at when `given` is what the command line said: the shear
+/// box's own default when none was given; `None` for experiments without a box scale.
+pub fn effective_box_scale(experiment: &str, given: Option<f64>) -> Option<f64> {
+    match experiment {
+        "shear-box" => Some(given.unwrap_or(ShearBox::default().box_scale)),
+        _ => given,
+    }
+}
+
 /// Builds an experiment from the campaign-wide settings.
 pub type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
 

@@ -644,6 +644,9 @@ pub fn fit(
         },
         groups: scaling.groups,
         experiment: table.campaign.as_ref().map(|m| m.experiment.clone()),
+        box_scale: table.campaign.as_ref().and_then(|m| {
+            crate::campaign::registry::effective_box_scale(&m.experiment, m.box_scale)
+        }),
         constants: constants(table, settings),
     };
     Ok(Fit {

@@ -330,6 +330,10 @@ pub struct Metamodel {
     /// sidecar; null when the data did not say.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub experiment: Option<String>,
+    /// The experiment's box scale in the training runs (the shear box's k, its smallest side in
+    /// d_max), when it has one: a validation at another scale would compare other physics.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub box_scale: Option<f64>,
     /// Parameters the campaign held at one value that are not inputs (a local space's known
     /// material values): the model describes runs at these values only.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
