@@ -39,6 +39,12 @@ fn base(b: &str) -> String {
 pub fn symbol(name: &str) -> String {
     let mut parts = name.split('_');
     let head = parts.next().unwrap_or("");
+    // A name made of words (`shear_angle`) is text, not a symbol with subscripts.
+    let is_word = |w: &str| w.chars().count() > 2 && w.chars().all(|c| c.is_ascii_alphabetic());
+    if !GREEK.contains(&head) && is_word(head) && name.split('_').skip(1).all(is_word) {
+        let words: Vec<String> = name.split('_').map(escape).collect();
+        return format!("\\mathrm{{{}}}", words.join("\\ "));
+    }
     let mut subs: Vec<String> = parts.filter(|p| !p.is_empty()).map(escape).collect();
     let split = head.find(|c: char| c.is_ascii_digit()).filter(|&i| i > 0);
     let b = match split {
@@ -205,14 +211,27 @@ fn product(e: &Expr, names: &[String]) -> (String, u8) {
     }
 }
 
+/// A scaling that changes nothing (`Linear` with offset 0 and width 1, a parameter whose range
+/// is already [0, 1]) is written as the input itself, not as `(x - 0)/1`.
+fn is_identity(t: &Transform) -> bool {
+    match *t {
+        Transform::Identity => true,
+        Transform::Linear { offset, width } => offset == 0.0 && width == 1.0,
+        Transform::Log { .. } => false,
+    }
+}
+
 /// The right-hand side of one response's equation.
 pub fn equation(m: &Metamodel, response: usize) -> String {
     let names: Vec<String> = m
         .inputs
         .iter()
-        .map(|i| match i.transform {
-            Transform::Identity => symbol(&i.name),
-            _ => format!("\\tilde{{{}}}", symbol(&i.name)),
+        .map(|i| {
+            if is_identity(&i.transform) {
+                symbol(&i.name)
+            } else {
+                format!("\\tilde{{{}}}", symbol(&i.name))
+            }
         })
         .collect();
     latex(&Expr::from_postfix(&m.responses[response].program), &names).0
@@ -227,6 +246,7 @@ pub fn document(m: &Metamodel) -> String {
     for i in &m.inputs {
         let s = symbol(&i.name);
         match i.transform {
+            _ if is_identity(&i.transform) => {}
             Transform::Identity => {}
             Transform::Linear { offset, width } => rows.push(format!(
                 "\\tilde{{{s}}} &= \\frac{{{s} - {}}}{{{}}}",
@@ -255,7 +275,9 @@ mod tests {
         assert_eq!(symbol("mu_r_pp"), "\\mu_{r,pp}");
         assert_eq!(symbol("d50"), "d_{50}");
         assert_eq!(symbol("E_p"), "E_{p}");
-        assert_eq!(symbol("shear_angle"), "\\mathrm{shear}_{angle}");
+        assert_eq!(symbol("shear_angle"), "\\mathrm{shear\\ angle}");
+        assert_eq!(symbol("flow_rate_t1"), "\\mathrm{flow}_{rate,t1}");
+        assert_eq!(symbol("sigma_ln"), "\\sigma_{ln}");
     }
 
     #[test]
