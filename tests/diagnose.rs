@@ -262,3 +262,34 @@ fn bad_measurement_sets_name_the_file_the_sample_and_the_field() {
         .to_string();
     assert!(e.contains("fixed.e_pp") && e.contains("set.toml"), "{e}");
 }
+
+/// A measurement set whose fixed values put a sample's stiffness group outside the model's
+/// training range is told which group, its value and the range (it used to end in "tmcmc: the
+/// likelihood is zero (-inf) at all 2000 prior samples").
+#[test]
+fn a_group_outside_the_model_is_named_not_a_zero_likelihood() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/measurements/control.toml"
+    ))
+    .unwrap()
+    .replace("E_p = 5e6", "E_p = 5e7")
+    .replace("E_w = 5e6", "E_w = 5e7")
+    .replace("mu_r_pw = 0\n", "mu_r_pw = 0.3\n");
+    let path = dir.path().join("stiff.toml");
+    std::fs::write(&path, set).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args(["diagnose", "--measurements", path.to_str().unwrap()])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("K_p = 101.9 E_p / (rho_p d50) is 9.8016e5")
+            && e.contains("[9.8272e3, 1.9436e5]"),
+        "{e}"
+    );
+    assert!(!e.contains("likelihood is zero"), "{e}");
+}

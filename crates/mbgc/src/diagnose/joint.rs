@@ -333,6 +333,18 @@ impl<'s> Joint<'s> {
                         };
                         slots.push((k, j));
                     }
+                    // A group its fixed inputs already put outside the training range has no
+                    // point of the search box inside it: say which, instead of a likelihood
+                    // that is zero everywhere.
+                    if let Some((g, v, [lo, hi])) = m.groups_fixed_outside(&x).into_iter().next() {
+                        return Err(format!(
+                            "sample \"{}\": {g} is {v:.4e} from the set's fixed values and the \
+                             sample's PSD, outside {}'s range [{lo:.4e}, {hi:.4e}] (the range of \
+                             its training runs); change the fixed values it is made of, or use a \
+                             model trained over this range",
+                            s.name, m.label
+                        ));
+                    }
                     Ok(Row {
                         model: mi,
                         x,

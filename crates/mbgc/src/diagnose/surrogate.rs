@@ -11,6 +11,9 @@ use mbgc_dem::contact::ModelClass;
 
 type Predict = dyn Fn(usize, &[f64]) -> f64 + Send + Sync;
 type Outside = dyn Fn(&[f64]) -> f64 + Send + Sync;
+/// Groups decided by the known inputs and outside their range: `(group = formula, value,
+/// range)`.
+type FixedOutside = dyn Fn(&[f64]) -> Vec<(String, f64, [f64; 2])> + Send + Sync;
 
 /// A model as a diagnosis uses it: class, experiment, input domains, fixed constants, responses
 /// with their own error, and a prediction function.
@@ -34,6 +37,8 @@ pub struct Surrogate {
     predict: Box<Predict>,
     /// Squared distance (in ln units) of derived groups outside their fitted range; 0 inside.
     outside: Box<Outside>,
+    /// The groups that the known inputs of `x` (free ones NaN) already put outside their range.
+    fixed_outside: Box<FixedOutside>,
 }
 
 impl Surrogate {
@@ -60,7 +65,7 @@ impl Surrogate {
             .map(|r| r.validation.or(r.test).map_or(0.0, |v| v.rmse))
             .collect();
         let m = Arc::new(m);
-        let (mp, mo) = (m.clone(), m.clone());
+        let (mp, mo, mf) = (m.clone(), m.clone(), m.clone());
         Ok(Surrogate {
             label,
             class,
@@ -75,6 +80,21 @@ impl Surrogate {
             responses: m.responses.iter().map(|r| r.name.clone()).collect(),
             error,
             predict: Box::new(move |r, x| mp.predict_point(&mp.responses[r], x)),
+            fixed_outside: Box::new(move |x| {
+                mf.groups
+                    .iter()
+                    .filter_map(|gd| {
+                        let v = mf.group_value(&gd.group, x);
+                        (v.is_finite() && !(v >= gd.domain[0] && v <= gd.domain[1])).then(|| {
+                            (
+                                format!("{} = {}", gd.group.name, gd.group.monomial.text()),
+                                v,
+                                gd.domain,
+                            )
+                        })
+                    })
+                    .collect()
+            }),
             outside: Box::new(move |x| {
                 mo.groups
                     .iter()
@@ -118,6 +138,7 @@ impl Surrogate {
             error: responses.iter().map(|(_, e)| *e).collect(),
             predict: Box::new(f),
             outside: Box::new(|_| 0.0),
+            fixed_outside: Box::new(|_| Vec::new()),
         }
     }
 
@@ -131,6 +152,12 @@ impl Surrogate {
     /// fitted range; 0 inside. The joint fit penalises it to keep away from extrapolation.
     pub fn outside(&self, x: &[f64]) -> f64 {
         (self.outside)(x)
+    }
+
+    /// The dimensionless groups that the known entries of `x` (the free ones NaN) already place
+    /// outside the model's range, whatever the free ones: `(group = formula, value, range)`.
+    pub fn groups_fixed_outside(&self, x: &[f64]) -> Vec<(String, f64, [f64; 2])> {
+        (self.fixed_outside)(x)
     }
 
     /// Index of input `name`, if the model has it.
