@@ -9,6 +9,7 @@ pub mod boxplot;
 pub mod corner;
 pub mod diagnosis;
 pub mod fit_figures;
+pub mod labels;
 pub mod parity;
 pub mod psd;
 pub mod sensitivity;
