@@ -194,15 +194,34 @@ pub fn csv_error(file: &str, e: csv::Error) -> Error {
     }
 }
 
+/// A CSV reader over a file's bytes, held in memory.
+pub type CsvReader = csv::Reader<std::io::Cursor<Vec<u8>>>;
+
 /// Opens a CSV file (fields trimmed) and returns the reader with its header. A column name that
 /// appears twice is refused: a reader looking it up would silently take the first.
-pub fn csv_open(path: &Path) -> Result<(csv::Reader<std::fs::File>, Vec<String>)> {
+pub fn csv_open(path: &Path) -> Result<(CsvReader, Vec<String>)> {
     let file = path.display().to_string();
+    let mut bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    // CRLF line ends (Windows, git's autocrlf): the csv reader would number every line after
+    // the first one short, so errors would point at the wrong line.
+    if bytes.windows(2).any(|w| w == b"\r\n") {
+        bytes = crlf_to_lf(&bytes);
+    }
     let rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| csv_error(&file, e))?;
+        .from_reader(std::io::Cursor::new(bytes));
     with_header(&file, rdr)
+}
+
+/// The bytes with every `\r\n` turned into `\n` (a lone `\r` is kept).
+fn crlf_to_lf(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len());
+    for (k, &b) in bytes.iter().enumerate() {
+        if !(b == b'\r' && bytes.get(k + 1) == Some(&b'\n')) {
+            out.push(b);
+        }
+    }
+    out
 }
 
 /// CSV text already in memory, read like [`csv_open`] but with `#` comment lines skipped
@@ -411,6 +430,23 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Entries<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Errors in a CRLF file name the line an editor shows, as in an LF file.
+    #[test]
+    fn crlf_files_report_the_lines_an_editor_shows() {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, end) in [("lf.csv", "\n"), ("crlf.csv", "\r\n")] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, ["x,y", "1,2", "3,4", "5,6"].join(end) + end).unwrap();
+            let (mut rdr, header) = csv_open(&path).unwrap();
+            assert_eq!(header, ["x", "y"]);
+            let lines: Vec<u64> = rdr
+                .records()
+                .map(|r| r.unwrap().position().unwrap().line())
+                .collect();
+            assert_eq!(lines, [2, 3, 4], "{name}");
+        }
+    }
 
     fn leftovers(dir: &Path) -> Vec<String> {
         std::fs::read_dir(dir)
