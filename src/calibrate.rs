@@ -169,13 +169,19 @@ fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
     let mut figures = Vec::new();
     if let (Some(post), Some(frame)) = (&s.posterior, s.posterior_frame()) {
         let path = dir.join(posterior);
-        let (marks, ranges) = (Some(&frame.marks[..]), Some(&frame.ranges[..]));
-        mbgc::plot::corner::corner(&path, &post.names, &post.draws, marks, ranges)?;
+        let key = if frame.marks.len() > s.free.len() {
+            "best optimum (σ: posterior mean)"
+        } else {
+            "best optimum"
+        };
+        let (marks, ranges) = (Some((&frame.marks[..], key)), Some(&frame.ranges[..]));
+        mbgc::plot::corner::corner_keyed(&path, &post.names, &post.draws, marks, ranges)?;
         figures.push(path);
     }
     if let Some(good) = s.solution_set() {
         let path = dir.join(solution_set);
-        mbgc::plot::corner::corner(&path, &s.free, &good, Some(&s.best().x), Some(&s.bounds))?;
+        let marks = Some((&s.best().x[..], "best optimum"));
+        mbgc::plot::corner::corner_keyed(&path, &s.free, &good, marks, Some(&s.bounds))?;
         figures.push(path);
     }
     Ok(figures)

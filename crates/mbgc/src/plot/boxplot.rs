@@ -55,10 +55,10 @@ fn draw_panel<DB: DrawingBackend>(
     let pad = ((hi - lo) * 0.08).max(1e-6);
     let y_range = (lo - pad).max(0.0) as f32..(hi + pad) as f32;
     let mut chart = ChartBuilder::on(area)
-        .caption(&panel.title, ("sans-serif", 20))
+        .caption(&panel.title, (super::FONT, 20))
         .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
         .build_cartesian_2d(labels[..].into_segmented(), y_range)?;
     chart
         .configure_mesh()
@@ -68,7 +68,8 @@ fn draw_panel<DB: DrawingBackend>(
             SegmentValue::CenterOf(s) | SegmentValue::Exact(s) => s.to_string(),
             SegmentValue::Last => String::new(),
         })
-        .x_label_style(("sans-serif", 12))
+        .label_style((super::FONT, super::TICK_FONT))
+        .axis_desc_style((super::FONT, super::DESC_FONT))
         .draw()?;
     let blue = RGBColor(31, 119, 180);
     chart.draw_series(panel.groups.iter().zip(&labels).map(|((_, v), l)| {

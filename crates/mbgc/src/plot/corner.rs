@@ -17,6 +17,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use super::labels::short_label;
+use super::{FONT, TICK_FONT};
 use crate::draw_figure;
 use crate::error::{Error, Result};
 
@@ -35,7 +37,29 @@ pub fn corner(
     marks: Option<&[f64]>,
     ranges: Option<&[(f64, f64)]>,
 ) -> Result<()> {
-    let data = CornerData::new(path, names, samples, marks, ranges)?;
+    corner_keyed(
+        path,
+        names,
+        samples,
+        marks.map(|m| (m, "marked point")),
+        ranges,
+    )
+}
+
+/// [`corner`] with the marks named: `marks` is `(values, what they are)`, e.g. the best optimum,
+/// and the title line gives the key ("red lines and crosses: best optimum").
+pub fn corner_keyed(
+    path: &Path,
+    names: &[String],
+    samples: &[Vec<f64>],
+    marks: Option<(&[f64], &str)>,
+    ranges: Option<&[(f64, f64)]>,
+) -> Result<()> {
+    let mut data = CornerData::new(path, names, samples, marks.map(|m| m.0), ranges)?;
+    data.mark_label = marks
+        .filter(|(m, _)| m.iter().any(|v| v.is_finite()))
+        .map(|(_, l)| l.trim().to_string())
+        .filter(|l| !l.is_empty());
     let size = data.layout.size();
     draw_figure!(path, size, draw_corner(&data))
 }
@@ -104,8 +128,10 @@ impl Layout {
         (self.inner() / 40).clamp(2, 10) as usize
     }
 
+    /// Tick labels at the default panel size are [`TICK_FONT`] (12.1 px in SVG); only the
+    /// small panels of a figure with many parameters get smaller ones.
     fn tick_font(&self) -> u32 {
-        (self.panel / 15).clamp(9, 15)
+        (self.panel / 14).clamp(9, TICK_FONT)
     }
 
     /// Number of histogram bins for `count` values: the square-root rule, at least 10, and bars
@@ -125,6 +151,8 @@ struct CornerData {
     ranges: Vec<(f64, f64)>,
     /// Per parameter, the mark (NaN for none).
     marks: Vec<f64>,
+    /// What the marks are, for the key in the title.
+    mark_label: Option<String>,
     /// Samples given, and samples skipped for a non-finite coordinate.
     total: usize,
     skipped: usize,
@@ -172,7 +200,7 @@ impl CornerData {
             .enumerate()
             .map(|(j, s)| match s.trim() {
                 "" => format!("parameter {}", j + 1),
-                t => t.to_string(),
+                t => short_label(t),
             })
             .collect();
 
@@ -229,6 +257,7 @@ impl CornerData {
             columns,
             ranges,
             marks: marks.map_or_else(|| vec![f64::NAN; n], <[f64]>::to_vec),
+            mark_label: None,
             total: samples.len(),
             skipped: samples.len() - kept.len(),
             shown: (0..kept.len()).step_by(stride).collect(),
@@ -255,6 +284,9 @@ impl CornerData {
                 self.shown.len(),
                 ordinal(self.stride)
             );
+        }
+        if let Some(label) = &self.mark_label {
+            t += &format!("; red lines and crosses: {label}");
         }
         t
     }
@@ -374,7 +406,7 @@ fn draw_corner<DB: DrawingBackend>(
     title.draw(&Text::new(
         d.title(),
         ((LEFT + (w - LEFT) / 2) as i32, 8),
-        ("sans-serif", 16)
+        (FONT, 18)
             .into_font()
             .color(&BLACK.mix(0.8))
             .pos(Pos::new(HPos::Center, VPos::Top)),
@@ -392,7 +424,7 @@ fn draw_corner<DB: DrawingBackend>(
         .iter()
         .map(|s| fit_text(root, s, lay.inner()))
         .collect::<std::result::Result<Vec<_>, _>>()?;
-    let name_font = fitted.iter().map(|(_, f)| *f).min().unwrap_or(16);
+    let name_font = fitted.iter().map(|(_, f)| *f).min().unwrap_or(TICK_FONT);
     let names: Vec<String> = fitted.into_iter().map(|(s, _)| s).collect();
     let style = PanelStyle {
         x_ticks,
@@ -429,7 +461,7 @@ fn tick_labels<DB: DrawingBackend>(
     after: f64,
     vertical: bool,
 ) -> std::result::Result<Vec<(f64, String)>, DrawingAreaErrorKind<DB::ErrorType>> {
-    let font = ("sans-serif", lay.tick_font()).into_text_style(area);
+    let font = (FONT, lay.tick_font()).into_text_style(area);
     let len = lay.inner() as f64;
     RangedCoordf64::from(lo..hi)
         .key_points(count)
@@ -463,7 +495,7 @@ fn x_tick_count<DB: DrawingBackend>(
     col: usize,
     range: (f64, f64),
 ) -> std::result::Result<usize, DrawingAreaErrorKind<DB::ErrorType>> {
-    let font = ("sans-serif", lay.tick_font()).into_text_style(area);
+    let font = (FONT, lay.tick_font()).into_text_style(area);
     let px = lay.inner() as f64 / (range.1 - range.0);
     let (before, after) = x_overhang(lay, col);
     for k in (3..=lay.ticks()).rev() {
@@ -547,8 +579,8 @@ fn panel<'a, DB: DrawingBackend>(
         .axis_style(BLACK.mix(0.6))
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&y_fmt)
-        .label_style(("sans-serif", lay.tick_font()))
-        .axis_desc_style(("sans-serif", style.name_font));
+        .label_style((FONT, lay.tick_font()))
+        .axis_desc_style((FONT, style.name_font));
     if row == last {
         mesh.x_desc(&style.names[col]);
     } else {
@@ -577,16 +609,16 @@ fn panel<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The largest font size from 16 down to 12 px at which `text` fits into `max` pixels, with the
+/// The largest font size from 20 down to 15 (12.1 px in SVG) at which `text` fits into `max` pixels, with the
 /// text itself, shortened with an ellipsis when it does not fit even at 12 px.
 fn fit_text<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     text: &str,
     max: u32,
 ) -> std::result::Result<(String, u32), DrawingAreaErrorKind<DB::ErrorType>> {
-    const SIZES: std::ops::RangeInclusive<u32> = 12..=16;
+    const SIZES: std::ops::RangeInclusive<u32> = TICK_FONT..=20;
     let fits = |t: &str, size: u32| {
-        let style = ("sans-serif", size).into_text_style(area);
+        let style = (FONT, size).into_text_style(area);
         area.estimate_text_size(t, &style).map(|(w, _)| w <= max)
     };
     for size in SIZES.rev() {
@@ -737,6 +769,33 @@ mod tests {
         assert!(!p.exists(), "{e}");
         assert!(e.contains("c.svg: corner plot: "), "{e}");
         e
+    }
+
+    #[test]
+    fn parameter_symbols_readable_ticks_and_a_key_for_the_marks() {
+        let dir = tempfile::tempdir().unwrap();
+        let names: Vec<String> = ["mu_pp", "mu_r_pp", "sigma"].map(String::from).to_vec();
+        let samples: Vec<Vec<f64>> = gaussian(3, 500, 7)
+            .into_iter()
+            .map(|s| vec![s[0], s[2], s[2].abs()])
+            .collect();
+        let best = [0.5, 0.3, 0.1];
+        let p = dir.path().join("post.svg");
+        corner_keyed(&p, &names, &samples, Some((&best, "best optimum")), None).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        for text in [
+            "μ_pp",
+            "μ_r,pp",
+            "σ (model error)",
+            "red lines and crosses: best optimum",
+        ] {
+            assert!(svg.contains(text), "no \"{text}\"");
+        }
+        assert!(!svg.contains("mu_pp") && !svg.contains("mu_r_pp"));
+        crate::plot::test_util::assert_fonts_at_least(&svg, 12.0);
+        // Without marks there is nothing to explain.
+        corner_keyed(&p, &names, &samples, None, None).unwrap();
+        assert!(!std::fs::read_to_string(&p).unwrap().contains("red lines"));
     }
 
     #[test]

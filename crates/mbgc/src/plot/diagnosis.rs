@@ -7,6 +7,8 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use super::labels::axis_label;
+use super::{DESC_FONT, FONT, LEGEND_FONT, TICK_FONT};
 use crate::draw_figure;
 use crate::error::{Error, Result};
 
@@ -47,10 +49,11 @@ pub fn residuals_against_d50(path: &Path, response: &str, series: &[Series]) -> 
         (a.min(*d), b.max(*d))
     });
     let zmax = all.iter().fold(2.5f64, |m, (_, z)| m.max(z.abs())) * 1.1;
+    let response = axis_label(response);
     draw_figure!(
         path,
-        (820, 560),
-        draw_residuals(response, series, dlo / 1.3, dhi * 1.3, zmax)
+        (860, 600),
+        draw_residuals(&response, series, dlo / 1.3, dhi * 1.3, zmax)
     )
 }
 
@@ -66,25 +69,31 @@ fn draw_residuals<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(root)
         .caption(
             format!("{response}: standardised residual against d50"),
-            ("sans-serif", 20),
+            (FONT, 20),
         )
         .margin(15)
-        .x_label_area_size(50)
-        .y_label_area_size(60)
+        .x_label_area_size(60)
+        .y_label_area_size(75)
         .build_cartesian_2d((dlo..dhi).log_scale(), -zmax..zmax)?;
     chart
         .configure_mesh()
-        .x_desc("d50 (mm)")
-        .y_desc("(measured - predicted) / sigma")
-        .axis_desc_style(("sans-serif", 16))
+        .x_desc("median particle size d50 (mm)")
+        .y_desc("z = (measured - predicted) / σ")
+        .label_style((FONT, TICK_FONT))
+        .axis_desc_style((FONT, DESC_FONT))
         .draw()?;
-    for z in [-2.0, 0.0, 2.0] {
-        let style = if z == 0.0 {
-            BLACK.stroke_width(1)
-        } else {
-            BLACK.mix(0.3).stroke_width(1)
-        };
-        chart.draw_series(LineSeries::new([(dlo, z), (dhi, z)], style))?;
+    chart.draw_series(LineSeries::new(
+        [(dlo, 0.0), (dhi, 0.0)],
+        BLACK.stroke_width(1),
+    ))?;
+    let band = BLACK.mix(0.3).stroke_width(1);
+    for z in [-2.0, 2.0] {
+        let series = chart.draw_series(LineSeries::new([(dlo, z), (dhi, z)], band))?;
+        if z > 0.0 {
+            series
+                .label("|z| = 2")
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], band));
+        }
     }
     for (i, s) in series.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
@@ -98,6 +107,7 @@ fn draw_residuals<DB: DrawingBackend>(
     }
     chart
         .configure_series_labels()
+        .label_font((FONT, LEGEND_FONT))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperRight)
@@ -132,11 +142,11 @@ fn draw_ladder<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(root)
         .caption(
             "error ladder: RMS standardised residual per sample",
-            ("sans-serif", 20),
+            (FONT, 20),
         )
         .margin(15)
-        .x_label_area_size(50)
-        .y_label_area_size(60)
+        .x_label_area_size(60)
+        .y_label_area_size(75)
         .build_cartesian_2d(-0.5..n - 0.5, 0.0..top)?;
     let names = samples.to_vec();
     chart
@@ -150,13 +160,15 @@ fn draw_ladder<DB: DrawingBackend>(
                 String::new()
             }
         })
-        .y_desc("RMS of (measured - predicted) / sigma")
-        .axis_desc_style(("sans-serif", 16))
+        .y_desc("RMS of z = (measured - predicted) / σ")
+        .label_style((FONT, TICK_FONT))
+        .axis_desc_style((FONT, DESC_FONT))
         .draw()?;
-    chart.draw_series(LineSeries::new(
-        [(-0.5, 1.0), (n - 0.5, 1.0)],
-        BLACK.mix(0.4).stroke_width(1),
-    ))?;
+    let unit = BLACK.mix(0.4).stroke_width(1);
+    chart
+        .draw_series(LineSeries::new([(-0.5, 1.0), (n - 0.5, 1.0)], unit))?
+        .label("RMS z = 1 (within the measurement error)")
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], unit));
     let w = 0.8 / series.len().max(1) as f64;
     for (i, s) in series.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
@@ -170,9 +182,53 @@ fn draw_ladder<DB: DrawingBackend>(
     }
     chart
         .configure_series_labels()
+        .label_font((FONT, LEGEND_FONT))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperRight)
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plot::test_util::assert_fonts_at_least;
+
+    #[test]
+    fn readable_labels_and_a_legend_for_every_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let series = [
+            Series {
+                label: "base",
+                points: vec![(0.5, 2.5), (4.0, 0.3), (16.0, -1.9)],
+            },
+            Series {
+                label: "base+sjkr",
+                points: vec![(0.5, 0.4), (4.0, -0.2), (16.0, 0.1)],
+            },
+        ];
+        let p = dir.path().join("z.svg");
+        residuals_against_d50(&p, "bulk_density", &series).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        for text in [
+            "bulk density (kg/m³): standardised residual",
+            "median particle size d50 (mm)",
+            "|z| = 2",
+            "base+sjkr",
+        ] {
+            assert!(svg.contains(text), "no \"{text}\"");
+        }
+        assert!(!svg.contains("bulk_density"));
+        assert_fonts_at_least(&svg, 12.0);
+
+        let p = dir.path().join("ladder.svg");
+        let samples: Vec<String> = ["fine", "mid", "coarse"].map(String::from).to_vec();
+        ladder(&p, &samples, &series).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        for text in ["RMS z = 1", "base", "base+sjkr", "fine", "coarse"] {
+            assert!(svg.contains(text), "no \"{text}\"");
+        }
+        assert_fonts_at_least(&svg, 12.0);
+    }
 }

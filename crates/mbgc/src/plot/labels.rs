@@ -36,6 +36,30 @@ pub fn axis_label(name: &str) -> String {
     name.to_string()
 }
 
+/// A shorter form of [`axis_label`] for tight places (bar-chart categories, heat-map rows, the
+/// panels of a corner plot): symbols instead of words where the words are long.
+pub fn short_label(name: &str) -> String {
+    match name.trim() {
+        "ced_pp" => "CED_pp (J/m³)".into(),
+        "ced_pw" => "CED_pw (J/m³)".into(),
+        "sigma" => "σ (model error)".into(),
+        n => axis_label(n),
+    }
+}
+
+/// A title that starts with a column name followed by a colon ("shear_angle: Sobol indices")
+/// with that name made readable ("shear angle (deg): Sobol indices"); other titles unchanged.
+pub fn title_label(title: &str) -> String {
+    match title.split_once(": ") {
+        Some((name, rest))
+            if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') =>
+        {
+            format!("{}: {rest}", axis_label(name))
+        }
+        _ => title.to_string(),
+    }
+}
+
 fn is_digits(s: &str) -> bool {
     !s.is_empty() && s.chars().all(|c| c.is_ascii_digit())
 }
@@ -149,16 +173,31 @@ mod tests {
             .iter()
             .chain(&hopper)
             .chain(&RESPONSES)
-            .chain(&FLOW_BIN_NAMES)
-            .chain(&SECTOR_ANGLE_NAMES)
             .chain(&["cnr", "ctr", "sigma"])
         {
-            assert_ne!(
-                axis_label(name),
-                name.replace('_', " "),
-                "{name} has no readable label"
-            );
+            assert!(known(name).is_some(), "{name} has no readable label");
         }
+        for name in FLOW_BIN_NAMES {
+            assert!(axis_label(name).ends_with("(kg/s)"), "{name}");
+        }
+        for name in SECTOR_ANGLE_NAMES {
+            assert!(axis_label(name).ends_with("(deg)"), "{name}");
+        }
+    }
+
+    #[test]
+    fn short_labels_and_titles() {
+        assert_eq!(short_label("ced_pp"), "CED_pp (J/m³)");
+        assert_eq!(short_label("mu_r_pp"), "μ_r,pp");
+        assert_eq!(
+            title_label("shear_angle: Sobol indices"),
+            "shear angle (deg): Sobol indices"
+        );
+        assert_eq!(
+            title_label("power-law exponents, 95 % intervals"),
+            "power-law exponents, 95 % intervals"
+        );
+        assert_eq!(title_label("a b: c"), "a b: c");
     }
 
     #[test]

@@ -14,6 +14,18 @@ pub mod parity;
 pub mod psd;
 pub mod sensitivity;
 
+/// Font family of every text in the figures. fontconfig resolves it to DejaVu Sans, which draws
+/// the Greek letters and superscripts of [`labels::axis_label`]; SVG files name the family and
+/// leave the font to the viewer.
+pub(crate) const FONT: &str = "sans-serif";
+/// Font size of tick labels, as plotters takes it. The SVG backend writes `size / 1.24` as the
+/// CSS font size, so 15 gives 12.1 px tick labels, readable at print size.
+pub(crate) const TICK_FONT: u32 = 15;
+/// Font size of axis descriptions (14.5 px in SVG).
+pub(crate) const DESC_FONT: u32 = 18;
+/// Font size of legend entries (12.1 px in SVG).
+pub(crate) const LEGEND_FONT: u32 = 15;
+
 /// Image format of a figure file, chosen by its extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
@@ -74,4 +86,36 @@ macro_rules! draw_figure {
             }
         }
     }};
+}
+
+/// Test helpers shared by the figure modules.
+#[cfg(test)]
+pub(crate) mod test_util {
+    /// The CSS font sizes (px) of all text elements of an SVG file written by plotters.
+    pub fn font_sizes(svg: &str) -> Vec<f64> {
+        svg.split("font-size=\"")
+            .skip(1)
+            .map(|rest| {
+                let v = rest.split('"').next().unwrap_or("");
+                v.parse::<f64>()
+                    .unwrap_or_else(|e| panic!("font-size \"{v}\": {e}"))
+            })
+            .collect()
+    }
+
+    /// Asserts that the SVG has text and that all of it is at least `min` px high.
+    pub fn assert_fonts_at_least(svg: &str, min: f64) {
+        let sizes = font_sizes(svg);
+        assert!(!sizes.is_empty(), "no text in the figure");
+        let small: Vec<f64> = sizes.iter().copied().filter(|&s| s < min).collect();
+        assert!(small.is_empty(), "text smaller than {min} px: {small:?}");
+    }
+
+    #[test]
+    fn font_sizes_are_read() {
+        let svg = r#"<text font-size="12.096774" x="1">a</text><text font-size="9.67">b</text>"#;
+        assert_eq!(font_sizes(svg), vec![12.096774, 9.67]);
+        assert!(std::panic::catch_unwind(|| assert_fonts_at_least(svg, 12.0)).is_err());
+        assert_fonts_at_least(svg, 9.0);
+    }
 }

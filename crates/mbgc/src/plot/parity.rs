@@ -13,6 +13,8 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use super::labels::axis_label;
+use super::{DESC_FONT, FONT, LEGEND_FONT, TICK_FONT};
 use crate::draw_figure;
 use crate::error::{Error, Result};
 
@@ -28,7 +30,8 @@ pub struct Split<'a> {
 }
 
 /// Parity plot: predicted against observed, one colour/marker per split (e.g. "train", "test"),
-/// the y = x line, axis labels `"{response} observed"` / `"{response} predicted"`, and a legend
+/// the y = x line, axis labels `"{label}, observed"` / `"{label}, predicted"` (`label` is
+/// [`axis_label`] of `response`, e.g. "shear angle (deg)" for "shear_angle"), and a legend
 /// giving each split's R^2 and RMSE (computed inside from the slices). Axes span the union of all
 /// values with a 5 % margin and equal ranges on both axes; the plotting area is square, so the
 /// y = x line runs at 45 degrees.
@@ -40,14 +43,15 @@ pub fn parity(path: &Path, response: &str, splits: &[Split]) -> Result<()> {
             .flat_map(|s| s.observed.iter().chain(&s.predicted))
             .copied(),
     )?;
-    draw_figure!(path, PARITY_SIZE, draw_parity(response, &data, lo, hi))
+    let response = axis_label(response);
+    draw_figure!(path, PARITY_SIZE, draw_parity(&response, &data, lo, hi))
 }
 
 /// Histogram of residuals (observed - predicted), bins shared by all splits (Freedman-Diaconis
 /// rule on the pooled residuals, the square-root rule when the interquartile range is zero,
 /// clamped to 10..=40 bins), the splits' bars side by side within each bin, x label
-/// "residual of {response}", y label "count"; the legend gives each split's 5/50/95 % residual
-/// quantiles.
+/// "residual of {label}" ([`axis_label`] of `response`), y label "count"; the legend gives each
+/// split's 5/50/95 % residual quantiles.
 pub fn residual_histogram(path: &Path, response: &str, splits: &[Split]) -> Result<()> {
     let data = prepare_splits(path, "residual histogram", splits)?;
     let residuals: Vec<Vec<f64>> = data.iter().map(SplitData::residuals).collect();
@@ -70,7 +74,8 @@ pub fn residual_histogram(path: &Path, response: &str, splits: &[Split]) -> Resu
             .collect(),
         bins,
     };
-    draw_figure!(path, HIST_SIZE, draw_histogram(response, &data, &hist))
+    let response = axis_label(response);
+    draw_figure!(path, HIST_SIZE, draw_histogram(&response, &data, &hist))
 }
 
 const PARITY_SIZE: (u32, u32) = (820, 760);
@@ -78,7 +83,6 @@ const HIST_SIZE: (u32, u32) = (900, 600);
 const MARGIN: u32 = 15;
 const X_LABEL_AREA: u32 = 55;
 const Y_LABEL_AREA: u32 = 80;
-const LEGEND_FONT: u32 = 15;
 
 /// Matplotlib's "tab10" colours.
 const PALETTE: [RGBColor; 8] = [
@@ -295,10 +299,7 @@ fn draw_parity<DB: DrawingBackend>(
     hi: f64,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
-    let area = root.titled(
-        &format!("{response}: predicted vs. observed"),
-        ("sans-serif", 22),
-    )?;
+    let area = root.titled(&format!("{response}: predicted vs. observed"), (FONT, 22))?;
     // Make the plotting area square so that equal axis ranges give a 45 degree y = x line.
     let (w, h) = area.dim_in_pixel();
     let pw = w.saturating_sub(2 * MARGIN + Y_LABEL_AREA);
@@ -309,10 +310,10 @@ fn draw_parity<DB: DrawingBackend>(
         .configure_mesh()
         .x_label_formatter(&|v| tick_label(*v, lo, hi))
         .y_label_formatter(&|v| tick_label(*v, lo, hi))
-        .x_desc(format!("{response} observed"))
-        .y_desc(format!("{response} predicted"))
-        .axis_desc_style(("sans-serif", 17))
-        .label_style(("sans-serif", 14))
+        .x_desc(format!("{response}, observed"))
+        .y_desc(format!("{response}, predicted"))
+        .axis_desc_style((FONT, DESC_FONT))
+        .label_style((FONT, TICK_FONT))
         .draw()?;
     chart
         .draw_series(LineSeries::new([(lo, lo), (hi, hi)], BLACK.stroke_width(1)))?
@@ -337,7 +338,7 @@ fn draw_parity<DB: DrawingBackend>(
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", LEGEND_FONT))
+        .label_font((FONT, LEGEND_FONT))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
@@ -453,7 +454,7 @@ fn draw_histogram<DB: DrawingBackend>(
     hist: &HistData,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
-    let area = root.titled(&format!("Residuals of {response}"), ("sans-serif", 22))?;
+    let area = root.titled(&format!("Residuals of {response}"), (FONT, 22))?;
     let bins = &hist.bins;
     let (lo, hi) = (bins.edge(0), bins.edge(bins.n));
     let pad = 0.05 * (hi - lo);
@@ -477,8 +478,8 @@ fn draw_histogram<DB: DrawingBackend>(
         .x_label_formatter(&|v| tick_label(*v, lo - pad, hi + pad))
         .x_desc(format!("residual of {response}"))
         .y_desc("count")
-        .axis_desc_style(("sans-serif", 17))
-        .label_style(("sans-serif", 14))
+        .axis_desc_style((FONT, DESC_FONT))
+        .label_style((FONT, TICK_FONT))
         .draw()?;
     if lo - pad < 0.0 && 0.0 < hi + pad {
         chart.draw_series(LineSeries::new(
@@ -517,7 +518,7 @@ fn draw_histogram<DB: DrawingBackend>(
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", LEGEND_FONT))
+        .label_font((FONT, LEGEND_FONT))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
@@ -574,12 +575,51 @@ mod tests {
             assert_written(&h);
         }
         let svg = std::fs::read_to_string(dir.path().join("parity.svg")).unwrap();
-        assert!(svg.contains("angle of repose / ° observed"));
-        assert!(svg.contains("angle of repose / ° predicted"));
+        assert!(svg.contains("angle of repose / °, observed"));
+        assert!(svg.contains("angle of repose / °, predicted"));
         assert!(svg.contains("R² = "));
         let svg = std::fs::read_to_string(dir.path().join("sub/residuals.svg")).unwrap();
         assert!(svg.contains("residual of angle of repose / °"));
         assert!(svg.contains("median = "));
+    }
+
+    #[test]
+    fn readable_labels_fonts_and_a_legend_entry_per_split() {
+        let dir = tempfile::tempdir().unwrap();
+        let data: Vec<(Vec<f64>, Vec<f64>)> = (0..3).map(|k| sample(40, k as f64)).collect();
+        let splits: Vec<Split> = ["train", "test", "validation"]
+            .iter()
+            .zip(&data)
+            .map(|(label, (o, p))| Split {
+                label,
+                observed: o,
+                predicted: p,
+            })
+            .collect();
+        let p = dir.path().join("parity.svg");
+        parity(&p, "shear_angle", &splits).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        assert!(svg.contains("shear angle (deg), observed"), "x axis label");
+        assert!(svg.contains("shear angle (deg), predicted"), "y axis label");
+        assert!(
+            !svg.contains("shear_angle"),
+            "snake_case name left in the figure"
+        );
+        for split in [
+            "train (n = 40)",
+            "test (n = 40)",
+            "validation (n = 40)",
+            "y = x",
+        ] {
+            assert!(svg.contains(split), "no legend entry for {split}");
+        }
+        crate::plot::test_util::assert_fonts_at_least(&svg, 12.0);
+        let h = dir.path().join("residuals.svg");
+        residual_histogram(&h, "bulk_density", &splits).unwrap();
+        let svg = std::fs::read_to_string(&h).unwrap();
+        assert!(svg.contains("residual of bulk density (kg/m³)"));
+        assert!(svg.contains("validation (n = 40)"));
+        crate::plot::test_util::assert_fonts_at_least(&svg, 12.0);
     }
 
     #[test]

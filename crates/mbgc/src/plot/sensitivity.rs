@@ -6,6 +6,8 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use super::labels::{axis_label, short_label, title_label};
+use super::{DESC_FONT, FONT, LEGEND_FONT, TICK_FONT};
 use crate::draw_figure;
 use crate::error::{Error, Result};
 
@@ -37,7 +39,9 @@ const COLOURS: [RGBColor; 6] = [
 ];
 
 /// Grouped bar chart: `categories` on the x axis, one bar per series at each, with interval
-/// whiskers where given; a zero line.
+/// whiskers where given; a zero line. Category names, series labels and a title starting with
+/// "name: " are made readable with [`short_label`], [`axis_label`] and [`title_label`]
+/// ("mu_pp" -> "μ_pp").
 pub fn bars(
     path: &Path,
     title: &str,
@@ -73,10 +77,19 @@ pub fn bars(
     lo -= if lo < 0.0 { pad } else { 0.0 };
     hi += pad;
     let width = (160 + 90 * categories.len() * series.len().max(2) / 2).clamp(640, 1400) as u32;
+    let title = title_label(title);
+    let categories: Vec<String> = categories.iter().map(|c| short_label(c)).collect();
+    let series: Vec<BarSeries> = series
+        .iter()
+        .map(|s| BarSeries {
+            label: axis_label(&s.label),
+            bars: s.bars.clone(),
+        })
+        .collect();
     draw_figure!(
         path,
         (width, 520),
-        draw_bars(title, y_label, categories, series, lo, hi)
+        draw_bars(&title, y_label, &categories, &series, lo, hi)
     )
 }
 
@@ -92,10 +105,10 @@ fn draw_bars<DB: DrawingBackend>(
     root.fill(&WHITE)?;
     let n = categories.len();
     let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 20))
+        .caption(title, (FONT, 20))
         .margin(15)
-        .x_label_area_size(50)
-        .y_label_area_size(70)
+        .x_label_area_size(60)
+        .y_label_area_size(80)
         .build_cartesian_2d(-0.5f64..n as f64 - 0.5, lo..hi)?;
     let cats = categories.to_vec();
     chart
@@ -111,7 +124,8 @@ fn draw_bars<DB: DrawingBackend>(
             }
         })
         .y_desc(y_label)
-        .axis_desc_style(("sans-serif", 16))
+        .label_style((FONT, TICK_FONT))
+        .axis_desc_style((FONT, DESC_FONT))
         .draw()?;
     chart.draw_series(LineSeries::new(
         [(-0.5, 0.0), (n as f64 - 0.5, 0.0)],
@@ -155,6 +169,7 @@ fn draw_bars<DB: DrawingBackend>(
     }
     chart
         .configure_series_labels()
+        .label_font((FONT, LEGEND_FONT))
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
         .draw()?;
@@ -162,7 +177,8 @@ fn draw_bars<DB: DrawingBackend>(
 }
 
 /// Heat map of a square matrix with values in [-1, 1] (blue negative, red positive), each cell
-/// labelled with its value.
+/// labelled with its value; `names` are made readable with [`short_label`] and a title starting
+/// with "name: " with [`title_label`].
 pub fn heat_map(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Result<()> {
     if names.is_empty() || m.len() != names.len() || m.iter().any(|r| r.len() != names.len()) {
         return Err(Error::invalid(format!(
@@ -170,7 +186,9 @@ pub fn heat_map(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> R
             path.display()
         )));
     }
-    draw_figure!(path, (640, 600), draw_heat(title, names, m))
+    let title = title_label(title);
+    let names: Vec<String> = names.iter().map(|n| short_label(n)).collect();
+    draw_figure!(path, (680, 620), draw_heat(&title, &names, m))
 }
 
 fn draw_heat<DB: DrawingBackend>(
@@ -182,10 +200,10 @@ fn draw_heat<DB: DrawingBackend>(
     root.fill(&WHITE)?;
     let n = names.len();
     let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 20))
+        .caption(title, (FONT, 20))
         .margin(15)
         .x_label_area_size(40)
-        .y_label_area_size(80)
+        .y_label_area_size(120)
         .build_cartesian_2d(0f64..n as f64, 0f64..n as f64)?;
     let xs = names.to_vec();
     let ys = names.to_vec();
@@ -196,6 +214,7 @@ fn draw_heat<DB: DrawingBackend>(
         .y_labels(2 * n + 1)
         .x_label_formatter(&move |x: &f64| label_at(&xs, *x, false))
         .y_label_formatter(&move |y: &f64| label_at(&ys, *y, true))
+        .label_style((FONT, TICK_FONT))
         .draw()?;
     for (i, row) in m.iter().enumerate() {
         for (j, &v) in row.iter().enumerate() {
@@ -215,7 +234,7 @@ fn draw_heat<DB: DrawingBackend>(
             chart.draw_series([Text::new(
                 format!("{v:.2}"),
                 (x + 0.35, y + 0.55),
-                ("sans-serif", 16).into_font(),
+                (FONT, 16).into_font(),
             )])?;
         }
     }
@@ -235,4 +254,55 @@ fn label_at(names: &[String], x: f64, rows: bool) -> String {
         r as usize
     };
     names[idx].clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plot::test_util::assert_fonts_at_least;
+
+    #[test]
+    fn bars_and_heat_map_show_readable_names() {
+        let dir = tempfile::tempdir().unwrap();
+        let cats: Vec<String> = ["e_pp", "mu_pp", "mu_r_pp"].map(String::from).to_vec();
+        let bar = |v: f64| Bar {
+            value: v,
+            ci95: Some([v - 0.1, v + 0.1]),
+        };
+        let series = [
+            BarSeries {
+                label: "shear_angle".into(),
+                bars: vec![bar(0.1), bar(0.8), bar(0.3)],
+            },
+            BarSeries {
+                label: "bulk_density".into(),
+                bars: vec![bar(-0.2), bar(0.1), bar(0.05)],
+            },
+        ];
+        let p = dir.path().join("bars.svg");
+        bars(&p, "shear_angle: Sobol indices", "index", &cats, &series).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        for text in [
+            "shear angle (deg): Sobol indices",
+            "μ_pp",
+            "μ_r,pp",
+            "shear angle (deg)",
+            "bulk density (kg/m³)",
+        ] {
+            assert!(svg.contains(text), "no \"{text}\"");
+        }
+        assert!(!svg.contains("mu_pp") && !svg.contains("bulk_density"));
+        assert_fonts_at_least(&svg, 12.0);
+
+        let m = vec![
+            vec![1.0, -0.3, 0.2],
+            vec![-0.3, 1.0, 0.5],
+            vec![0.2, 0.5, 1.0],
+        ];
+        let h = dir.path().join("heat.svg");
+        heat_map(&h, "correlation", &cats, &m).unwrap();
+        let svg = std::fs::read_to_string(&h).unwrap();
+        assert!(svg.contains("μ_r,pp") && !svg.contains("mu_r_pp"));
+        assert_fonts_at_least(&svg, 12.0);
+    }
 }
