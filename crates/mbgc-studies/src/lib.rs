@@ -10,6 +10,9 @@
 //! - [`gp_vs_gplearn`]: symbolic regression against gplearn on Feynman equations.
 //! - [`metamodel_report`]: the shipped metamodel, its cost and validation, the gravel calibrated
 //!   on it (docs/metamodel.md).
+//! - [`metamodel_benchmark`]: mbgc's GP against PyOperon, a Gaussian process and a quadratic
+//!   surface on the shipped campaign (docs/metamodel_benchmark.md); [`noise_floor`]: the
+//!   replicate noise both metamodel studies judge errors by.
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
 //! - [`sensitivity_report`]: seed 000's three-level sensitivity analysis on the hopper
 //!   (docs/sensitivity.md).
@@ -25,7 +28,9 @@ pub mod dem_throughput;
 pub mod diagnose_report;
 pub mod gp_vs_gplearn;
 pub mod liggghts_backend;
+pub mod metamodel_benchmark;
 pub mod metamodel_report;
+pub mod noise_floor;
 pub mod reference;
 pub mod restitution;
 pub mod sampling_quality;

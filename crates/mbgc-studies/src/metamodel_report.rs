@@ -18,6 +18,8 @@ use mbgc::metamodel::{Metamodel, Metrics};
 use mbgc::space::{Scale, Space};
 use mbgc::train::{TrainPaths, TrainRecord};
 
+use crate::noise_floor::{replicate_noise, NoiseFloor};
+
 /// Seed 004's validation R^2 of its metamodel (Sec. 3.4).
 const SEED004_R2: [(&str, f64); 2] = [("shear_angle", 0.98085), ("bulk_density", 0.99975)];
 /// Seed 004 Table 5 (mu_pp, rho_p) and Table 3 (angle, density), and its DEM validation's
@@ -333,16 +335,6 @@ fn cost_section(w: &mut String, tables: &[&TableSummary]) {
     );
 }
 
-/// The seed-to-seed spread of the shear box at k = 10 (mbgc rows of the issue-13 check).
-struct NoiseFloor {
-    /// Root of the mean variance over the points: deg.
-    angle_sd: f64,
-    /// The same of the relative bulk density (sd / mean).
-    bulk_rel_sd: f64,
-    points: usize,
-    runs: usize,
-}
-
 impl NoiseFloor {
     fn read(path: &Path) -> anyhow::Result<NoiseFloor> {
         let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
@@ -411,49 +403,6 @@ impl NoiseFloor {
             runs,
         })
     }
-}
-
-/// Seed-to-seed spread inside the campaign's space: validation rows rerun with another seed
-/// (`training_data/<name>_replicates.csv`, same design rows), sd = rms difference / sqrt 2.
-fn replicate_noise(validation: &Path, replicates: &Path) -> anyhow::Result<Option<NoiseFloor>> {
-    if !replicates.exists() {
-        return Ok(None);
-    }
-    let read = |p: &Path| -> anyhow::Result<Vec<(String, f64, f64)>> {
-        let t = Csv::read(p)?;
-        let col = |n: &str| t.col(n);
-        let (row, st, a, b) = (
-            col("row")?,
-            col("status")?,
-            col("shear_angle")?,
-            col("bulk_density")?,
-        );
-        let mut out = Vec::new();
-        for rec in t.records.iter().filter(|r| &r[st] == "done") {
-            out.push((rec[row].to_string(), num(rec, a), num(rec, b)));
-        }
-        Ok(out)
-    };
-    let (v, r) = (read(validation)?, read(replicates)?);
-    let (mut da, mut db, mut runs) = (Vec::new(), Vec::new(), 0);
-    for (row, a2, b2) in &r {
-        if let Some((_, a1, b1)) = v.iter().find(|(x, _, _)| x == row) {
-            runs += 1;
-            if (a1 - a2).is_finite() {
-                da.push(a1 - a2);
-            }
-            if (b1 - b2).is_finite() {
-                db.push((b1 - b2) / (0.5 * (b1 + b2)));
-            }
-        }
-    }
-    let sd = |d: &[f64]| (d.iter().map(|x| x * x).sum::<f64>() / (2.0 * d.len() as f64)).sqrt();
-    Ok((runs > 0).then(|| NoiseFloor {
-        angle_sd: sd(&da),
-        bulk_rel_sd: sd(&db),
-        points: runs,
-        runs: 2 * runs,
-    }))
 }
 
 /// The validation rows of `response` with the model's predictions.

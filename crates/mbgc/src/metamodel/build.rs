@@ -656,6 +656,121 @@ pub fn fit(
     })
 }
 
+/// One response as the regression engine is offered it: the columns GP sees (scaled inputs, then
+/// the log-scaled dimensionless groups), the quantity GP fits (the response divided by its
+/// factor, e.g. the solid fraction) and that factor per row. Any regressor given these columns
+/// solves exactly the problem mbgc's GP solves, which is what a benchmark against other
+/// regressors needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegressionProblem {
+    /// The physical response, e.g. `bulk_density`.
+    pub response: String,
+    /// What is fitted: the response itself or the scaled quantity (e.g. `solid_fraction`).
+    pub fitted: String,
+    /// Names of the columns (`mu_pp_u`, `K_p_u`, ...).
+    pub symbols: Vec<String>,
+    /// Every row of the table (no test split).
+    pub train: ProblemRows,
+    /// The rows of the settings' validation table, scaled as the training rows are.
+    pub validation: Option<ProblemRows>,
+}
+
+/// Rows of a [`RegressionProblem`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProblemRows {
+    /// `x[column][row]`.
+    pub x: Vec<Vec<f64>>,
+    /// The fitted quantity.
+    pub y: Vec<f64>,
+    /// Response = `factor * y` (1 for an unscaled response).
+    pub factor: Vec<f64>,
+}
+
+/// The regression problems of `settings`' responses on `table` (and on its validation table),
+/// checked as [`fit`] checks them.
+pub fn regression_problems(
+    table: &TrainingTable,
+    settings: &FitSettings,
+) -> Result<Vec<RegressionProblem>> {
+    settings.check()?;
+    let absorbed = settings.absorbed();
+    let cols = columns(table, settings)?;
+    let n_in = settings.inputs.len();
+    let scaling = scaling(table, settings, &absorbed, &cols[..n_in])?;
+    let rows_of = |cols: &[Vec<f64>], gp_cols: Vec<Vec<f64>>, target: &str, t: usize| {
+        let x_phys = &cols[..n_in];
+        let n = cols[0].len();
+        let factor: Vec<f64> = match settings.similarity.as_ref().and_then(|s| s.scaled(target)) {
+            Some(sc) => (0..n)
+                .map(|r| {
+                    sc.factor
+                        .value(|name| x_phys[var_of(settings, name) as usize][r])
+                })
+                .collect(),
+            None => vec![1.0; n],
+        };
+        let y = cols[n_in + t]
+            .iter()
+            .zip(&factor)
+            .map(|(v, f)| v / f)
+            .collect();
+        ProblemRows {
+            x: gp_cols,
+            y,
+            factor,
+        }
+    };
+    let validation_cols = match &settings.validation {
+        Some(v) => {
+            let vc = columns(v, settings)?;
+            let n = vc[0].len();
+            let mut gp_cols: Vec<Vec<f64>> = scaling
+                .gp_inputs
+                .iter()
+                .map(|&k| {
+                    vc[k]
+                        .iter()
+                        .map(|&x| scaling.inputs[k].transform.apply(x))
+                        .collect()
+                })
+                .collect();
+            for g in &scaling.groups {
+                gp_cols.push(
+                    (0..n)
+                        .map(|r| {
+                            g.transform.apply(
+                                g.group
+                                    .monomial
+                                    .value(|name| vc[var_of(settings, name) as usize][r]),
+                            )
+                        })
+                        .collect(),
+                );
+            }
+            Some((vc, gp_cols))
+        }
+        None => None,
+    };
+    Ok(settings
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(t, target)| RegressionProblem {
+            response: target.clone(),
+            fitted: settings
+                .similarity
+                .as_ref()
+                .and_then(|s| s.scaled(target))
+                .map_or_else(|| target.clone(), |s| s.fitted.clone()),
+            symbols: scaling.gp_symbols.clone(),
+            train: rows_of(&cols, scaling.gp_cols.clone(), target, t),
+            validation: validation_cols
+                .as_ref()
+                .map(|(vc, g)| rows_of(vc, g.clone(), target, t)),
+        })
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -737,6 +852,26 @@ mod tests {
         }
         // The angle's equation reads no group and no absorbed input.
         assert_eq!(m.responses[1].uses, vec!["mu".to_string()]);
+
+        // The problems a benchmark hands to other regressors: the same columns, the density as
+        // phi = density / rho with rho as its factor, the validation rows scaled alike.
+        let settings = settings.validation(table.clone());
+        let problems = regression_problems(&table, &settings).unwrap();
+        assert_eq!(problems.len(), 2);
+        let (dens, angle) = (&problems[0], &problems[1]);
+        assert_eq!(dens.symbols, vec!["mu".to_string(), "K_u".to_string()]);
+        assert_eq!((dens.fitted.as_str(), angle.fitted.as_str()), ("phi", "angle"));
+        let v = dens.validation.as_ref().unwrap();
+        assert_eq!(v, &dens.train);
+        let (k_lo, k_hi): (f64, f64) = (1e6 / 8000.0, 1e6 * (1.0 + 0.37 * 59.0) / 8000.0);
+        for r in 0..60 {
+            let k: f64 = 1e6 * (1.0 + 0.37 * r as f64) / 8000.0;
+            assert!((dens.train.y[r] - (0.5 + 0.02 * k.ln())).abs() < 1e-12);
+            assert_eq!(dens.train.factor[r], 2000.0);
+            let k_u = (k.ln() - k_lo.ln()) / (k_hi.ln() - k_lo.ln());
+            assert!((dens.train.x[1][r] - k_u).abs() < 1e-12, "row {r}");
+            assert_eq!(angle.train.factor[r], 1.0);
+        }
         // K beyond the data is outside the domain, named by the group.
         let out = m.outside_domain(&[1e9, 2000.0, 4.0, 0.5]);
         assert!(out.iter().any(|o| o.0 == "K"), "{out:?}");

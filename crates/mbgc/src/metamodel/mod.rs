@@ -10,7 +10,9 @@ pub mod model;
 pub mod table;
 mod training_table;
 
-pub use build::{fit, Fit, ResponseSplits, SplitValues};
+pub use build::{
+    fit, regression_problems, Fit, ProblemRows, RegressionProblem, ResponseSplits, SplitValues,
+};
 pub use fit_settings::FitSettings;
 pub use model::*;
 pub use training_table::TrainingTable;
