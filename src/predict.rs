@@ -35,23 +35,48 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
         &[("--model", &a.model), ("--data", &a.data)],
     )?;
     let model = Metamodel::load(&a.model)?;
-    let names = model.input_names();
+    let mut names = model.input_names();
+    let n_in = names.len();
+    // Parameters the campaign held fixed: a data column of that name must hold that value, or
+    // the row lies outside what the model describes. They are read with the inputs.
+    let header = read_columns(&a.data, &[])?.header;
+    let held: Vec<&mbgc::metamodel::Constant> = model
+        .constants
+        .iter()
+        .filter(|c| header.iter().any(|h| h == &c.name) && !names.contains(&c.name))
+        .collect();
+    names.extend(held.iter().map(|c| c.name.clone()));
     let cols = read_columns(&a.data, &names)?;
+    let (inputs, held_cols) = cols.values.split_at(n_in);
     let rows = cols.records.len();
     let preds: Vec<Vec<f64>> = model
         .responses
         .iter()
-        .map(|r| model.predict(r, &cols.values))
+        .map(|r| model.predict(r, inputs))
         .collect();
     let mut outside = Vec::new();
     for row in 0..rows {
-        let x: Vec<f64> = cols.values.iter().map(|c| c[row]).collect();
+        let x: Vec<f64> = inputs.iter().map(|c| c[row]).collect();
         if let Some((name, v, d)) = model.outside_domain(&x).first() {
             outside.push(format!(
                 "line {}: {name} = {v} outside [{}, {}]",
                 row + 2,
                 d[0],
                 d[1]
+            ));
+        } else if let Some((c, v)) = held
+            .iter()
+            .zip(held_cols)
+            .map(|(c, col)| (c, col[row]))
+            .find(|(c, v)| !((v - c.value).abs() <= 1e-9 * c.value.abs()))
+        {
+            outside.push(format!(
+                "line {}: {} = {v}, but the model holds only at {} = {} (its campaign held it \
+                 fixed)",
+                row + 2,
+                c.name,
+                c.name,
+                c.value
             ));
         }
     }

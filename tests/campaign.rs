@@ -795,6 +795,55 @@ fn a_second_writer_on_the_same_table_is_refused_and_nothing_is_written_twice() {
         .unwrap();
 }
 
+/// The same through a hard link made once the first writer has created the table: another
+/// name, hence another lock file, but the same file, which the first writer holds.
+#[test]
+fn a_second_writer_through_a_hard_link_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = sleep_design(dir.path(), "d.csv", 12, None);
+    let out = dir.path().join("t.csv");
+    let hard = dir.path().join("h.csv");
+    let args = |table: &Path| -> Vec<String> {
+        [
+            "simulate",
+            "--design",
+            s(&design),
+            "--experiment",
+            "sleep-test",
+            "--out",
+            s(table),
+            "--threads",
+            "1",
+            "--set",
+            "sleep_ms=40",
+        ]
+        .iter()
+        .map(|a| a.to_string())
+        .collect()
+    };
+    let mut first = command(&arg_refs(&args(&out)))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !out.exists() || read(&out).1.is_empty() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "first writer made no progress"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::fs::hard_link(&out, &hard).unwrap();
+    let second = mbgc(&arg_refs(&args(&hard)));
+    let err = String::from_utf8_lossy(&second.stderr).to_string();
+    assert!(!second.status.success(), "second writer was allowed");
+    assert!(err.contains("another mbgc process is writing"), "{err}");
+    assert!(first.wait().unwrap().success());
+    let rows = read(&out).1;
+    assert_eq!(rows.len(), 12, "lines written twice");
+}
+
 #[test]
 fn fit_refuses_a_table_holding_a_run_twice() {
     let dir = tempfile::tempdir().unwrap();
@@ -1350,4 +1399,32 @@ fn import_refuses_decks_of_an_edited_campaign() {
         s(&d.join("t.csv")),
     ]);
     assert!(e.contains("edited after --write-decks"), "{e}");
+}
+
+/// A line whose status is neither done nor failed is refused by merge as by status and a resumed
+/// simulate, naming the file, the line and the field; merge does not copy it on.
+#[test]
+fn merge_refuses_a_line_with_an_invalid_status() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = Path::new(env!("CARGO_MANIFEST_DIR")).join("training_data/diagnose_local.csv");
+    let text = std::fs::read_to_string(full).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    assert!(lines[3].contains(",done,"), "{}", lines[3]);
+    lines[3] = lines[3].replacen(",done,", ",dne,", 1);
+    let bad = write(dir.path(), "lf.csv", &(lines.join("\n") + "\n"));
+    let out = dir.path().join("m.csv");
+    for args in [
+        vec!["campaign", "merge", s(&bad), "--out", s(&out)],
+        vec!["campaign", "status", s(&bad)],
+    ] {
+        let e = fails(&args);
+        assert!(
+            e.contains(s(&bad))
+                && e.contains("line 4")
+                && e.contains("status")
+                && e.contains("dne"),
+            "{args:?}: {e}"
+        );
+    }
+    assert!(!out.exists(), "merge wrote {}", out.display());
 }

@@ -341,3 +341,47 @@ fn same_seed_same_model_file() {
     };
     assert_eq!(run("a.json"), run("b.json"));
 }
+
+/// A column holding a parameter the model's campaign held fixed is read: a row at another value
+/// lies outside what the model describes and is counted and named as such.
+#[test]
+fn predict_names_rows_at_another_value_of_a_held_parameter() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/diagnose_local_sjkr.json");
+    let data = dir.path().join("pts.csv");
+    std::fs::write(
+        &data,
+        "mu_pp,d50,ced_pp,E_p\n0.4,4,10000,5e6\n0.4,4,10000,5e7\n",
+    )
+    .unwrap();
+    let out = dir.path().join("pred.csv");
+    let json = ok(&[
+        "predict",
+        "--model",
+        s(&model),
+        "--data",
+        s(&data),
+        "--out",
+        s(&out),
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["outside_domain"], 1, "{json}");
+    let o = Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args([
+            "predict",
+            "--model",
+            s(&model),
+            "--data",
+            s(&data),
+            "--out",
+            s(&out),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("line 3: E_p = 50000000, but the model holds only at E_p = 5000000"),
+        "{err}"
+    );
+}

@@ -44,7 +44,34 @@ fn psd_fit_never_draws_over_its_sieve_file() {
     let link = dir.path().join("link.svg");
     std::os::unix::fs::symlink(&data, &link).unwrap();
     fails(&["psd", "fit", s(&data), "--plot", s(&link)]);
+    // A hard link is the same file under another name.
+    let hard = dir.path().join("hard.svg");
+    std::fs::hard_link(&data, &hard).unwrap();
+    let e = fails(&["psd", "fit", s(&data), "--plot", s(&hard)]);
+    assert!(e.contains("never overwrites"), "{e}");
     unchanged(&data, &before);
+}
+
+/// A figure is drawn beside its target and renamed over it, so that even a path no check knows
+/// as an input (a hard link made to some other file) is replaced, not written through.
+#[test]
+fn a_figure_replaces_its_target_instead_of_writing_through_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("s.csv");
+    std::fs::copy(root().join("examples/sieve_gravel_8_16.csv"), &data).unwrap();
+    let keep = dir.path().join("keep.txt");
+    std::fs::write(&keep, "not a figure\n").unwrap();
+    let plot = dir.path().join("plot.svg");
+    std::fs::hard_link(&keep, &plot).unwrap();
+    common::ok(&["psd", "fit", s(&data), "--plot", s(&plot)]);
+    unchanged(&keep, b"not a figure\n");
+    assert!(std::fs::read_to_string(&plot).unwrap().contains("<svg"));
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp."))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
 
 #[test]
@@ -134,4 +161,36 @@ fn a_bench_report_never_replaces_its_data() {
         "{e}"
     );
     unchanged(&data, &before);
+    // The model it reads is an input too, and so is an input in the folder of figures.
+    let model = dir.path().join("m.json");
+    std::fs::copy(root().join("models/shear_box.json"), &model).unwrap();
+    let model_before = std::fs::read(&model).unwrap();
+    let e = fails(&[
+        "bench",
+        "sensitivity",
+        "--data",
+        s(&data),
+        "--model",
+        s(&model),
+        "--report",
+        s(&model),
+        "--figures",
+        s(&dir.path().join("figs")),
+    ]);
+    assert!(e.contains("--report") && e.contains("--model"), "{e}");
+    let svg_data = dir.path().join("exponents.svg");
+    std::fs::copy(&data, &svg_data).unwrap();
+    let e = fails(&[
+        "bench",
+        "sensitivity",
+        "--data",
+        s(&svg_data),
+        "--report",
+        s(&dir.path().join("r.md")),
+        "--figures",
+        s(dir.path()),
+    ]);
+    assert!(e.contains("--figures") && e.contains("--data"), "{e}");
+    unchanged(&svg_data, &before);
+    unchanged(&model, &model_before);
 }

@@ -146,7 +146,9 @@ fn yes(b: bool) -> &'static str {
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    mbgc::outputs::refuse_overwriting_inputs("--report", &a.report, &[("--data", &a.data)])?;
+    let inputs = [("--data", a.data.as_path()), ("--model", a.model.as_path())];
+    mbgc::outputs::refuse_overwriting_inputs("--report", &a.report, &inputs)?;
+    mbgc::outputs::refuse_figures_over_inputs("--figures", &a.figures, &inputs)?;
     let d = load(&a.data)?;
     std::fs::create_dir_all(&a.figures)?;
     let fig = |n: &str| a.figures.join(n);

@@ -12,6 +12,8 @@ use crate::error::{Error, Result};
 #[derive(Debug)]
 pub struct TableLock {
     _file: File,
+    /// The table's name as given, for messages.
+    table: PathBuf,
     /// The table itself, locked too when it exists: a hard link elsewhere names the same file
     /// under another lock file.
     _table: Option<File>,
@@ -33,6 +35,19 @@ fn resolved(table: &Path) -> Result<PathBuf> {
             .join(name)),
         _ => Ok(table.to_path_buf()),
     }
+}
+
+/// Whether an open file and a path's metadata are one file (same device and inode).
+#[cfg(unix)]
+fn same_file(held: &File, now: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    held.metadata()
+        .is_ok_and(|m| m.dev() == now.dev() && m.ino() == now.ino())
+}
+
+#[cfg(not(unix))]
+fn same_file(_: &File, _: &std::fs::Metadata) -> bool {
+    false
 }
 
 /// The lock file of a table: `<table>.lock`.
@@ -79,11 +94,41 @@ impl TableLock {
             Err(TryLockError::WouldBlock) => return Err(busy(&path)),
             Err(TryLockError::Error(e)) => return Err(Error::io(&path, e)),
         }
-        let table_file = match OpenOptions::new().read(true).open(table) {
+        let mut lock = TableLock {
+            _file: file,
+            table: table.to_path_buf(),
+            _table: None,
+            path,
+        };
+        lock.hold_table()?;
+        Ok(lock)
+    }
+
+    /// Locks the file the table's name leads to now. A writer calls it again once it has
+    /// created the table or replaced it by a rename: a hard link made to the new file (another
+    /// name, hence another lock file) must still meet this lock.
+    pub fn hold_table(&mut self) -> Result<()> {
+        let table = self.table.as_path();
+        // A second lock on the file already held would conflict with our own (flock locks
+        // belong to the open file); a file replaced by a rename is a new one to lock.
+        if let (Some(held), Ok(now)) = (&self._table, std::fs::metadata(table)) {
+            if same_file(held, &now) {
+                return Ok(());
+            }
+        }
+        self._table = None;
+        self._table = match OpenOptions::new().read(true).open(table) {
             Ok(f) => {
                 match f.try_lock() {
                     Ok(()) => {}
-                    Err(TryLockError::WouldBlock) => return Err(busy(table)),
+                    Err(TryLockError::WouldBlock) => {
+                        return Err(Error::invalid(format!(
+                            "{}: another mbgc process is writing this table (through another \
+                             name of the same file); wait for it to finish, or give this run \
+                             another --out",
+                            table.display()
+                        )))
+                    }
                     Err(TryLockError::Error(e)) => return Err(Error::io(table, e)),
                 }
                 Some(f)
@@ -91,11 +136,7 @@ impl TableLock {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
             Err(e) => return Err(Error::io(table, e)),
         };
-        Ok(TableLock {
-            _file: file,
-            _table: table_file,
-            path,
-        })
+        Ok(())
     }
 
     /// The lock file held, next to the table.
@@ -147,6 +188,31 @@ mod tests {
         }
         drop(first);
         TableLock::acquire(&sub.join("hard.csv")).unwrap();
+    }
+
+    /// A table created (or replaced by a rename) after the lock was taken: a hard link to the
+    /// new file meets the lock once the writer holds the table again.
+    #[test]
+    fn a_table_made_after_the_lock_is_held_too() {
+        let dir = tempfile::tempdir().unwrap();
+        let table = dir.path().join("run.csv");
+        let mut first = TableLock::acquire(&table).unwrap();
+        std::fs::write(&table, "run_id\n").unwrap();
+        first.hold_table().unwrap();
+        let hard = dir.path().join("hard.csv");
+        std::fs::hard_link(&table, &hard).unwrap();
+        let e = TableLock::acquire(&hard).unwrap_err().to_string();
+        assert!(e.contains("another mbgc process"), "{e}");
+        // Replaced by a rename: the new file is held once the writer says so.
+        let tmp = dir.path().join("tmp.csv");
+        std::fs::write(&tmp, "run_id\n").unwrap();
+        std::fs::rename(&tmp, &table).unwrap();
+        first.hold_table().unwrap();
+        let hard2 = dir.path().join("hard2.csv");
+        std::fs::hard_link(&table, &hard2).unwrap();
+        assert!(TableLock::acquire(&hard2).is_err());
+        drop(first);
+        TableLock::acquire(&hard2).unwrap();
     }
 
     #[test]

@@ -109,7 +109,7 @@ pub fn run_campaign(
     }
     // Before the table is read: a second process must not resume from a table that the first
     // is still appending to.
-    let _lock = TableLock::acquire(&opts.out)?;
+    let mut lock = TableLock::acquire(&opts.out)?;
     let (mut present, truncated_bytes) = prepare_table(plan, &opts.out)?;
     let selected: Vec<&PlannedRun> = plan
         .selected()
@@ -153,6 +153,8 @@ pub fn run_campaign(
         summary.elapsed_s = t0.elapsed().as_secs_f64();
         return Ok(summary);
     }
+    // The table may have been created or rewritten (by a rename) since the lock was taken.
+    lock.hold_table()?;
     let mut file = OpenOptions::new()
         .append(true)
         .open(&opts.out)

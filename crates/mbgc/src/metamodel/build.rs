@@ -243,12 +243,16 @@ fn scaling(
             })
             .collect();
         let domain = range(&col);
-        let (lo, hi) = (domain[0].ln(), domain[1].ln());
+        // The log of the group as the saved equation computes it (a sum of logs): its smallest
+        // value is the offset, so that the scaled group is exactly 0 there, not -1e-16 (which
+        // would make sqrt of it NaN at a training row of the saved model).
+        let ln = ln_group(settings, &g.monomial, x_phys);
+        let [lo, hi] = range(&ln);
         let transform = Transform::Log {
             offset: lo,
             width: if hi > lo { hi - lo } else { 1.0 },
         };
-        group_cols.push(col.iter().map(|&v| transform.apply(v)).collect());
+        group_cols.push(scaled_group(settings, &g.monomial, &transform, x_phys));
         groups.push(GroupDomain {
             group: g.clone(),
             transform,
@@ -283,6 +287,32 @@ fn scaling(
         symbols,
         gp_symbols,
     })
+}
+
+/// `ln(group)` per row, computed by the program the saved equation uses
+/// ([`Monomial::ln_program`]), so that a fit and its saved model see bit-identical values.
+fn ln_group(settings: &FitSettings, m: &Monomial, x_phys: &[Vec<f64>]) -> Vec<f64> {
+    let p = m.ln_program(&|name| var_of(settings, name));
+    let mut out = vec![0.0; x_phys.first().map_or(0, Vec::len)];
+    gp::eval::Evaluator::new().eval(&p, x_phys, &mut out);
+    out
+}
+
+/// The scaled group GP sees, `(ln(group) - offset) / width`, with the same operations as the
+/// composed equation ([`Scaling::compose`]).
+fn scaled_group(
+    settings: &FitSettings,
+    m: &Monomial,
+    t: &Transform,
+    x_phys: &[Vec<f64>],
+) -> Vec<f64> {
+    let Transform::Log { offset, width } = *t else {
+        unreachable!("groups are log-scaled")
+    };
+    ln_group(settings, m, x_phys)
+        .into_iter()
+        .map(|l| (l - offset) / width)
+        .collect()
 }
 
 impl Scaling {
@@ -333,10 +363,24 @@ impl Scaling {
     }
 }
 
+/// The equation on every row of `d`; `false` when it is not finite on some, whose values are
+/// then NaN (the others keep theirs, so metrics over them are never computed on stand-ins).
 fn predict(p: &[gp::Node], d: &Dataset) -> (bool, Vec<f64>) {
     let mut out = vec![0.0; d.rows()];
-    let ok = gp::eval::Evaluator::new().eval(p, &d.x, &mut out);
-    (ok, out)
+    let mut ev = gp::eval::Evaluator::new();
+    if ev.eval(p, &d.x, &mut out) {
+        return (true, out);
+    }
+    for (r, v) in out.iter_mut().enumerate() {
+        let row: Vec<Vec<f64>> = d.x.iter().map(|c| vec![c[r]]).collect();
+        let mut one = [0.0];
+        *v = if ev.eval(p, &row, &mut one) {
+            one[0]
+        } else {
+            f64::NAN
+        };
+    }
+    (false, out)
 }
 
 fn pick(col: &[f64], idx: &[usize]) -> Vec<f64> {
@@ -428,7 +472,15 @@ fn fit_response(
         .collect();
     let best = res.best();
     let program = scaling.compose(settings, &best.program, factor);
-    let (_, train_pred) = predict(&program, &train);
+    let (train_ok, train_pred) = predict(&program, &train);
+    if !train_ok {
+        let bad = train_pred.iter().filter(|v| !v.is_finite()).count();
+        warnings.push(format!(
+            "the saved equation for {target} is not finite on {bad} of the {} training rows \
+             (its training metrics are NaN): report this as a bug",
+            train.rows()
+        ));
+    }
     let (test_ok, test_pred) = predict(&program, &test);
     if test.rows() > 0 && !test_ok {
         warnings.push(format!(
@@ -723,7 +775,6 @@ pub fn regression_problems(
     let validation_cols = match &settings.validation {
         Some(v) => {
             let vc = columns(v, settings)?;
-            let n = vc[0].len();
             let mut gp_cols: Vec<Vec<f64>> = scaling
                 .gp_inputs
                 .iter()
@@ -735,17 +786,12 @@ pub fn regression_problems(
                 })
                 .collect();
             for g in &scaling.groups {
-                gp_cols.push(
-                    (0..n)
-                        .map(|r| {
-                            g.transform.apply(
-                                g.group
-                                    .monomial
-                                    .value(|name| vc[var_of(settings, name) as usize][r]),
-                            )
-                        })
-                        .collect(),
-                );
+                gp_cols.push(scaled_group(
+                    settings,
+                    &g.group.monomial,
+                    &g.transform,
+                    &vc[..n_in],
+                ));
             }
             Some((vc, gp_cols))
         }
@@ -775,6 +821,57 @@ pub fn regression_problems(
 mod tests {
     use super::*;
     use crate::similarity::{Group, Monomial, ScaledResponse, Similarity};
+
+    /// The saved equation computes a group through a sum of logs; GP must have seen exactly those
+    /// values, the smallest scaled to exactly 0 (a tree with sqrt(K_u) fitted on them was NaN at
+    /// the training row of smallest K once saved, and its training metrics were computed on
+    /// zeros).
+    #[test]
+    fn the_saved_equation_sees_the_groups_gp_saw_bit_for_bit() {
+        let k = Monomial {
+            coefficient: 1.0 / 9.81e-3,
+            powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
+        };
+        let similarity = Similarity {
+            groups: vec![Group {
+                name: "K".into(),
+                what: "stiffness".into(),
+                monomial: k,
+            }],
+            scaled: vec![],
+        };
+        let n = 50;
+        let e: Vec<f64> = (0..n).map(|r| 2.5e6 * 1.0731f64.powi(r) + 0.137).collect();
+        let table = TrainingTable::from_columns(
+            "t.csv",
+            vec![
+                ("E".into(), e.clone()),
+                ("rho".into(), vec![2600.0; n as usize]),
+                ("d".into(), vec![10.0; n as usize]),
+                ("y".into(), e.iter().map(|v| v.ln()).collect()),
+            ],
+        )
+        .unwrap();
+        let inputs: Vec<String> = vec!["E".into(), "rho".into(), "d".into()];
+        let settings = FitSettings::new(inputs, vec!["y".into()])
+            .test_fraction(0.0)
+            .similarity(similarity);
+        let cols = columns(&table, &settings).unwrap();
+        let sc = scaling(&table, &settings, &settings.absorbed(), &cols[..3]).unwrap();
+        let k_var = sc.gp_inputs.len() as u16;
+        for tree in [
+            vec![gp::Node::Var(k_var)],
+            vec![gp::Node::Var(k_var), gp::Node::Sqrt],
+        ] {
+            let program = sc.compose(&settings, &tree, None);
+            let (ok, saved) = predict(&program, &Dataset::new(cols[..3].to_vec(), vec![0.0; 50]));
+            assert!(ok, "{tree:?} is not finite on the training rows");
+            if tree.len() == 1 {
+                assert_eq!(saved, sc.gp_cols[k_var as usize], "not bit for bit");
+                assert_eq!(saved.iter().copied().fold(f64::INFINITY, f64::min), 0.0);
+            }
+        }
+    }
 
     /// A table held at one rho and one d (as the shipped campaign is), whose density is
     /// rho * (0.5 + 0.02 ln K) with K = E / (rho d): the fitted model must be right at other rho
@@ -860,7 +957,10 @@ mod tests {
         assert_eq!(problems.len(), 2);
         let (dens, angle) = (&problems[0], &problems[1]);
         assert_eq!(dens.symbols, vec!["mu".to_string(), "K_u".to_string()]);
-        assert_eq!((dens.fitted.as_str(), angle.fitted.as_str()), ("phi", "angle"));
+        assert_eq!(
+            (dens.fitted.as_str(), angle.fitted.as_str()),
+            ("phi", "angle")
+        );
         let v = dens.validation.as_ref().unwrap();
         assert_eq!(v, &dens.train);
         let (k_lo, k_hi): (f64, f64) = (1e6 / 8000.0, 1e6 * (1.0 + 0.37 * 59.0) / 8000.0);

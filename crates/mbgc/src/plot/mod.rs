@@ -1,7 +1,7 @@
 //! Figures. Each figure is drawn by a function generic over the plotters backend and written as
 //! SVG or PNG according to the file extension.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
@@ -66,25 +66,60 @@ pub(crate) fn draw_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::invalid(format!("{}: cannot draw the figure: {e}", path.display()))
 }
 
+/// Where a figure is drawn before it replaces `path`: a hidden file in the same folder with the
+/// same extension (the bitmap backend picks its format by it). Drawing there and renaming means a
+/// figure never writes through another name of an existing file (a hard link to an input) and
+/// never leaves half a figure behind.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    path.with_file_name(format!(
+        ".{name}.{}.tmp.{}",
+        std::process::id(),
+        match format_of(path) {
+            Ok(Format::Png) => "png",
+            _ => "svg",
+        }
+    ))
+}
+
+/// Moves a drawn figure from its temporary file onto `path`, or removes the temporary file when
+/// drawing failed.
+pub fn finish(path: &Path, tmp: &Path, drawn: Result<()>) -> Result<()> {
+    match drawn {
+        Ok(()) => std::fs::rename(tmp, path).map_err(|e| {
+            let _ = std::fs::remove_file(tmp);
+            Error::io(path, e)
+        }),
+        Err(e) => {
+            let _ = std::fs::remove_file(tmp);
+            Err(e)
+        }
+    }
+}
+
 /// Draws a figure with whichever backend the file extension asks for. `$draw` is a generic
-/// function taking the root drawing area as its first argument.
+/// function taking the root drawing area as its first argument. The file appears whole, by a
+/// rename ([`temp_path`]).
 #[macro_export]
 macro_rules! draw_figure {
     ($path:expr, $size:expr, $draw:ident ( $($arg:expr),* )) => {{
         use plotters::prelude::*;
         let path: &std::path::Path = $path;
-        match $crate::plot::prepare(path)? {
+        let format = $crate::plot::prepare(path)?;
+        let tmp = $crate::plot::temp_path(path);
+        let drawn = match format {
             $crate::plot::Format::Svg => {
-                let root = SVGBackend::new(path, $size).into_drawing_area();
+                let root = SVGBackend::new(&tmp, $size).into_drawing_area();
                 $draw(&root, $($arg),*).and_then(|_| root.present())
                     .map_err(|e| $crate::plot::draw_error(path, e))
             }
             $crate::plot::Format::Png => {
-                let root = BitMapBackend::new(path, $size).into_drawing_area();
+                let root = BitMapBackend::new(&tmp, $size).into_drawing_area();
                 $draw(&root, $($arg),*).and_then(|_| root.present())
                     .map_err(|e| $crate::plot::draw_error(path, e))
             }
-        }
+        };
+        $crate::plot::finish(path, &tmp, drawn)
     }};
 }
 
