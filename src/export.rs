@@ -30,9 +30,9 @@ pub fn run(a: &ExportArgs) -> anyhow::Result<()> {
     match &a.out {
         Some(p) => {
             write_atomic(p, text.as_bytes())?;
-            println!("wrote {}", p.display());
+            mbgc_output::outln!("wrote {}", p.display())?;
         }
-        None => print!("{text}"),
+        None => mbgc_output::out!("{text}")?,
     }
     Ok(())
 }

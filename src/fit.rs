@@ -95,6 +95,16 @@ pub struct FitArgs {
     pub json: bool,
 }
 
+/// Refuses a population, tournament, generation count, restart count, island count or tree
+/// length outside the range the GP engine allows (`Config::sizes`), naming the flag: a zero too
+/// many must not abort on an allocation or run for days.
+pub fn gp_sizes(config: &Config) -> anyhow::Result<()> {
+    match config.sizes().iter().find(|s| !s.holds()) {
+        Some(size) => anyhow::bail!("{}", size.refusal(&size.flag())),
+        None => Ok(()),
+    }
+}
+
 /// `90`, `90s`, `10m`, `1.5h` -> seconds.
 pub fn parse_duration(s: &str) -> Result<f64, String> {
     let s = s.trim();
@@ -146,9 +156,6 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     refuse_overwriting_inputs("--out", &a.out, &inputs)?;
     // Values the engine would silently bend: 0 generations ran one, an infinite parsimony
     // made every tree equal.
-    if a.generations == 0 {
-        anyhow::bail!("--generations 0: expected at least 1 generation");
-    }
     if !(a.parsimony.is_finite() && a.parsimony >= 0.0) {
         anyhow::bail!(
             "--parsimony {}: expected a finite penalty >= 0 (default 0.001)",
@@ -170,6 +177,7 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         selection: a.select,
         ..Config::default()
     };
+    gp_sizes(&config)?;
     let figures = if a.no_figures {
         None
     } else {

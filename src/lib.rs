@@ -107,11 +107,64 @@ pub fn main() -> std::process::ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    match run(Cli::parse()) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+    let cli = Cli::parse();
+    quiet_stdout_panics();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli)));
+    let result = match result {
+        Ok(r) => r,
+        // A `println!` that could not write (only code not yet moved to mbgc_output's writers
+        // has one): the same clean error as any other write failure on standard output.
+        Err(payload) => match stdout_panic_reason(payload.as_ref()) {
+            Some(reason) => {
+                eprintln!("mbgc: writing to standard output: {reason}");
+                return std::process::ExitCode::FAILURE;
+            }
+            None => std::panic::resume_unwind(payload),
+        },
+    };
+    // A report line that could not be written (`say!` keeps the error) fails the command too.
+    let flushed = mbgc_output::finish();
+    match result {
         Err(e) => {
-            eprintln!("error: {e:#}");
+            match e.downcast_ref::<mbgc_output::StdoutError>() {
+                Some(w) => eprintln!("mbgc: {w}"),
+                None => eprintln!("error: {e:#}"),
+            }
             std::process::ExitCode::FAILURE
         }
+        Ok(()) => match flushed {
+            Ok(()) => std::process::ExitCode::SUCCESS,
+            Err(w) => {
+                eprintln!("mbgc: {w}");
+                std::process::ExitCode::FAILURE
+            }
+        },
     }
+}
+
+/// The prefix of the panic message of `print!` and `println!` when standard output fails.
+const STDOUT_PANIC: &str = "failed printing to stdout: ";
+
+/// The reason of a failed `println!` (its panic payload), without the OS error number.
+fn stdout_panic_reason(payload: &(dyn std::any::Any + Send)) -> Option<String> {
+    let text = payload
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| payload.downcast_ref::<&str>().copied())?;
+    let reason = text.strip_prefix(STDOUT_PANIC)?;
+    Some(match reason.find(" (os error ") {
+        Some(k) => reason[..k].to_string(),
+        None => reason.to_string(),
+    })
+}
+
+/// Keeps the panic of a failed `println!` off standard error: [`main`] reports it as an error.
+/// Every other panic is reported as before.
+fn quiet_stdout_panics() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if stdout_panic_reason(info.payload()).is_none() {
+            default(info);
+        }
+    }));
 }

@@ -89,6 +89,16 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
             "{flag} {n} in {dim} dimensions: expected at most {MAX_VALUES} values in all (n x dim)"
         );
     }
+    if let Some(c) = a.fssf_candidates {
+        // Each candidate is a point held in memory and compared with every new point.
+        let most = MAX_VALUES / dim;
+        if c < n || c > most {
+            anyhow::bail!(
+                "--fssf-candidates {c} in {dim} dimensions: expected {n} to {most} candidates (at \
+                 least one per new point, at most {MAX_VALUES} values in all, candidates x dim)"
+            );
+        }
+    }
     let mut design = match &a.extend {
         Some(path) => {
             let d = Design::read(path, space.as_ref())?;

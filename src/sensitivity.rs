@@ -382,6 +382,14 @@ fn flow_curve_cmd(a: &FlowCurveArgs) -> anyhow::Result<()> {
             continue;
         }
         let w = cols.values[1][r];
+        // Bin k covers [k w, (k + 1) w): a width of 0 puts every bin at t = 0.
+        if !(w.is_finite() && w > 0.0) {
+            anyhow::bail!(
+                "{}: row {row}, column flow_bin_width: {w}; expected a positive bin width in \
+                 seconds (the flow_rate_t* bins are consecutive windows of this width)",
+                a.data.display()
+            );
+        }
         let t: Vec<f64> = (0..FLOW_BIN_NAMES.len())
             .map(|k| (k as f64 + 0.5) * w)
             .collect();
@@ -765,12 +773,8 @@ struct SobolResponse {
 fn sobol_cmd(a: &SobolArgs) -> anyhow::Result<()> {
     let out = Output::new(a.json);
     let model = Metamodel::load(&a.model)?;
-    if a.bootstrap < 50 {
-        anyhow::bail!(
-            "--bootstrap {}: expected at least 50 resamples",
-            a.bootstrap
-        );
-    }
+    // Before the model is evaluated, with the range the estimator itself enforces.
+    sobol::check_bootstrap(a.bootstrap)?;
     unique("--responses", a.responses.iter().map(String::as_str))?;
     let responses: Vec<String> = if a.responses.is_empty() {
         model.responses.iter().map(|r| r.name.clone()).collect()
@@ -779,7 +783,7 @@ fn sobol_cmd(a: &SobolArgs) -> anyhow::Result<()> {
     };
     let k = model.inputs.len();
     let names = model.input_names();
-    say!(out, "Sobol indices of {} over its domain: N = {} base points, {} evaluations per response, {} bootstrap resamples (seed {})", a.model.display(), a.samples, a.samples * (k + 2), a.bootstrap, a.seed);
+    say!(out, "Sobol indices of {} over its domain: N = {} base points, {} evaluations per response, {} bootstrap resamples (seed {})", a.model.display(), a.samples, a.samples.saturating_mul(k + 2), a.bootstrap, a.seed);
     for inp in &model.inputs {
         let how = if matches!(inp.transform, Transform::Log { .. }) {
             "log-uniform"

@@ -100,6 +100,19 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
+    let config = mbgc::gp::Config {
+        population: a.population,
+        generations: a.generations,
+        time_limit: a.time_limit,
+        parsimony: a.parsimony,
+        max_length: a.max_length,
+        restarts: a.restarts,
+        selection: a.select,
+        ..mbgc::gp::Config::default()
+    };
+    // Before anything is sampled or simulated, also with --no-fit or --shard (a later train
+    // fits with the same flags).
+    crate::fit::gp_sizes(&config)?;
     let req = TrainRequest {
         validation: a.validation,
         out_dir: a.out_dir.clone(),
@@ -115,16 +128,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         no_fit: a.no_fit,
         partial: a.partial,
         figures: true,
-        config: mbgc::gp::Config {
-            population: a.population,
-            generations: a.generations,
-            time_limit: a.time_limit,
-            parsimony: a.parsimony,
-            max_length: a.max_length,
-            restarts: a.restarts,
-            selection: a.select,
-            ..mbgc::gp::Config::default()
-        },
+        config,
         ..TrainRequest::new(a.space.clone(), &a.experiment, a.n)
     };
     let observer = Printer::new(a.generations);

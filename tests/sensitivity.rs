@@ -363,3 +363,65 @@ fn invalid_points_duplicates_and_flat_records_are_refused() {
         "{e}"
     );
 }
+
+/// The bootstrap count has one range, checked before the model is evaluated and stated the same
+/// way whichever end is crossed.
+#[test]
+fn sobol_bootstrap_has_one_range() {
+    let run = |b: &str| {
+        common::mbgc(&[
+            "sensitivity",
+            "sobol",
+            "--model",
+            "models/diagnose_local.json",
+            "--samples",
+            "64",
+            "--bootstrap",
+            b,
+            "--json",
+        ])
+    };
+    for b in ["0", "39", "100001", "1000000000000"] {
+        let o = run(b);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "--bootstrap {b}: {e}");
+        assert!(
+            e.contains(&format!("--bootstrap {b}: expected 40 to 100000 resamples")),
+            "--bootstrap {b}: {e}"
+        );
+    }
+    for b in ["40", "100000"] {
+        let o = run(b);
+        assert!(
+            o.status.success(),
+            "--bootstrap {b}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
+
+/// A hopper record with flow_bin_width 0 (or below) is refused by that name, not reported as a
+/// fit that did not converge.
+#[test]
+fn flow_curve_names_a_bad_bin_width() {
+    let dir = tempfile::tempdir().unwrap();
+    for width in ["0", "-0.15"] {
+        let flow = dir.path().join("flow.csv");
+        let mut text = String::from("row,status,flow_bin_width");
+        for k in 1..=8 {
+            text.push_str(&format!(",flow_rate_t{k}"));
+        }
+        text.push_str("\n0,done,0.15,0.04,0.04,0.039,0.035,0.02,0.008,0.002,0\n");
+        text.push_str(&format!(
+            "3,done,{width},0.04,0.04,0.039,0.035,0.02,0.008,0.002,0\n"
+        ));
+        std::fs::write(&flow, text).unwrap();
+        let e = fails(&["sensitivity", "flow-curve", "--data", s(&flow)]);
+        assert!(
+            e.contains("row 3, column flow_bin_width")
+                && e.contains("expected a positive bin width"),
+            "{width}: {e}"
+        );
+        assert!(!e.contains("converge"), "{width}: {e}");
+    }
+}

@@ -104,7 +104,7 @@ impl Default for Config {
             islands: 4,
             migration_interval: 5,
             migrants: 10,
-            tournament: 20,
+            tournament: DEFAULT_TOURNAMENT,
             p_crossover: 0.9,
             p_subtree: 0.01,
             p_hoist: 0.01,
@@ -131,7 +131,100 @@ impl Default for Config {
     }
 }
 
+/// Most trees per generation (all islands together): beyond this one generation's trees alone
+/// take gigabytes.
+pub const MAX_POPULATION: usize = 1_000_000;
+/// Most generations of one search.
+pub const MAX_GENERATIONS: usize = 1_000_000;
+/// Trees per tournament unless set (gplearn's 20).
+pub const DEFAULT_TOURNAMENT: usize = 20;
+/// Most islands.
+pub const MAX_ISLANDS: usize = 1_000;
+/// Most independent searches.
+pub const MAX_RESTARTS: usize = 1_000;
+/// Longest tree (nodes) a search may build: far beyond a readable equation.
+pub const MAX_LENGTH: usize = 10_000;
+
+/// The allowed range of one size setting of a [`Config`], from [`Config::sizes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SizeRange {
+    /// The field (`max_length`; the command line spells it `--max-length`).
+    pub name: &'static str,
+    /// What it counts ("trees", "nodes"), for the message.
+    pub unit: &'static str,
+    /// The value given.
+    pub value: usize,
+    /// Smallest allowed value.
+    pub min: usize,
+    /// Largest allowed value.
+    pub max: usize,
+}
+
+impl SizeRange {
+    /// Whether the value lies in the range.
+    pub fn holds(&self) -> bool {
+        (self.min..=self.max).contains(&self.value)
+    }
+
+    /// The option of a command line that sets it: `--max-length`.
+    pub fn flag(&self) -> String {
+        format!("--{}", self.name.replace('_', "-"))
+    }
+
+    /// "{name} {value}: expected {min} to {max} {unit}", naming the field as `name` says.
+    pub fn refusal(&self, name: &str) -> String {
+        format!(
+            "{name} {}: expected {} to {} {}",
+            self.value, self.min, self.max, self.unit
+        )
+    }
+}
+
 impl Config {
+    /// The size settings with their allowed ranges, in the order they are checked (a range may
+    /// depend on an earlier setting: the population holds at least 2 trees per island, a
+    /// tournament draws at most the population). Stated here once, for [`Config::check`] and
+    /// for a command line naming its flags.
+    pub fn sizes(&self) -> [SizeRange; 6] {
+        let islands = self.islands.clamp(1, MAX_ISLANDS);
+        let population = self.population.clamp(2 * islands, MAX_POPULATION);
+        let range = |name, unit, value, min, max| SizeRange {
+            name,
+            unit,
+            value,
+            min,
+            max,
+        };
+        [
+            range("islands", "islands", self.islands, 1, MAX_ISLANDS),
+            range(
+                "population",
+                "trees (at least 2 per island)",
+                self.population,
+                2 * islands,
+                MAX_POPULATION,
+            ),
+            // A tournament beyond the population only repeats its draws; small populations keep
+            // the default 20.
+            range(
+                "tournament",
+                "trees (at most the population, or 20 below 20 trees)",
+                self.tournament,
+                1,
+                population.max(DEFAULT_TOURNAMENT),
+            ),
+            range(
+                "generations",
+                "generations",
+                self.generations,
+                1,
+                MAX_GENERATIONS,
+            ),
+            range("restarts", "searches", self.restarts, 1, MAX_RESTARTS),
+            range("max_length", "nodes", self.max_length, 1, MAX_LENGTH),
+        ]
+    }
+
     /// Checks the settings; the message names the field.
     pub fn check(&self) -> Result<Vec<Node>, String> {
         let functions =
@@ -156,26 +249,11 @@ impl Config {
                 "p_crossover + p_subtree + p_hoist + p_point + p_scale: expected at most 1, got {p_sum}"
             ));
         }
-        if self.islands == 0 || self.population < 2 * self.islands {
-            return Err(format!(
-                "population: expected at least 2 per island ({} islands), got {}",
-                self.islands, self.population
-            ));
-        }
-        if self.tournament == 0 {
-            return Err("tournament: expected at least 1".into());
+        if let Some(size) = self.sizes().iter().find(|s| !s.holds()) {
+            return Err(size.refusal(size.name));
         }
         if self.init_depth.0 > self.init_depth.1 {
             return Err("init_depth: expected min <= max".into());
-        }
-        if self.generations == 0 {
-            return Err("generations: expected at least 1 (0 would return a random tree)".into());
-        }
-        if self.restarts == 0 {
-            return Err("restarts: expected at least 1".into());
-        }
-        if self.max_length < 1 {
-            return Err("max_length: expected at least 1".into());
         }
         if self.const_range.0.is_nan()
             || self.const_range.0.partial_cmp(&self.const_range.1) != Some(std::cmp::Ordering::Less)

@@ -89,6 +89,6 @@ pub mod program;
 pub mod seed;
 pub mod select;
 
-pub use engine::{fit, Config, FitResult, FrontEntry, Progress};
+pub use engine::{fit, Config, FitResult, FrontEntry, Progress, SizeRange};
 pub use eval::Dataset;
 pub use node::Node;

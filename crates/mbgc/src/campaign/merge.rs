@@ -170,6 +170,15 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
                     format!("row: expected a row number, found \"{}\"", &r[1]),
                 )
             })?;
+            // As `campaign status` and a resumed `simulate` read it: a line whose status is
+            // neither is not a run, and copying it would hand the damage on.
+            if r[2] != *DONE && r[2] != *FAILED {
+                return Err(Error::input(
+                    &file,
+                    format!("line {line}"),
+                    format!("status: expected done or failed, found \"{}\"", &r[2]),
+                ));
+            }
             let id = r[0].to_string();
             if let Some(b) = backend_of(&t.header, &r) {
                 match &backend {

@@ -90,6 +90,17 @@ pub fn fit(t: &[f64], y: &[f64]) -> Result<FlowCurveFit> {
             t.len()
         )));
     }
+    let (t_lo, t_hi) = t
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    if t_hi <= t_lo {
+        return Err(Error::invalid(format!(
+            "flow-rate curve: every point is at t = {t_lo} s; expected points at different times \
+             (a bin width of 0?)"
+        )));
+    }
     let peak = y.iter().copied().fold(0.0, f64::max);
     if peak <= 0.0 {
         return Err(Error::invalid(
@@ -181,6 +192,15 @@ mod tests {
             assert!(c.ci95[0] < c.value && c.value < c.ci95[1]);
         }
         assert!(f.k.ci95[0] < 1.1 && 1.1 < f.k.ci95[1], "{f:?}");
+    }
+
+    /// Points all at one time (a bin width of 0) determine no K or n: said so, not "did not
+    /// converge".
+    #[test]
+    fn points_at_one_time_are_refused_by_name() {
+        let y = [0.04, 0.04, 0.03, 0.02, 0.01, 0.005, 0.002, 0.0];
+        let e = fit(&[0.0; 8], &y).unwrap_err().to_string();
+        assert!(e.contains("different times"), "{e}");
     }
 
     #[test]

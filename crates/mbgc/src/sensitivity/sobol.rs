@@ -53,6 +53,18 @@ pub const MIN_BOOTSTRAP: usize = 40;
 /// Most bootstrap resamples: beyond this the intervals do not change, only the time grows.
 pub const MAX_BOOTSTRAP: usize = 100_000;
 
+/// Refuses a bootstrap count outside [`MIN_BOOTSTRAP`]..=[`MAX_BOOTSTRAP`] (the one range, for
+/// the command line to check before any evaluation too).
+pub fn check_bootstrap(bootstrap: usize) -> Result<()> {
+    if !(MIN_BOOTSTRAP..=MAX_BOOTSTRAP).contains(&bootstrap) {
+        return Err(Error::invalid(format!(
+            "--bootstrap {bootstrap}: expected {MIN_BOOTSTRAP} to {MAX_BOOTSTRAP} resamples (a 95 % \
+             percentile interval needs a few dozen; each costs a pass over the base points)"
+        )));
+    }
+    Ok(())
+}
+
 /// Rows of points, `[row][input]`.
 pub type Rows = Vec<Vec<f64>>;
 
@@ -122,13 +134,7 @@ pub fn estimate(
     bootstrap: usize,
     seed: u64,
 ) -> Result<Indices> {
-    if !(MIN_BOOTSTRAP..=MAX_BOOTSTRAP).contains(&bootstrap) {
-        return Err(Error::invalid(format!(
-            "sobol indices: --bootstrap {bootstrap}; expected {MIN_BOOTSTRAP} to {MAX_BOOTSTRAP} \
-             resamples (a 95 % percentile interval needs a few dozen; each costs a pass over the \
-             base points)"
-        )));
-    }
+    check_bootstrap(bootstrap)?;
     let n = ya.len();
     let keep: Vec<usize> = (0..n)
         .filter(|&j| ya[j].is_finite() && yb[j].is_finite() && yab.iter().all(|y| y[j].is_finite()))

@@ -13,7 +13,9 @@ pub mod extend;
 mod pipeline;
 mod stages;
 
-pub use pipeline::{train, Silent, TrainObserver, TrainOutcome, TrainRequest, TrainStage};
+pub use pipeline::{
+    train, Silent, TrainObserver, TrainOutcome, TrainRequest, TrainStage, MAX_RUNS,
+};
 pub use stages::{
     ensure_design, fit_inputs, plan, samplers, seeds, space_parameters, ExtendsRecord, TrainPaths,
     TrainRecord,

@@ -152,12 +152,22 @@ pub enum TrainOutcome {
     Simulated(TrainPaths),
 }
 
+/// Most runs of a train's design, and of its validation set: each is a DEM simulation (minutes),
+/// so more would run for years, and the design alone is sampled in memory.
+pub const MAX_RUNS: usize = 100_000;
+
 /// Runs (or resumes) a train: sample, simulate, fit.
 pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOutcome> {
-    if req.n < 5 {
+    if !(5..=MAX_RUNS).contains(&req.n) {
         return Err(Error::invalid(format!(
-            "--n {}: expected at least 5 training runs",
+            "--n {}: expected 5 to {MAX_RUNS} training runs",
             req.n
+        )));
+    }
+    if req.validation > MAX_RUNS {
+        return Err(Error::invalid(format!(
+            "--validation {}: expected 0 to {MAX_RUNS} validation runs",
+            req.validation
         )));
     }
     if req.threads == 0 {
