@@ -190,6 +190,9 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
             a.out.with_file_name(format!("{stem}_figures"))
         }))
     };
+    if let Some(dir) = &figures {
+        mbgc::outputs::refuse_figures_over_inputs("--figures", dir, &inputs)?;
+    }
     let mut settings = FitSettings::new(a.inputs.clone(), a.targets.clone())
         .test_fraction(a.test_fraction)
         .config(config);
@@ -250,10 +253,16 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
         .save(&a.out)
         .with_context(|| format!("writing {}", a.out.display()))?;
     for r in &model.responses {
-        let test = r
+        let mut test = r
             .test
             .map(|t| format!("test R2 {:.5} RMSE {:.4e}", t.r2, t.rmse))
             .unwrap_or_else(|| "no test rows".into());
+        if let Some(v) = r.validation {
+            test += &format!(
+                ", validation R2 {:.5} RMSE {:.4e} ({} rows)",
+                v.r2, v.rmse, v.rows
+            );
+        }
         say!(
             out,
             "{} = {}\n    size {}, train R2 {:.5} RMSE {:.4e}, {test}; {} generations, {:.1} s, {:.2e} node-evals/s",
@@ -291,6 +300,7 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
             "size": r.size,
             "train": r.train,
             "test": r.test,
+            "validation": r.validation,
             "generations": r.generations,
             "seconds": r.seconds,
         })).collect::<Vec<_>>(),

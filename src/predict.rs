@@ -68,7 +68,7 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
             .iter()
             .zip(held_cols)
             .map(|(c, col)| (c, col[row]))
-            .find(|(c, v)| !((v - c.value).abs() <= 1e-9 * c.value.abs()))
+            .find(|(c, v)| v.is_nan() || (v - c.value).abs() > 1e-9 * c.value.abs())
         {
             outside.push(format!(
                 "line {}: {} = {v}, but the model holds only at {} = {} (its campaign held it \

@@ -406,3 +406,28 @@ fn validate_refuses_what_would_test_another_model_or_do_nothing() {
     let e = validate(&other, &[]);
     assert!(e.contains("parameters.mu_pw") && e.contains("0.363"), "{e}");
 }
+
+/// Fixed values that alone put a dimensionless group outside the model's range: the message
+/// says it is outside (not "inside"), with the value, the range and what to change.
+#[test]
+fn fixed_values_that_put_a_group_outside_are_named_as_outside() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::copy(
+        root.join("examples/sieve_gravel_8_16.csv"),
+        dir.path().join("sieve_gravel_8_16.csv"),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(root.join("examples/gravel.toml"))
+        .unwrap()
+        .replace("nu_p = 0.25", "nu_p = 0.25\nrho_p = 1000");
+    let material = dir.path().join("m.toml");
+    std::fs::write(&material, text).unwrap();
+    let e = fails(&["calibrate", "--material", s(&material)]);
+    assert!(
+        e.contains("K_p")
+            && e.contains("is not inside the model's range")
+            && e.contains("expected"),
+        "{e}"
+    );
+}

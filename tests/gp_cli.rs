@@ -385,3 +385,61 @@ fn predict_names_rows_at_another_value_of_a_held_parameter() {
         "{err}"
     );
 }
+
+/// A validation table's scores are printed and in the JSON, not only in the model file; a
+/// folder of figures that holds an input with a figure's name is refused.
+#[test]
+fn fit_reports_its_validation_and_keeps_figures_off_its_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (data, _) = table(dir.path());
+    let model = dir.path().join("m.json");
+    let args = |extra: &[&str]| -> Vec<String> {
+        let mut v = vec![
+            "fit",
+            "--inputs",
+            "mu,mu_r,E",
+            "--targets",
+            "y1",
+            "--out",
+            s(&model),
+            "--population",
+            "200",
+            "--generations",
+            "3",
+        ];
+        v.extend_from_slice(extra);
+        v.iter().map(|x| x.to_string()).collect()
+    };
+    let run = |a: Vec<String>| ok(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let text = run(args(&[
+        "--data",
+        s(&data),
+        "--validation",
+        s(&data),
+        "--no-figures",
+    ]));
+    assert!(
+        text.contains("validation R2 ") && text.contains("rows)"),
+        "{text}"
+    );
+    let json = run(args(&[
+        "--data",
+        s(&data),
+        "--validation",
+        s(&data),
+        "--no-figures",
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(v["responses"][0]["validation"]["r2"].is_number(), "{json}");
+    // Data whose name is that of a figure the fit draws, in the folder of figures.
+    let figs = dir.path().join("figs");
+    std::fs::create_dir(&figs).unwrap();
+    let named = figs.join("y1_parity.svg");
+    std::fs::copy(&data, &named).unwrap();
+    let before = std::fs::read(&named).unwrap();
+    let a = args(&["--data", s(&named), "--figures", s(&figs)]);
+    let e = fails(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(e.contains("--figures") && e.contains("--data"), "{e}");
+    assert_eq!(std::fs::read(&named).unwrap(), before);
+}

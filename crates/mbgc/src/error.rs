@@ -12,7 +12,7 @@ use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad content in a user-supplied file or argument.
-    #[error("{file}: {field}: {expected}")]
+    #[error("{file}: {field}: {}", Error::expectation(expected))]
     Input {
         /// The file (or label of in-memory data) holding the bad value.
         file: String,
@@ -85,6 +85,22 @@ impl Error {
         Error::Io {
             file: file.display().to_string(),
             cause: source,
+        }
+    }
+
+    /// The `expected` text of an input error as printed: a bare description of what belongs there
+    /// ("a standard deviation > 0, got -1") gets the word that says it is the expectation, so that
+    /// the message cannot read as a statement of what was found. Texts that say "expected"
+    /// themselves, or state what is wrong ("missing; ..."), are printed as written.
+    fn expectation(text: &str) -> String {
+        let bare = ["a ", "an ", "at least ", "at most ", "[", "\""]
+            .iter()
+            .any(|p| text.starts_with(p))
+            || text.starts_with(|c: char| c.is_ascii_digit());
+        if bare && !text.to_ascii_lowercase().contains("expected") {
+            format!("expected {text}")
+        } else {
+            text.to_string()
         }
     }
 
@@ -430,6 +446,32 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Entries<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_bare_expectation_says_it_is_one() {
+        let e = Error::input(
+            "m.toml",
+            "measured.x.sd",
+            "a standard deviation > 0, got -1",
+        );
+        assert_eq!(
+            e.to_string(),
+            "m.toml: measured.x.sd: expected a standard deviation > 0, got -1"
+        );
+        let e = Error::input("m.json", "version", "1, got 99");
+        assert_eq!(e.to_string(), "m.json: version: expected 1, got 99");
+        let e = Error::input("m.json", "format", "\"mbgc-metamodel\", got \"x\"");
+        assert!(e
+            .to_string()
+            .contains("format: expected \"mbgc-metamodel\""));
+        for kept in [
+            "missing; add a column",
+            "not a response of the model; expected one of: a, b",
+            "an x; expected y",
+        ] {
+            assert!(Error::input("f", "k", kept).to_string().ends_with(kept));
+        }
+    }
 
     /// Errors in a CRLF file name the line an editor shows, as in an LF file.
     #[test]

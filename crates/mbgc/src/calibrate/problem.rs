@@ -236,8 +236,10 @@ impl<'m> Problem<'m> {
                         file,
                         "fixed",
                         format!(
-                            "{} = {} = {v:.4e} from the fixed {}, inside the model's range \
-                             [{:.4e}, {:.4e}] ({}; outside it the equations extrapolate)",
+                            "{} = {} = {v:.4e} from the fixed {} is not inside the model's \
+                             range [{:.4e}, {:.4e}] ({}; outside it the equations \
+                             extrapolate): expected fixed values that put it inside, or a model \
+                             trained over it",
                             gd.group.name,
                             gd.group.monomial.text(),
                             parts

@@ -105,6 +105,17 @@ pub struct Table {
 pub fn read_table(path: &Path) -> Result<Table> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    // Lines ended by a lone CR (classic Mac OS): the reader would take the last completed run
+    // for a cut line, and lines appended with LF would be glued to it. Refused rather than
+    // rewritten: the table is the user's record of hours of runs.
+    if bytes.contains(&b'\r') && !bytes.contains(&b'\n') {
+        return Err(Error::input(
+            &file,
+            "line ends",
+            "expected lines ended by LF or CR LF, found CR only (convert it, e.g. with `tr '\\r' \
+             '\\n'`, then resume)",
+        ));
+    }
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
@@ -191,6 +202,16 @@ mod tests {
 
     /// A table whose line ends were turned into CRLF (git's autocrlf) reads as the same table:
     /// every run complete, nothing to truncate, the lines numbered as an editor shows them.
+    #[test]
+    fn a_table_with_cr_only_line_ends_is_refused_not_cut() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cr.csv");
+        std::fs::write(&path, "a,b\r1,2\r3,4\r").unwrap();
+        let e = read_table(&path).unwrap_err().to_string();
+        assert!(e.contains("line ends") && e.contains("CR only"), "{e}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"a,b\r1,2\r3,4\r");
+    }
+
     #[test]
     fn a_crlf_table_is_read_whole_with_its_editor_line_numbers() {
         let dir = tempfile::tempdir().unwrap();
