@@ -9,6 +9,7 @@ use clap::Args;
 use mbgc::calibrate::session::{self, Session, SessionOptions};
 use mbgc::error::write_atomic;
 use mbgc::material::PsdSpec;
+use mbgc_output::outln;
 
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
@@ -97,7 +98,7 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     let models = crate::builtin::models(&a.model)?;
     for (i, (model, label)) in models.iter().enumerate() {
         if i > 0 && !a.json {
-            println!();
+            outln!()?;
         }
         let s = session::run(&material, model, label, &opts)?;
         let mut written = Vec::new();
@@ -109,9 +110,9 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             written.extend(plot(dir, Path::new(label), &s)?);
         }
         if !a.json {
-            print_text(&s);
+            print_text(&s)?;
             for f in &written {
-                println!("wrote {}", f.display());
+                outln!("wrote {}", f.display())?;
             }
         }
         sessions.push(s);
@@ -123,11 +124,11 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
                 "classes": sessions.iter().map(Session::json).collect::<Vec<_>>(),
                 "class_probabilities": prob,
             });
-            println!("{}", serde_json::to_string_pretty(&v)?);
+            outln!("{}", serde_json::to_string_pretty(&v)?)?;
         } else {
-            println!("\nModel classes (equal prior probabilities):");
+            outln!("\nModel classes (equal prior probabilities):")?;
             for (((_, m), z), p) in models.iter().zip(&ln_z).zip(&prob) {
-                println!("  {m:>40}: log evidence {z:.3}, P(M|D) = {p:.4}");
+                outln!("  {m:>40}: log evidence {z:.3}, P(M|D) = {p:.4}")?;
             }
         }
     } else if a.json {
@@ -137,7 +138,7 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
         } else {
             serde_json::json!({ "classes": sessions.iter().map(Session::json).collect::<Vec<_>>() })
         };
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     }
     Ok(())
 }
@@ -187,25 +188,25 @@ fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
     Ok(figures)
 }
 
-fn print_text(s: &Session) {
+fn print_text(s: &Session) -> anyhow::Result<()> {
     let cal = &s.calibration;
     let names = &s.free;
-    println!("{} ({}) with {}", s.material, s.source, s.model);
+    outln!("{} ({}) with {}", s.material, s.source, s.model)?;
     for n in &s.notes {
-        println!("  {n}");
+        outln!("  {n}")?;
     }
     for (n, v) in &s.fixed {
-        println!("  {n} = {v} fixed");
+        outln!("  {n} = {v} fixed")?;
     }
     let meas: Vec<String> = s
         .measured
         .iter()
         .map(|t| format!("{} {} +- {}", t.name, t.value, t.sd))
         .collect();
-    println!("  measured: {}", meas.join(", "));
+    outln!("  measured: {}", meas.join(", "))?;
     let fitting = s.fitting().len();
     let others = cal.optima.len() - fitting;
-    println!(
+    outln!(
         "{fitting} of {} distinct optima from {} starts in {:.3} s fit the measurements (chi2 <= \
          {:.2}, the 95 % level for {} measurement{}):",
         cal.optima.len(),
@@ -214,10 +215,10 @@ fn print_text(s: &Session) {
         s.fit_threshold(),
         s.measured.len(),
         if s.measured.len() == 1 { "" } else { "s" }
-    );
+    )?;
     for (i, o) in cal.optima.iter().enumerate().take(10) {
         if i == fitting && others > 0 {
-            println!("  local minima that do not fit:");
+            outln!("  local minima that do not fit:")?;
         }
         let params: Vec<String> = names
             .iter()
@@ -230,43 +231,43 @@ fn print_text(s: &Session) {
             .zip(o.predictions.iter().zip(&o.residuals))
             .map(|(t, (p, r))| format!("{} {p:.4} ({r:+.2} sd)", t.name))
             .collect();
-        println!(
+        outln!(
             "  #{} chi2 {:.3e} ({} starts): {}\n      predicted {}",
             i + 1,
             o.chi2,
             o.starts,
             params.join(", "),
             fits.join(", ")
-        );
+        )?;
     }
     if cal.optima.len() > 10 {
-        println!("  ... {} more (see --json)", cal.optima.len() - 10);
+        outln!("  ... {} more (see --json)", cal.optima.len() - 10)?;
     }
     if !s.unused.is_empty() {
-        println!(
+        outln!(
             "Not in any equation of the measured responses (any value in range fits equally): {}",
             s.unused.join(", ")
-        );
+        )?;
     }
     if cal.excess_parameters > 0 {
         let equal = s.equally_good().len();
         if equal > 1 {
-            println!(
+            outln!(
                 "{equal} of the optima are equally good points of one continuous solution set, \
                  not separate answers."
-            );
+            )?;
         }
-        println!(
+        outln!(
             "{} free parameters but {} measurements: the data fix at most {} combinations; the \
              solutions form a set of dimension >= {}.",
             names.len(),
             s.measured.len(),
             s.measured.len(),
             cal.excess_parameters
-        );
+        )?;
     }
     if !cal.flat_directions.is_empty() {
-        println!("Directions at the best optimum along which the predictions do not change (unit-box steps):");
+        outln!("Directions at the best optimum along which the predictions do not change (unit-box steps):")?;
         for d in &cal.flat_directions {
             let comp: Vec<String> = names
                 .iter()
@@ -274,33 +275,40 @@ fn print_text(s: &Session) {
                 .filter(|(_, c)| c.abs() >= 0.05)
                 .map(|(n, c)| format!("{c:+.2} {n}"))
                 .collect();
-            println!(
+            outln!(
                 "  {}  (singular value {:.1e})",
                 comp.join(" "),
                 d.singular_value
-            );
+            )?;
         }
-        println!(
+        outln!(
             "Range of each parameter over the equally good optima (chi2 within 1 of the best):"
-        );
+        )?;
         for r in &cal.solution_ranges {
-            println!("  {} in [{:.4}, {:.4}]", r.name, r.min, r.max);
+            outln!("  {} in [{:.4}, {:.4}]", r.name, r.min, r.max)?;
         }
     }
     if let Some(post) = &s.posterior {
-        println!(
+        outln!(
             "Posterior (TMCMC, {} samples, {} stages): log evidence {:.3}",
-            post.samples, post.stages, post.ln_evidence
-        );
+            post.samples,
+            post.stages,
+            post.ln_evidence
+        )?;
         for p in &post.parameters {
-            println!(
+            outln!(
                 "  {:>12}: mean {:.4}, COV {:.3}, 5 % {:.4}, 95 % {:.4}",
-                p.name, p.mean, p.cov, p.q05, p.q95
-            );
+                p.name,
+                p.mean,
+                p.cov,
+                p.q05,
+                p.q95
+            )?;
         }
-        println!("Posterior-robust predictions (mean +- sd over the posterior):");
+        outln!("Posterior-robust predictions (mean +- sd over the posterior):")?;
         for r in &post.responses {
-            println!("  {:>12}: {:.4} +- {:.4}", r.name, r.mean, r.sd);
+            outln!("  {:>12}: {:.4} +- {:.4}", r.name, r.mean, r.sd)?;
         }
     }
+    Ok(())
 }
