@@ -244,6 +244,15 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     for w in &fitted.warnings {
         eprintln!("warning: {w}");
     }
+    if fitted.model.experiment.is_none() && fitted.model.model_class.is_some() {
+        eprintln!(
+            "warning: {} has no campaign record beside it ({}.meta.json): the model records no \
+             experiment and no box scale, so `validate` cannot check that it reruns the \
+             experiment the model was trained on",
+            a.data.display(),
+            a.data.display()
+        );
+    }
     let figure_paths = match &figures {
         Some(dir) => fit_figures(dir, &fitted)?,
         None => Vec::new(),

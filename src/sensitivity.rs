@@ -644,15 +644,19 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
             summary(Equation::Translational),
             summary(Equation::Rotational),
         );
-        if translational
-            .norms
-            .iter()
-            .chain(&rotational.norms)
-            .any(|v| !v.is_finite())
-        {
+        // Norms must be finite; a correlation may be undefined (NaN: a parameter the equation
+        // does not depend on) but never infinite, which only an overflow gives.
+        let infinite = [&translational, &rotational].iter().any(|s| {
+            s.norms.iter().chain(&s.shares).any(|v| !v.is_finite())
+                || s.cross_correlation
+                    .iter()
+                    .flatten()
+                    .any(|v| v.is_infinite())
+        });
+        if infinite {
             anyhow::bail!(
                 "--at #{} ({}): the contact law's derivatives overflow or are undefined there \
-                 (a norm is not finite); expected a physical point (E_p up to about 1e12 Pa)",
+                 (a norm, a share or a correlation is not finite); expected a physical point (E_p from about 1e3 to 1e12 Pa)",
                 i + 1,
                 at.iter()
                     .map(|(n, v)| format!("{n}={v:e}"))
@@ -699,9 +703,31 @@ fn matrix_cmd(a: &MatrixArgs) -> anyhow::Result<()> {
                     out,
                     "    CC {n:<8} {}",
                     row.iter()
-                        .map(|v| format!("{v:+.3}"))
+                        .map(|v| if v.is_nan() {
+                            "   n/a".to_string()
+                        } else {
+                            format!("{v:+.3}")
+                        })
                         .collect::<Vec<_>>()
                         .join(" ")
+                );
+            }
+            let flat: Vec<&String> = s
+                .parameters
+                .iter()
+                .zip(&s.norms)
+                .filter(|(_, n)| **n == 0.0)
+                .map(|(p, _)| p)
+                .collect();
+            if !flat.is_empty() {
+                say!(
+                    out,
+                    "    n/a: the {eq} equation does not depend on {} at this point (sensitivity \
+                     0), so its correlations are undefined",
+                    flat.iter()
+                        .map(|p| p.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 );
             }
         }

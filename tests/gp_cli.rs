@@ -443,3 +443,39 @@ fn fit_reports_its_validation_and_keeps_figures_off_its_inputs() {
     assert!(e.contains("--figures") && e.contains("--data"), "{e}");
     assert_eq!(std::fs::read(&named).unwrap(), before);
 }
+
+/// A DEM table fitted without its campaign record: the model cannot know its experiment, and
+/// the fit says so instead of writing a model that validate cannot check.
+#[test]
+fn fit_warns_when_a_dem_table_has_no_campaign_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("dl.csv");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("training_data/diagnose_local.csv"),
+        &data,
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .args([
+            "fit",
+            "--data",
+            s(&data),
+            "--inputs",
+            "mu_pp,d50",
+            "--targets",
+        ])
+        .args([
+            "shear_angle",
+            "--population",
+            "100",
+            "--generations",
+            "2",
+            "--no-figures",
+        ])
+        .args(["--out", s(&dir.path().join("m.json"))])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("has no campaign record"), "{err}");
+}

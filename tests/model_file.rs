@@ -71,6 +71,16 @@ fn broken_models_are_refused_by_field() {
             Box::new(|m| m["responses"][0]["name"] = json!("z")),
             "responses.z",
         ),
+        (
+            "a negative box scale",
+            Box::new(|m| m["box_scale"] = json!(-3.0)),
+            "box_scale",
+        ),
+        (
+            "an unknown experiment",
+            Box::new(|m| m["experiment"] = json!("warp-drive")),
+            "experiment",
+        ),
     ];
     for (what, edit, field) in edits {
         let mut m = tiny();

@@ -311,6 +311,11 @@ fn invalid_points_duplicates_and_flat_records_are_refused() {
     let set = "nu_p=0.3,rho_p=2500,d50=2";
     for (at, set) in [
         ("E_p=1e308,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45", set),
+        // Finite norms but infinite correlations.
+        (
+            "E_p=1e-300,e_pp=0.45,mu_pp=0.25,mu_r_pp=0.25",
+            "nu_p=0.3,rho_p=2600,d50=2",
+        ),
         (
             "E_p=2e7,e_pp=0.45,mu_pp=0.5,mu_r_pp=0.45",
             "nu_p=-1,rho_p=2500,d50=2",

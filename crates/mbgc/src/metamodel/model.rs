@@ -469,6 +469,23 @@ impl Metamodel {
                 "at least one response, found none",
             ));
         }
+        if let Some(k) = self.box_scale.filter(|k| !(k.is_finite() && *k > 0.0)) {
+            return Err(Error::input(
+                file,
+                "box_scale",
+                format!("a box scale > 0 (the experiment's size in particle diameters), found {k}"),
+            ));
+        }
+        if let Some(e) = &self.experiment {
+            let known = crate::campaign::registry::experiment_names();
+            if !known.contains(&e.as_str()) {
+                return Err(Error::input(
+                    file,
+                    "experiment",
+                    format!("one of {}, found \"{e}\"", known.join(", ")),
+                ));
+            }
+        }
         let inputs: Vec<&str> = self.inputs.iter().map(|i| i.name.as_str()).collect();
         let responses: Vec<&str> = self.responses.iter().map(|r| r.name.as_str()).collect();
         for (what, names) in [("inputs", &inputs), ("responses", &responses)] {
