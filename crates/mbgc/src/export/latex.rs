@@ -234,7 +234,48 @@ pub fn equation(m: &Metamodel, response: usize) -> String {
             }
         })
         .collect();
-    latex(&Expr::from_postfix(&m.responses[response].program), &names).0
+    latex(&display_tree(m, response), &names).0
+}
+
+/// The equation as a reader is shown it: simplified (constants folded, `(a + c1) - c2` as
+/// `a + c`, division by a constant as a product) when the simplified tree gives the saved
+/// equation's values to 1e-9 at 64 points spread over the model's domain; the saved tree
+/// otherwise, so that the display never says something the model does not.
+pub fn display_tree(m: &Metamodel, response: usize) -> Expr {
+    let saved = &m.responses[response];
+    let e = Expr::from_postfix(&saved.program);
+    let s = e.clone().simplify();
+    if s == e {
+        return e;
+    }
+    let n = 64;
+    let x: Vec<Vec<f64>> = m
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(j, i)| {
+            // A different irrational stride per input spreads the points over the box.
+            let stride = (0.618_033_988_75 + 0.414_213_562 * j as f64).fract();
+            (0..n)
+                .map(|k| {
+                    let u = ((k as f64 + 0.5) * stride).fract();
+                    i.domain[0] + u * (i.domain[1] - i.domain[0])
+                })
+                .collect()
+        })
+        .collect();
+    let mut simplified = saved.clone();
+    simplified.program = s.to_postfix();
+    let (a, b) = (m.predict(saved, &x), m.predict(&simplified, &x));
+    let same = a
+        .iter()
+        .zip(&b)
+        .all(|(a, b)| (a.is_nan() && b.is_nan()) || (a - b).abs() <= 1e-9 * a.abs().max(1.0));
+    if same {
+        s
+    } else {
+        e
+    }
 }
 
 /// An `align*` block with every response and the definitions of scaled inputs.
@@ -269,6 +310,31 @@ pub fn document(m: &Metamodel) -> String {
 mod tests {
     use super::*;
     use Expr::{Binary, Const, Var};
+
+    /// The shipped model's group term was shown as `... + 4.624 - 9.193`: the display folds it,
+    /// and the folded tree gives the saved equation's values.
+    #[test]
+    fn the_display_folds_constants_the_saved_equation_leaves_apart() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let m = Metamodel::load(&root.join("models/shear_box.json")).unwrap();
+        let k = m
+            .responses
+            .iter()
+            .position(|r| r.name == "bulk_density")
+            .unwrap();
+        let shown = equation(&m, k);
+        assert!(
+            shown.contains("\\ln\\left(d_{50}\\right) - 4.569"),
+            "{shown}"
+        );
+        assert!(
+            !shown.contains("4.624") && !shown.contains("9.193"),
+            "{shown}"
+        );
+        let names: Vec<String> = m.inputs.iter().map(|i| symbol(&i.name)).collect();
+        let raw = latex(&Expr::from_postfix(&m.responses[k].program), &names).0;
+        assert!(raw.contains("+ 4.624 - 9.193"), "{raw}");
+    }
 
     #[test]
     fn names_follow_the_field() {
