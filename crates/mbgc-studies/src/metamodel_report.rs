@@ -67,6 +67,9 @@ pub struct Args {
     pub validation_record: PathBuf,
     #[cfg_attr(feature = "cli", arg(long, default_value = "docs/metamodel.md"))]
     pub report: PathBuf,
+    /// Folder of the report's figures (partial dependence), linked relative to the report.
+    #[cfg_attr(feature = "cli", arg(long, default_value = "docs/figures/metamodel"))]
+    pub figures: PathBuf,
     /// Standard output holds one JSON object (where the report went); text goes to standard
     /// error.
     #[cfg_attr(feature = "cli", arg(long))]
@@ -77,6 +80,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     mbgc::outputs::refuse_overwriting_inputs(
         "--report",
         &a.report,
+        &[
+            ("--material", &a.material),
+            ("--noise", &a.noise),
+            ("--validation-record", &a.validation_record),
+        ],
+    )?;
+    mbgc::outputs::refuse_figures_over_inputs(
+        "--figures",
+        &a.figures,
         &[
             ("--material", &a.material),
             ("--noise", &a.noise),
@@ -169,6 +181,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         &space,
     )?;
     equation_section(&mut w, &model);
+    partial_dependence_section(&mut w, a, &model, &paths.table)?;
     gravel_section(&mut w, a, &paths, &record)?;
 
     if let Some(dir) = a.report.parent() {
@@ -560,6 +573,54 @@ fn validation_section(
          Parity and residual figures: `models/<name>_figures/`.",
         model.data.rows, model.data.no_value_rows
     );
+    Ok(())
+}
+
+/// One partial-dependence figure per response, through the training design's median point.
+fn partial_dependence_section(
+    w: &mut String,
+    a: &Args,
+    model: &Metamodel,
+    table: &Path,
+) -> anyhow::Result<()> {
+    let names = model.input_names();
+    let t = mbgc::metamodel::TrainingTable::read_csv(table, &names, &[])?;
+    let centre: Vec<f64> = names
+        .iter()
+        .map(|n| -> anyhow::Result<f64> {
+            let mut v = t.column(n)?.to_vec();
+            v.sort_by(f64::total_cmp);
+            Ok(v[v.len() / 2])
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let _ = writeln!(
+        w,
+        "\n## Partial dependence\n\nEach input an equation uses, swept over its valid range \
+         with the other inputs at the training design's median ({}); a gap is where the sweep \
+         takes a dimensionless group outside the model's range.\n",
+        names
+            .iter()
+            .zip(&centre)
+            .map(|(n, v)| format!("{n} = {v:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let rel = a
+        .figures
+        .strip_prefix(a.report.parent().unwrap_or(Path::new("")))
+        .unwrap_or(&a.figures)
+        .to_path_buf();
+    for (k, r) in model.responses.iter().enumerate() {
+        let file = format!("partial_dependence_{}.svg", r.name);
+        mbgc::plot::partial_dependence::partial_dependence(
+            &a.figures.join(&file),
+            model,
+            k,
+            &centre,
+            "others at the training median",
+        )?;
+        let _ = writeln!(w, "![{}]({})\n", r.name, rel.join(&file).display());
+    }
     Ok(())
 }
 

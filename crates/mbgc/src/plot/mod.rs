@@ -11,6 +11,7 @@ pub mod diagnosis;
 pub mod fit_figures;
 pub mod labels;
 pub mod parity;
+pub mod partial_dependence;
 pub mod psd;
 pub mod sensitivity;
 
