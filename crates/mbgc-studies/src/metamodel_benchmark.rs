@@ -92,6 +92,9 @@ pub struct Args {
         arg(long, default_value = "docs/metamodel_benchmark.md")
     )]
     pub report: PathBuf,
+    /// Write the report from the kept results (`--results`) without fitting anything.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub from_results: bool,
     /// Standard output holds one JSON object (where the report went); text goes to standard
     /// error.
     #[cfg_attr(feature = "cli", arg(long))]
@@ -286,7 +289,7 @@ fn command(a: &Args) -> String {
     format!(
         "cargo run --release -- bench metamodels --limits {} --population {} --generations {} \
          --restarts {} --operon-generations {} --operon-population {} --operon-evaluations {} \
-         --seed {}",
+         --seed {} (the report alone, from the kept results: add --from-results)",
         lim.join(","),
         a.population,
         a.generations,
@@ -321,13 +324,27 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             ],
         )?;
     }
-    let (table, settings) = settings(&dir, &paths)?;
-    let problems = regression_problems(&table, &settings)?;
     let replicates = paths
         .validation_table
         .with_file_name(format!("{}_replicates.csv", a.name));
     let noise: NoiseFloor = replicate_noise(&paths.validation_table, &replicates)?
         .with_context(|| format!("{}: no replicate runs", replicates.display()))?;
+    if a.from_results {
+        let text =
+            std::fs::read_to_string(&a.results).with_context(|| a.results.display().to_string())?;
+        let results: Results =
+            serde_json::from_str(&text).with_context(|| a.results.display().to_string())?;
+        let text = report(&results, &noise, &a.results);
+        write_atomic(&a.report, text.as_bytes())?;
+        crate::report_written(
+            a.json,
+            &a.report,
+            serde_json::json!({ "results": a.results }),
+        );
+        return Ok(());
+    }
+    let (table, settings) = settings(&dir, &paths)?;
+    let problems = regression_problems(&table, &settings)?;
     let shipped = Metamodel::load(&paths.model)?;
     let base = gp::Config {
         population: a.population,
@@ -555,6 +572,30 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
                 m.seconds
             );
         }
+        let rmse = |m: &MethodResult| score(r, m).validation.rmse / r.noise_sd;
+        let mut limits: Vec<usize> = r.methods.iter().filter_map(|m| m.limit).collect();
+        limits.sort_unstable();
+        limits.dedup();
+        let mut lines = Vec::new();
+        for l in limits {
+            let at = |name: &str| {
+                r.methods
+                    .iter()
+                    .find(|m| m.method == name && m.limit == Some(l))
+                    .map(rmse)
+            };
+            if let (Some(ours), Some(theirs)) = (at("mbgc"), at("pyoperon")) {
+                let verdict = if ours <= theirs {
+                    "mbgc no worse"
+                } else {
+                    "PyOperon better"
+                };
+                lines.push(format!(
+                    "{l}: mbgc {ours:.2}, PyOperon {theirs:.2} ({verdict})"
+                ));
+            }
+        }
+        let _ = writeln!(w, "\nRMSE / noise at each limit: {}.", lines.join("; "));
         let _ = writeln!(
             w,
             "\nEquations (over the scaled columns; `_u` = scaled to [0, 1]):\n"
@@ -574,4 +615,68 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
         let _ = writeln!(w);
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn method(name: &str, limit: Option<usize>, err: f64) -> MethodResult {
+        MethodResult {
+            method: name.into(),
+            limit,
+            own_length: limit.map(|l| l + 4),
+            nodes: None,
+            equation: "x".into(),
+            seconds: 1.0,
+            train_pred: vec![1.0 + err, 2.0 - err],
+            validation_pred: vec![1.0 + err, 2.0 - err, 3.0 + err],
+        }
+    }
+
+    /// Scores are in the response's units (prediction times factor), judged against the noise,
+    /// and the summary names the better engine at each limit from those scores.
+    #[test]
+    fn the_report_scores_in_physical_units_and_says_who_is_better() {
+        let r = ResponseResults {
+            response: "bulk_density".into(),
+            fitted: "solid_fraction".into(),
+            symbols: vec!["x".into()],
+            train_observed: vec![2.0, 4.0],
+            train_factor: vec![2.0, 2.0],
+            validation_observed: vec![2.0, 4.0, 6.0],
+            validation_factor: vec![2.0, 2.0, 2.0],
+            noise_sd: 0.5,
+            methods: vec![
+                method("mbgc", Some(10), 0.1),
+                method("pyoperon", Some(10), 0.2),
+                method("mbgc", Some(20), 0.3),
+                method("pyoperon", Some(20), 0.1),
+            ],
+        };
+        let s = score(&r, &r.methods[0]);
+        assert!(
+            (s.validation.rmse - 0.2).abs() < 1e-12,
+            "{}",
+            s.validation.rmse
+        );
+        let res = Results {
+            mbgc_settings: gp::Config::default(),
+            python_versions: serde_json::json!({"pyoperon": "0.6.2"}),
+            operon_settings: serde_json::json!({}),
+            responses: vec![r],
+            command: "cmd".into(),
+        };
+        let noise = NoiseFloor {
+            angle_sd: 1.0,
+            bulk_rel_sd: 0.01,
+            points: 3,
+            runs: 6,
+        };
+        let text = report(&res, &noise, Path::new("r.json"));
+        assert!(
+            text.contains("10: mbgc 0.40, PyOperon 0.80 (mbgc no worse); 20: mbgc 1.20, PyOperon 0.40 (PyOperon better)"),
+            "{text}"
+        );
+    }
 }
