@@ -5,6 +5,8 @@
 
 use std::path::Path;
 
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -139,7 +141,6 @@ fn draw<DB: DrawingBackend>(
     let area = root.titled(title, (FONT, 20))?;
     let rows = sweeps.len().div_ceil(cols).max(1);
     let panels = area.split_evenly((rows, cols));
-    let blue = RGBColor(31, 119, 180);
     let y_desc = axis_label(response);
     for (s, panel) in sweeps.iter().zip(panels.iter()) {
         let (x0, x1) = (s.x[0], s.x[s.x.len() - 1]);
@@ -167,39 +168,53 @@ fn draw<DB: DrawingBackend>(
         let mut b = ChartBuilder::on(panel);
         b.margin(8).x_label_area_size(48).y_label_area_size(78);
         let y_fmt = |v: &f64| tick(*v, hi - lo);
+        let style = PanelStyle {
+            x_desc: short_label(&s.input),
+            y_desc: &y_desc,
+            y_fmt: &y_fmt,
+        };
         if s.log {
-            let mut chart = b.build_cartesian_2d((x0..x1).log_scale(), lo..hi)?;
-            chart
-                .configure_mesh()
-                .x_labels(4)
-                .y_labels(5)
-                .x_label_formatter(&|v| tick(*v, *v))
-                .y_label_formatter(&y_fmt)
-                .x_desc(short_label(&s.input))
-                .y_desc(&y_desc)
-                .label_style((FONT, TICK_FONT))
-                .axis_desc_style((FONT, DESC_FONT))
-                .draw()?;
-            for seg in segments {
-                chart.draw_series(LineSeries::new(seg, blue.stroke_width(2)))?;
-            }
+            let chart = b.build_cartesian_2d((x0..x1).log_scale(), lo..hi)?;
+            draw_panel(chart, &segments, &style, &|v: &f64| tick(*v, *v))?;
         } else {
-            let mut chart = b.build_cartesian_2d(x0..x1, lo..hi)?;
-            chart
-                .configure_mesh()
-                .x_labels(4)
-                .y_labels(5)
-                .x_label_formatter(&|v| tick(*v, x1 - x0))
-                .y_label_formatter(&y_fmt)
-                .x_desc(short_label(&s.input))
-                .y_desc(&y_desc)
-                .label_style((FONT, TICK_FONT))
-                .axis_desc_style((FONT, DESC_FONT))
-                .draw()?;
-            for seg in segments {
-                chart.draw_series(LineSeries::new(seg, blue.stroke_width(2)))?;
-            }
+            let chart = b.build_cartesian_2d(x0..x1, lo..hi)?;
+            draw_panel(chart, &segments, &style, &|v: &f64| tick(*v, x1 - x0))?;
         }
+    }
+    Ok(())
+}
+
+/// What every panel's mesh shows, whatever its x axis.
+struct PanelStyle<'a> {
+    x_desc: String,
+    y_desc: &'a str,
+    y_fmt: &'a dyn Fn(&f64) -> String,
+}
+
+/// The mesh and the curve of one panel, on a linear or a logarithmic x axis.
+fn draw_panel<DB: DrawingBackend, X>(
+    mut chart: ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
+    segments: &[Vec<(f64, f64)>],
+    style: &PanelStyle,
+    x_fmt: &dyn Fn(&f64) -> String,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    chart
+        .configure_mesh()
+        .x_labels(4)
+        .y_labels(5)
+        .x_label_formatter(x_fmt)
+        .y_label_formatter(style.y_fmt)
+        .x_desc(&style.x_desc)
+        .y_desc(style.y_desc)
+        .label_style((FONT, TICK_FONT))
+        .axis_desc_style((FONT, DESC_FONT))
+        .draw()?;
+    let blue = RGBColor(31, 119, 180);
+    for seg in segments {
+        chart.draw_series(LineSeries::new(seg.iter().copied(), blue.stroke_width(2)))?;
     }
     Ok(())
 }
