@@ -741,6 +741,34 @@ fn bad_inputs_are_refused_naming_the_file_and_field_before_anything_runs() {
     );
 }
 
+/// Starts `first` writing `out`, waits for its first run, then runs `second` (which may first
+/// make `link` a hard link to the table) and asserts that it is refused while the first ends
+/// well.
+fn second_writer_is_refused(first: &[String], second: &[String], out: &Path, link: Option<&Path>) {
+    let mut child = command(&arg_refs(first))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait until the first process has started writing (header plus one run).
+    let t0 = Instant::now();
+    while !out.exists() || read(out).1.is_empty() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "first writer made no progress"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    if let Some(link) = link {
+        std::fs::hard_link(out, link).unwrap();
+    }
+    let o = mbgc(&arg_refs(second));
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "second writer was allowed");
+    assert!(err.contains("another mbgc process is writing"), "{err}");
+    assert!(child.wait().unwrap().success());
+}
+
 #[test]
 fn a_second_writer_on_the_same_table_is_refused_and_nothing_is_written_twice() {
     let dir = tempfile::tempdir().unwrap();
@@ -762,25 +790,7 @@ fn a_second_writer_on_the_same_table_is_refused_and_nothing_is_written_twice() {
     .iter()
     .map(|a| a.to_string())
     .collect();
-    let mut first = command(&arg_refs(&args))
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    // Wait until the first process has started writing (header plus one run).
-    let t0 = Instant::now();
-    while !out.exists() || read(&out).1.is_empty() {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "first writer made no progress"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let second = mbgc(&arg_refs(&args));
-    let err = String::from_utf8_lossy(&second.stderr).to_string();
-    assert!(!second.status.success(), "second writer was allowed");
-    assert!(err.contains("another mbgc process is writing"), "{err}");
-    assert!(first.wait().unwrap().success());
+    second_writer_is_refused(&args, &args, &out, None);
     let rows = read(&out).1;
     assert_eq!(rows.len(), 20);
     let mut ids: Vec<&String> = rows.iter().map(|r| &r["run_id"]).collect();
@@ -821,25 +831,7 @@ fn a_second_writer_through_a_hard_link_is_refused() {
         .map(|a| a.to_string())
         .collect()
     };
-    let mut first = command(&arg_refs(&args(&out)))
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    while !out.exists() || read(&out).1.is_empty() {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "first writer made no progress"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    std::fs::hard_link(&out, &hard).unwrap();
-    let second = mbgc(&arg_refs(&args(&hard)));
-    let err = String::from_utf8_lossy(&second.stderr).to_string();
-    assert!(!second.status.success(), "second writer was allowed");
-    assert!(err.contains("another mbgc process is writing"), "{err}");
-    assert!(first.wait().unwrap().success());
+    second_writer_is_refused(&args(&out), &args(&hard), &out, Some(&hard));
     let rows = read(&out).1;
     assert_eq!(rows.len(), 12, "lines written twice");
 }
