@@ -227,6 +227,9 @@ fn run_status(a: &StatusArgs) -> anyhow::Result<()> {
             .unwrap_or_default()
     );
     say!(out, "  done       {}", s.done);
+    if let Some(n) = s.no_value.filter(|&n| n > 0) {
+        say!(out, "    of them without a value of some response: {n}");
+    }
     say!(out, "  failed     {}", s.failed);
     say!(out, "  remaining  {}", opt(s.remaining));
     say!(out, "  total      {}", opt(s.total));

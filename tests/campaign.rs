@@ -1300,6 +1300,21 @@ fn runs_without_a_value_are_counted_apart() {
         err.contains("2 of the 4 runs done measured no value"),
         "{err}"
     );
+    // The table's status counts them too, from the table alone.
+    let o = mbgc(&["campaign", "status", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (v["done"].as_u64(), v["no_value"].as_u64()),
+        (Some(4), Some(2)),
+        "{v}"
+    );
+    let o = mbgc(&["campaign", "status", out.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("without a value of some response: 2"),
+        "{text}"
+    );
 }
 
 /// A failed run in one table and the same run done in another (a rerun that succeeded

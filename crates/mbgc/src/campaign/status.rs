@@ -122,6 +122,9 @@ pub struct Status {
     pub total: Option<usize>,
     /// An incomplete last line is present (its run counts as remaining).
     pub partial_line: bool,
+    /// Of the done runs, those without a value of some response (NaN: a shear box whose material
+    /// ran out flat has no flank); None when the table does not say which experiment made it.
+    pub no_value: Option<usize>,
 }
 
 /// Refuses to count a table against a design it was not run on: every line's design columns must
@@ -250,7 +253,30 @@ pub fn status(out: &Path, design: Option<&Path>) -> Result<Status> {
         }
         None => (None, None),
     };
+    // The experiment's responses, when the sidecar names a known experiment: a done run with a
+    // NaN in one of them measured nothing there.
+    let responses: Option<Vec<usize>> = meta.as_ref().and_then(|m| {
+        super::registry::experiment_by_name(&m.experiment, &Default::default())
+            .ok()
+            .map(|e| {
+                e.responses()
+                    .iter()
+                    .filter_map(|r| t.header.iter().position(|h| h == r))
+                    .collect()
+            })
+    });
+    let no_value = responses.map(|cols| {
+        t.records
+            .iter()
+            .filter(|(_, r)| &r[2] == DONE)
+            .filter(|(_, r)| {
+                cols.iter()
+                    .any(|&k| r[k].parse::<f64>().is_ok_and(f64::is_nan))
+            })
+            .count()
+    });
     Ok(Status {
+        no_value,
         out: file,
         experiment: meta.map(|m| m.experiment),
         done,
