@@ -3,7 +3,7 @@ GP solves, on identical columns and rows.
 
 Reads one JSON file written by the bench (`--problems`): per response the columns GP is offered
 (scaled inputs and dimensionless groups), the fitted quantity on every training row and the
-validation rows' columns, the length limits, the seed, and mbgc's equations (sympy syntax) whose
+validation rows' columns, the length limits, the seeds, and mbgc's equations (sympy syntax) whose
 nodes are to be counted by the same rule as everyone else's. Writes one JSON object to standard
 output:
 
@@ -102,15 +102,16 @@ def main():
         res = {"response": p["response"], "methods": [], "mbgc_nodes": []}
         for eq in p["mbgc_equations"]:
             res["mbgc_nodes"].append(sympy_nodes(eq, names))
-        for limit in p["limits"]:
+        for limit, seed in [(lim, s) for lim in p["limits"] for s in p["seeds"]]:
             est, seconds = operon(
-                xt, yt, xv, limit, p["seed"], a.threads,
+                xt, yt, xv, limit, seed, a.threads,
                 a.operon_generations, a.operon_population, a.operon_evaluations,
             )
             text = est.get_model_string(est.model_, 6, names)
             res["methods"].append({
                 "method": "pyoperon",
                 "limit": limit,
+                "seed": seed,
                 "own_length": int(est.model_.Length),
                 "equation": text,
                 "nodes": sympy_nodes(text, names),
@@ -118,7 +119,7 @@ def main():
                 "train_pred": est.predict(xt).tolist(),
                 "validation_pred": est.predict(xv).tolist(),
             })
-            print(f"{p['response']}: pyoperon limit {limit}: length {est.model_.Length}, "
+            print(f"{p['response']}: pyoperon limit {limit} seed {seed}: length {est.model_.Length}, "
                   f"{seconds:.1f} s", file=sys.stderr)
         # The quadratic response surface.
         poly = PolynomialFeatures(degree=2, include_bias=False)
@@ -148,7 +149,7 @@ def main():
             ) + WhiteKernel(1e-2, (1e-8, 1.0))
             gpr = GaussianProcessRegressor(
                 kernel=kernel, normalize_y=True, n_restarts_optimizer=5,
-                random_state=p["seed"],
+                random_state=p["seeds"][0],
             )
             t0 = time.perf_counter()
             gpr.fit(xt, yt)

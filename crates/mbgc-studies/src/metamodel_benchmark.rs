@@ -71,9 +71,13 @@ pub struct Args {
     pub operon_population: usize,
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1_000_000))]
     pub operon_evaluations: usize,
-    /// Seed of every method.
+    /// Seed of every method's first run.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
     pub seed: u64,
+    /// Runs per engine and limit, seeds `seed`, `seed + 1`, ...: one run's error varies with
+    /// its seed as much as between engines, so the report gives mean and spread.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
+    pub seeds: u64,
     /// Virtual environment of the Python tools, made (and filled) when it lacks them.
     #[cfg_attr(feature = "cli", arg(long, default_value = "target/venv-metamodels"))]
     pub venv: PathBuf,
@@ -108,6 +112,9 @@ pub struct MethodResult {
     pub method: String,
     /// The length limit it was run with (none for the fixed-form models).
     pub limit: Option<usize>,
+    /// The seed of the run (none for the deterministic models).
+    #[serde(default)]
+    pub seed: Option<u64>,
     /// The engine's own node count (mbgc and Operon: with the linear scaling's 4 nodes).
     pub own_length: Option<usize>,
     /// Nodes of the equation's sympy tree (the common rule).
@@ -224,6 +231,7 @@ fn run_mbgc(p: &RegressionProblem, cfg: &gp::Config) -> anyhow::Result<MethodRes
     Ok(MethodResult {
         method: "mbgc".into(),
         limit: Some(cfg.max_length),
+        seed: Some(cfg.seed),
         own_length: Some(best.size),
         nodes: None,
         equation: expr::infix(
@@ -289,7 +297,7 @@ fn command(a: &Args) -> String {
     format!(
         "cargo run --release -- bench metamodels --limits {} --population {} --generations {} \
          --restarts {} --operon-generations {} --operon-population {} --operon-evaluations {} \
-         --seed {} (the report alone, from the kept results: add --from-results)",
+         --seed {} --seeds {} (the report alone, from the kept results: add --from-results)",
         lim.join(","),
         a.population,
         a.generations,
@@ -297,7 +305,8 @@ fn command(a: &Args) -> String {
         a.operon_generations,
         a.operon_population,
         a.operon_evaluations,
-        a.seed
+        a.seed,
+        a.seeds
     )
 }
 
@@ -306,6 +315,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(
         !a.limits.is_empty() && a.limits.iter().all(|&l| (1..=1000).contains(&l)),
         "--limits: expected lengths from 1 to 1000"
+    );
+    anyhow::ensure!(
+        (1..=100).contains(&a.seeds),
+        "--seeds {}: expected 1 to 100 runs per engine and limit",
+        a.seeds
     );
     let dir = if a.dir == Path::new(".") {
         PathBuf::new()
@@ -359,20 +373,23 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     for p in &problems {
         let mut v = Vec::new();
         for &limit in &a.limits {
-            let cfg = gp::Config {
-                max_length: limit,
-                ..base.clone()
-            };
-            let r = run_mbgc(p, &cfg)?;
-            say!(
-                out,
-                "{}: mbgc limit {limit}: size {}, {:.1} s: {}",
-                p.response,
-                r.own_length.unwrap_or(0),
-                r.seconds,
-                r.equation
-            );
-            v.push(r);
+            for seed in a.seed..a.seed + a.seeds {
+                let cfg = gp::Config {
+                    max_length: limit,
+                    seed,
+                    ..base.clone()
+                };
+                let r = run_mbgc(p, &cfg)?;
+                say!(
+                    out,
+                    "{}: mbgc limit {limit} seed {seed}: size {}, {:.1} s: {}",
+                    p.response,
+                    r.own_length.unwrap_or(0),
+                    r.seconds,
+                    r.equation
+                );
+                v.push(r);
+            }
         }
         ours.push(v);
     }
@@ -388,7 +405,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                 "train_y": p.train.y,
                 "validation_x": v.x,
                 "limits": a.limits,
-                "seed": a.seed,
+                "seeds": (a.seed..a.seed + a.seeds).collect::<Vec<u64>>(),
                 "mbgc_equations": o.iter().map(|r| r.equation.clone()).collect::<Vec<_>>(),
             })
         }).collect::<Vec<_>>(),
@@ -488,6 +505,25 @@ pub fn score(r: &ResponseResults, m: &MethodResult) -> Scored {
     }
 }
 
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// `mean` for one value, `mean ± sd (min-max)` for several.
+fn spread(v: &[f64]) -> String {
+    if v.len() < 2 {
+        return format!("{:.2}", mean(v));
+    }
+    let m = mean(v);
+    let sd = (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    format!("{m:.2} ± {sd:.2} ({lo:.2}-{hi:.2})")
+}
+
 fn label(method: &str) -> &str {
     match method {
         "mbgc" => "mbgc GP",
@@ -546,43 +582,67 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
     for r in &res.responses {
         let _ = writeln!(
             w,
-            "## {}\n\nNoise sd {:.3}; validation rows {}, training rows {}.\n\n| method | limit | \
+            "## {}\n\nNoise sd {:.3}; validation rows {}, training rows {}.\n\nWith several seeds: the mean of each \
+             column, and for RMSE / noise the mean ± sd (min-max).\n\n| method | limit | runs | \
              own length | nodes | validation RMSE | RMSE / noise | validation R^2 | training R^2 \
-             | fit s |\n|---|---|---|---|---|---|---|---|---|",
+             | fit s |\n|---|---|---|---|---|---|---|---|---|---|",
             r.response,
             r.noise_sd,
             r.validation_observed.len(),
             r.train_observed.len()
         );
-        let mut rows: Vec<&MethodResult> = r.methods.iter().collect();
-        rows.sort_by_key(|m| (m.limit.unwrap_or(usize::MAX), m.method != "mbgc"));
-        for m in rows {
-            let s = score(r, m);
+        let mut groups: Vec<(&str, Option<usize>)> = r
+            .methods
+            .iter()
+            .map(|m| (m.method.as_str(), m.limit))
+            .collect();
+        groups.sort_by_key(|(m, l)| (l.unwrap_or(usize::MAX), *m != "mbgc", m.to_string()));
+        groups.dedup();
+        let runs = |method: &str, limit: Option<usize>| -> Vec<&MethodResult> {
+            r.methods
+                .iter()
+                .filter(|m| m.method == method && m.limit == limit)
+                .collect()
+        };
+        let rmse = |m: &MethodResult| score(r, m).validation.rmse / r.noise_sd;
+        for &(method, limit) in &groups {
+            let g = runs(method, limit);
+            let scores: Vec<Scored> = g.iter().map(|m| score(r, m)).collect();
+            let ratio: Vec<f64> = scores
+                .iter()
+                .map(|s| s.validation.rmse / r.noise_sd)
+                .collect();
+            let opt_mean = |v: Vec<Option<usize>>| -> String {
+                let v: Vec<f64> = v.into_iter().flatten().map(|x| x as f64).collect();
+                if v.is_empty() {
+                    "-".into()
+                } else {
+                    format!("{:.0}", mean(&v))
+                }
+            };
             let _ = writeln!(
                 w,
-                "| {} | {} | {} | {} | {:.4} | {:.2} | {:.4} | {:.4} | {:.1} |",
-                label(&m.method),
-                m.limit.map_or("-".into(), |l| l.to_string()),
-                m.own_length.map_or("-".into(), |l| l.to_string()),
-                m.nodes.map_or("-".into(), |l| l.to_string()),
-                s.validation.rmse,
-                s.validation.rmse / r.noise_sd,
-                s.validation.r2,
-                s.train.r2,
-                m.seconds
+                "| {} | {} | {} | {} | {} | {:.4} | {} | {:.4} | {:.4} | {:.1} |",
+                label(method),
+                limit.map_or("-".into(), |l| l.to_string()),
+                g.len(),
+                opt_mean(g.iter().map(|m| m.own_length).collect()),
+                opt_mean(g.iter().map(|m| m.nodes).collect()),
+                mean(&scores.iter().map(|s| s.validation.rmse).collect::<Vec<_>>()),
+                spread(&ratio),
+                mean(&scores.iter().map(|s| s.validation.r2).collect::<Vec<_>>()),
+                mean(&scores.iter().map(|s| s.train.r2).collect::<Vec<_>>()),
+                mean(&g.iter().map(|m| m.seconds).collect::<Vec<_>>()),
             );
         }
-        let rmse = |m: &MethodResult| score(r, m).validation.rmse / r.noise_sd;
         let mut limits: Vec<usize> = r.methods.iter().filter_map(|m| m.limit).collect();
         limits.sort_unstable();
         limits.dedup();
         let mut lines = Vec::new();
         for l in limits {
             let at = |name: &str| {
-                r.methods
-                    .iter()
-                    .find(|m| m.method == name && m.limit == Some(l))
-                    .map(rmse)
+                let v: Vec<f64> = runs(name, Some(l)).into_iter().map(rmse).collect();
+                (!v.is_empty()).then(|| mean(&v))
             };
             if let (Some(ours), Some(theirs)) = (at("mbgc"), at("pyoperon")) {
                 let verdict = if ours <= theirs {
@@ -595,7 +655,11 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
                 ));
             }
         }
-        let _ = writeln!(w, "\nRMSE / noise at each limit: {}.", lines.join("; "));
+        let _ = writeln!(
+            w,
+            "\nRMSE / noise at each limit (mean over the seeds): {}.",
+            lines.join("; ")
+        );
         let _ = writeln!(
             w,
             "\nEquations (over the scaled columns; `_u` = scaled to [0, 1]):\n"
@@ -606,9 +670,10 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
             }
             let _ = writeln!(
                 w,
-                "- {} at {}: `{}`",
+                "- {} at {}{}: `{}`",
                 label(&m.method),
                 m.limit.map_or("-".into(), |l| l.to_string()),
+                m.seed.map_or(String::new(), |s| format!(", seed {s}")),
                 m.equation
             );
         }
@@ -625,6 +690,7 @@ mod tests {
         MethodResult {
             method: name.into(),
             limit,
+            seed: limit.map(|_| 1),
             own_length: limit.map(|l| l + 4),
             nodes: None,
             equation: "x".into(),
@@ -652,6 +718,8 @@ mod tests {
                 method("pyoperon", Some(10), 0.2),
                 method("mbgc", Some(20), 0.3),
                 method("pyoperon", Some(20), 0.1),
+                // A second seed of mbgc at 20 nodes: its mean is reported.
+                method("mbgc", Some(20), 0.1),
             ],
         };
         let s = score(&r, &r.methods[0]);
@@ -675,8 +743,11 @@ mod tests {
         };
         let text = report(&res, &noise, Path::new("r.json"));
         assert!(
-            text.contains("10: mbgc 0.40, PyOperon 0.80 (mbgc no worse); 20: mbgc 1.20, PyOperon 0.40 (PyOperon better)"),
+            text.contains("10: mbgc 0.40, PyOperon 0.80 (mbgc no worse); 20: mbgc 0.80, PyOperon 0.40 (PyOperon better)"),
             "{text}"
         );
+        // Two runs at 20 nodes: 1.20 and 0.40 times the noise.
+        assert!(text.contains("| mbgc GP | 20 | 2 |"), "{text}");
+        assert!(text.contains("0.80 ± 0.57 (0.40-1.20)"), "{text}");
     }
 }
