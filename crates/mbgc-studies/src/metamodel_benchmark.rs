@@ -74,8 +74,9 @@ pub struct Args {
     /// Seed of every method's first run.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
     pub seed: u64,
-    /// Runs per engine and limit, seeds `seed`, `seed + 1`, ...: one run's error varies with
-    /// its seed as much as between engines, so the report gives mean and spread.
+    /// Runs per engine and limit (mbgc's seeds `restarts` apart, so that no two runs share a
+    /// restart; PyOperon's `seed`, `seed + 1`, ...): one run's error varies with its seed as much
+    /// as between engines, so the report gives mean and spread.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
     pub seeds: u64,
     /// Virtual environment of the Python tools, made (and filled) when it lacks them.
@@ -373,7 +374,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     for p in &problems {
         let mut v = Vec::new();
         for &limit in &a.limits {
-            for seed in a.seed..a.seed + a.seeds {
+            // A run with r restarts uses the seeds seed..seed + r: runs r apart share none.
+            let step = base.restarts.max(1) as u64;
+            for seed in (0..a.seeds).map(|k| a.seed + k * step) {
                 let cfg = gp::Config {
                     max_length: limit,
                     seed,
