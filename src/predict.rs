@@ -39,7 +39,7 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
     let n_in = names.len();
     // Parameters the campaign held fixed: a data column of that name must hold that value, or
     // the row lies outside what the model describes. They are read with the inputs.
-    let header = read_columns(&a.data, &[])?.header;
+    let (_, header) = mbgc::error::csv_open(&a.data)?;
     let held: Vec<&mbgc::metamodel::Constant> = model
         .constants
         .iter()
