@@ -23,7 +23,7 @@ fn cube(v: f64) -> f64 {
     v * v * v
 }
 
-/// shear_angle (train R^2 0.97024); uses e_pp, mu_pp, mu_pw, mu_r_pp, mu_r_pw, sigma_ln.
+/// shear_angle (train R^2 0.95244); uses mu_pp, mu_pw, mu_r_pp, mu_r_pw.
 #[allow(unused_variables, clippy::all)]
 pub fn shear_angle(E_p: f64, E_w: f64, nu_p: f64, e_pp: f64, e_pw: f64, mu_pp: f64, mu_pw: f64, mu_r_pp: f64, mu_r_pw: f64, rho_p: f64, d50: f64, sigma_ln: f64) -> f64 {
     let nu_p_u = (nu_p - 0.1) / 0.4;
@@ -34,10 +34,10 @@ pub fn shear_angle(E_p: f64, E_w: f64, nu_p: f64, e_pp: f64, e_pw: f64, mu_pp: f
     let mu_r_pp_u = (mu_r_pp - 0.0) / 1.0;
     let mu_r_pw_u = (mu_r_pw - 0.0) / 1.0;
     let sigma_ln_u = (sigma_ln - 0.07) / 0.21000000000000002;
-    f64::tanh(mu_pw_u*-12.230667949448282)*(f64::exp(f64::tanh(f64::tanh(mu_r_pp_u*(mu_pp_u/(mu_pw_u*-0.026439577768900498) - (-980.8404111292954 - f64::tanh(f64::tanh(mu_r_pp_u*(mu_pp_u/(mu_pw_u*-0.004255693971972738) - (2296.9623300948942 - sigma_ln_u*e_pp_u*16039.935624773094))*0.001286014915458236))*e_pp_u*441.87155925711863))*0.0049569446297197915))*(f64::exp(f64::tanh(mu_pp_u*5.447672836670096)) - mu_r_pp_u*-0.5728994780442896)) - (f64::tanh(mu_pw_u*-4.431192470278837)*f64::exp(f64::tanh(mu_pp_u*14.111585820072131))*(f64::tanh(mu_r_pw_u*mu_r_pw_u*51.30090523229814 - mu_r_pp_u*-14.60618391180641)*(f64::exp(f64::tanh(f64::exp(mu_pp_u))) - f64::tanh(f64::tanh(mu_r_pw_u*-1.981005842344588)))) + e_pp_u*mu_r_pp_u*1.512382687481956 + mu_r_pp_u + sigma_ln_u))*-1.8763076820265516 + 11.330925518523483
+    f64::tanh(f64::sqrt(f64::sqrt(mu_pp_u*(mu_r_pw_u*mu_pw_u)*0.05861047027182776 + mu_pp_u*f64::tanh(f64::tanh(mu_r_pp_u*mu_pw_u*12.47672003962177))*(mu_r_pp_u*mu_pp_u))))*(mu_pp_u*0.4047668107789147 - (0.22082345026095673 - f64::tanh(mu_pw_u*-7.635905399550669)))*-59.42227939258769 + 9.852038519282694
 }
 
-/// bulk_density (train R^2 0.99347); uses E_p, e_pp, mu_pp, mu_pw, mu_r_pp, rho_p, d50, sigma_ln.
+/// bulk_density (train R^2 0.98734); uses E_p, e_pp, mu_pp, mu_pw, mu_r_pp, rho_p, d50, sigma_ln.
 #[allow(unused_variables, clippy::all)]
 pub fn bulk_density(E_p: f64, E_w: f64, nu_p: f64, e_pp: f64, e_pw: f64, mu_pp: f64, mu_pw: f64, mu_r_pp: f64, mu_r_pw: f64, rho_p: f64, d50: f64, sigma_ln: f64) -> f64 {
     let nu_p_u = (nu_p - 0.1) / 0.4;
@@ -48,5 +48,5 @@ pub fn bulk_density(E_p: f64, E_w: f64, nu_p: f64, e_pp: f64, e_pw: f64, mu_pp: 
     let mu_r_pp_u = (mu_r_pp - 0.0) / 1.0;
     let mu_r_pw_u = (mu_r_pw - 0.0) / 1.0;
     let sigma_ln_u = (sigma_ln - 0.07) / 0.21000000000000002;
-    ((f64::ln(mu_pw_u - e_pp_u*-0.18900778185771852) + e_pp_u*-1.4054717871561426 + (f64::tanh(f64::exp(f64::tanh(mu_r_pp_u*10.58035897930505) - mu_pp_u*1.962656271279832 - e_pp_u*(f64::tanh((f64::ln(E_p) - f64::ln(rho_p) - f64::ln(d50) + 4.624353005404865 - 9.192909447786583)/2.984583014752012) - (e_pp_u*-2.021334932867762 + 1.606763709026946)))) - ((f64::tanh((f64::ln(E_p) - f64::ln(rho_p) - f64::ln(d50) + 4.624353005404865 - 9.192909447786583)/2.984583014752012*0.1160212015878985) + f64::tanh(mu_pp_u))*0.6153685754864757 - 6.7442366407918755))*(f64::tanh((f64::ln(E_p) - f64::ln(rho_p) - f64::ln(d50) + 4.624353005404865 - 9.192909447786583)/2.984583014752012*1.6791847553160746) + f64::tanh(mu_pp_u) - mu_pp_u*-11.862415210421682 - sigma_ln_u) + (mu_pp_u*-71.70357014140933 + f64::exp(f64::exp(f64::tanh(mu_pp_u))*f64::tanh(mu_r_pp_u*3.201463025248922) - f64::tanh(mu_pp_u) - (e_pp_u - 1.1076544127048356))*f64::sqrt(mu_pp_u)))*-0.005138671412073908 + 0.6214785891047286)*rho_p
+    ((sigma_ln_u*23.58800173177228 + (e_pp_u - f64::exp(0.5426010060188162 - mu_pp_u) - 1.96981286114617)*((f64::ln(E_p) - f64::ln(rho_p) - f64::ln(d50) + 4.624353005404865 - 9.192909447786583)/2.984583014752012*(13.534746958235978 - (f64::ln(E_p) - f64::ln(rho_p) - f64::ln(d50) + 4.624353005404865 - 9.192909447786583)/2.984583014752012*6.609629905077657) + f64::ln(mu_pw_u) - (f64::tanh(mu_r_pp_u*-2.750241298573631) + mu_pp_u - 2.110040865119929)*mu_pp_u*14.79359593204972))*0.0015284810207307818 + 0.622477830968987)*rho_p
 }

@@ -55,6 +55,11 @@ pub struct Args {
         arg(long, value_delimiter = ',', default_value = "10,20,30,40")
     )]
     pub limits: Vec<usize>,
+    /// PyOperon's length limits (default: `--limits`). Operon counts a weighted variable `w*x` as
+    /// one node, so its equations at a limit are longer than mbgc's; more limits let the report
+    /// also compare the two at equal counted nodes.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
+    pub operon_limits: Option<Vec<usize>>,
     /// mbgc's population (the shipped model: 5000).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 2000))]
     pub population: usize,
@@ -64,6 +69,17 @@ pub struct Args {
     /// mbgc's independent restarts (the shipped model: 4).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 2))]
     pub restarts: usize,
+    /// mbgc's share of each island whose constants are tuned every generation (default: the
+    /// shipped model's); 1 tunes every tree, as Operon does.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub tune_fraction: Option<f64>,
+    /// mbgc's Levenberg-Marquardt steps per tuning during the search (default: the shipped
+    /// model's).
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub tune_iterations: Option<usize>,
+    /// Fit mbgc only (no Python tools): for measuring mbgc's own settings against each other.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub mbgc_only: bool,
     /// PyOperon's generations, population and evaluation budget.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1000))]
     pub operon_generations: usize,
@@ -246,6 +262,55 @@ fn run_mbgc(p: &RegressionProblem, cfg: &gp::Config) -> anyhow::Result<MethodRes
     })
 }
 
+/// PyOperon, the Gaussian process and the quadratic surface on the same problems, through the
+/// Python script in the bench's virtual environment; it also counts mbgc's equations' nodes.
+fn other_regressors(
+    a: &Args,
+    out: &Output,
+    problems: &[RegressionProblem],
+    ours: &[Vec<MethodResult>],
+) -> anyhow::Result<PythonOutput> {
+    let python = venv_python(a, out)?;
+    let spec = serde_json::json!({
+        "problems": problems.iter().zip(ours).map(|(p, o)| {
+            let v = p.validation.as_ref().expect("checked in run_mbgc");
+            serde_json::json!({
+                "response": p.response,
+                "symbols": p.symbols,
+                "train_x": p.train.x,
+                "train_y": p.train.y,
+                "validation_x": v.x,
+                "limits": a.operon_limits.as_ref().unwrap_or(&a.limits),
+                "seeds": (a.seed..a.seed + a.seeds).collect::<Vec<u64>>(),
+                "mbgc_equations": o.iter().map(|r| r.equation.clone()).collect::<Vec<_>>(),
+            })
+        }).collect::<Vec<_>>(),
+    });
+    let work = tempfile::tempdir()?;
+    let spec_path = work.path().join("problems.json");
+    std::fs::write(&spec_path, serde_json::to_vec(&spec)?)?;
+    say!(
+        out,
+        "running {} (PyOperon, Gaussian process, quadratic)",
+        script().display()
+    );
+    let run = Command::new(&python)
+        .arg(script())
+        .arg("--problems")
+        .arg(&spec_path)
+        .args(["--operon-generations", &a.operon_generations.to_string()])
+        .args(["--operon-population", &a.operon_population.to_string()])
+        .args(["--operon-evaluations", &a.operon_evaluations.to_string()])
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .with_context(|| format!("running {}", python.display()))?;
+    anyhow::ensure!(run.status.success(), "{} failed", script().display());
+    let theirs: PythonOutput = serde_json::from_slice(&run.stdout)
+        .with_context(|| format!("{} printed no result object", script().display()))?;
+
+    Ok(theirs)
+}
+
 /// The virtual environment's Python, made and filled first when it cannot import the tools.
 fn venv_python(a: &Args, out: &Output) -> anyhow::Result<PathBuf> {
     let py = a.venv.join("bin/python");
@@ -294,12 +359,32 @@ fn script() -> PathBuf {
 }
 
 fn command(a: &Args) -> String {
-    let lim: Vec<String> = a.limits.iter().map(|l| l.to_string()).collect();
+    let list = |v: &[usize]| -> String {
+        v.iter()
+            .map(|l| l.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let mut operon = a
+        .operon_limits
+        .as_ref()
+        .map(|o| format!(" --operon-limits {}", list(o)))
+        .unwrap_or_default();
+    if let Some(t) = a.tune_fraction {
+        operon += &format!(" --tune-fraction {t}");
+    }
+    if let Some(t) = a.tune_iterations {
+        operon += &format!(" --tune-iterations {t}");
+    }
+    if a.mbgc_only {
+        operon += " --mbgc-only";
+    }
     format!(
-        "cargo run --release -- bench metamodels --limits {} --population {} --generations {} \
-         --restarts {} --operon-generations {} --operon-population {} --operon-evaluations {} \
-         --seed {} --seeds {} (the report alone, from the kept results: add --from-results)",
-        lim.join(","),
+        "cargo run --release -- bench metamodels --limits {}{operon} --population {} \
+         --generations {} --restarts {} --operon-generations {} --operon-population {} \
+         --operon-evaluations {} --seed {} --seeds {} (the report alone, from the kept results: \
+         add --from-results)",
+        list(&a.limits),
         a.population,
         a.generations,
         a.restarts,
@@ -317,6 +402,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         !a.limits.is_empty() && a.limits.iter().all(|&l| (1..=1000).contains(&l)),
         "--limits: expected lengths from 1 to 1000"
     );
+    if let Some(o) = &a.operon_limits {
+        anyhow::ensure!(
+            !o.is_empty() && o.iter().all(|&l| (1..=1000).contains(&l)),
+            "--operon-limits: expected lengths from 1 to 1000"
+        );
+    }
     anyhow::ensure!(
         (1..=100).contains(&a.seeds),
         "--seeds {}: expected 1 to 100 runs per engine and limit",
@@ -366,8 +457,14 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         generations: a.generations,
         restarts: a.restarts,
         seed: a.seed,
+        tune_fraction: a.tune_fraction.unwrap_or(shipped.settings.tune_fraction),
+        tune_iterations: a
+            .tune_iterations
+            .unwrap_or(shipped.settings.tune_iterations),
         ..shipped.settings.clone()
     };
+    base.check()
+        .map_err(|e| anyhow::anyhow!("mbgc's settings: {e}"))?;
 
     // mbgc first: its equations go to the Python side to be counted by the common rule.
     let mut ours: Vec<Vec<MethodResult>> = Vec::new();
@@ -397,43 +494,22 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         ours.push(v);
     }
 
-    let python = venv_python(a, &out)?;
-    let spec = serde_json::json!({
-        "problems": problems.iter().zip(&ours).map(|(p, o)| {
-            let v = p.validation.as_ref().expect("checked in run_mbgc");
-            serde_json::json!({
-                "response": p.response,
-                "symbols": p.symbols,
-                "train_x": p.train.x,
-                "train_y": p.train.y,
-                "validation_x": v.x,
-                "limits": a.limits,
-                "seeds": (a.seed..a.seed + a.seeds).collect::<Vec<u64>>(),
-                "mbgc_equations": o.iter().map(|r| r.equation.clone()).collect::<Vec<_>>(),
-            })
-        }).collect::<Vec<_>>(),
-    });
-    let work = tempfile::tempdir()?;
-    let spec_path = work.path().join("problems.json");
-    std::fs::write(&spec_path, serde_json::to_vec(&spec)?)?;
-    say!(
-        out,
-        "running {} (PyOperon, Gaussian process, quadratic)",
-        script().display()
-    );
-    let run = Command::new(&python)
-        .arg(script())
-        .arg("--problems")
-        .arg(&spec_path)
-        .args(["--operon-generations", &a.operon_generations.to_string()])
-        .args(["--operon-population", &a.operon_population.to_string()])
-        .args(["--operon-evaluations", &a.operon_evaluations.to_string()])
-        .stderr(std::process::Stdio::inherit())
-        .output()
-        .with_context(|| format!("running {}", python.display()))?;
-    anyhow::ensure!(run.status.success(), "{} failed", script().display());
-    let theirs: PythonOutput = serde_json::from_slice(&run.stdout)
-        .with_context(|| format!("{} printed no result object", script().display()))?;
+    let theirs = if a.mbgc_only {
+        PythonOutput {
+            versions: serde_json::json!({}),
+            operon_settings: serde_json::json!({}),
+            responses: problems
+                .iter()
+                .map(|p| PythonResponse {
+                    response: p.response.clone(),
+                    methods: Vec::new(),
+                    mbgc_nodes: Vec::new(),
+                })
+                .collect(),
+        }
+    } else {
+        other_regressors(a, &out, &problems, &ours)?
+    };
 
     let mut responses = Vec::new();
     for ((p, mut o), t) in problems.iter().zip(ours).zip(theirs.responses) {
@@ -537,6 +613,60 @@ fn label(method: &str) -> &str {
     }
 }
 
+/// Each mbgc limit against PyOperon at the same counted size: the longest Operon limit whose
+/// mean node count (the common sympy rule) is at most mbgc's at that limit. Operon's own length
+/// counts `w*x` as one node, so comparing at the same nominal limit gives it longer equations.
+fn equal_nodes(r: &ResponseResults) -> Vec<String> {
+    let rmse = |m: &MethodResult| score(r, m).validation.rmse / r.noise_sd;
+    let summary = |method: &str| -> Vec<(usize, f64, f64)> {
+        let mut limits: Vec<usize> = r
+            .methods
+            .iter()
+            .filter(|m| m.method == method)
+            .filter_map(|m| m.limit)
+            .collect();
+        limits.sort_unstable();
+        limits.dedup();
+        limits
+            .into_iter()
+            .filter_map(|l| {
+                let g: Vec<&MethodResult> = r
+                    .methods
+                    .iter()
+                    .filter(|m| m.method == method && m.limit == Some(l))
+                    .collect();
+                let nodes: Vec<f64> = g.iter().filter_map(|m| m.nodes).map(|n| n as f64).collect();
+                (!nodes.is_empty()).then(|| {
+                    let e: Vec<f64> = g.iter().map(|m| rmse(m)).collect();
+                    (l, mean(&nodes), mean(&e))
+                })
+            })
+            .collect()
+    };
+    let theirs = summary("pyoperon");
+    summary("mbgc")
+        .into_iter()
+        .map(|(l, nodes, ours)| {
+            match theirs
+                .iter()
+                .filter(|t| t.1 <= nodes)
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+            {
+                Some(&(tl, tn, te)) => format!(
+                    "mbgc {l} ({nodes:.0} nodes) {ours:.2}, PyOperon {tl} ({tn:.0} nodes) {te:.2} \
+                     ({})",
+                    if ours <= te {
+                        "mbgc no worse"
+                    } else {
+                        "PyOperon better"
+                    }
+                ),
+                None => format!("mbgc {l} ({nodes:.0} nodes) {ours:.2}, no PyOperon run as short"),
+            }
+        })
+        .collect()
+}
+
 /// The Markdown report.
 pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String {
     let mut w = String::new();
@@ -564,7 +694,8 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
     );
     let _ = writeln!(
         w,
-        "mbgc: population {}, {} generations, {} restarts, parsimony {}, functions {}, selection \
+        "mbgc: population {}, {} generations, {} restarts, constants of {} of each island tuned \
+         every generation ({} Levenberg-Marquardt steps), parsimony {}, functions {}, selection \
          by 5-fold cross-validation, linear scaling, `--max-length` = the limit. PyOperon {}: \
          the same functions, `max_length` = the limit, population {}, {} generations, at most {} \
          evaluations, Levenberg-Marquardt on the constants, its minimum-description-length \
@@ -575,6 +706,8 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
         res.mbgc_settings.population,
         res.mbgc_settings.generations,
         res.mbgc_settings.restarts,
+        res.mbgc_settings.tune_fraction,
+        res.mbgc_settings.tune_iterations,
         res.mbgc_settings.parsimony,
         res.mbgc_settings.functions,
         res.python_versions["pyoperon"].as_str().unwrap_or("?"),
@@ -662,6 +795,12 @@ pub fn report(res: &Results, noise: &NoiseFloor, results_path: &Path) -> String 
             w,
             "\nRMSE / noise at each limit (mean over the seeds): {}.",
             lines.join("; ")
+        );
+        let _ = writeln!(
+            w,
+            "\nAt equal counted nodes (each mbgc limit against the longest PyOperon limit whose \
+             equations have no more nodes on average, by the sympy rule): {}.",
+            equal_nodes(r).join("; ")
         );
         let _ = writeln!(
             w,

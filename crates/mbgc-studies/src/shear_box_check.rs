@@ -132,6 +132,7 @@ pub fn point(name: &str) -> Option<ParamSet> {
 const COMPARE_POINTS: [&str; 6] = ["a", "c", "b", "a2", "c2", "b2"];
 const SCALE_POINTS: [&str; 2] = ["c", "c2"];
 /// The cost is compared on equal particles: mbgc draws LIGGGHTS' 5 classes too.
+#[cfg(feature = "cli")]
 const COST_POINTS: [&str; 2] = ["a-5cls", "a2-5cls"];
 /// Seed 004's point varied: (point, code, seeds). Stiffer particles (the time step, and with it
 /// the cost, grows as sqrt(E)) and the PSD as 5 classes.

@@ -70,6 +70,15 @@ pub fn quantile(values: &[f64], p: f64) -> f64 {
     quantile_sorted(&v, p)
 }
 
+/// `v` rounded to `digits` significant decimal digits (the number a reader sees printed with
+/// that many digits); zero and non-finite values unchanged.
+pub fn round_significant(v: f64, digits: usize) -> f64 {
+    if v == 0.0 || !v.is_finite() || digits == 0 {
+        return v;
+    }
+    format!("{:.*e}", digits - 1, v).parse().unwrap_or(v)
+}
+
 /// `v` rounded to four significant digits for reading: the digits, and the power of ten they
 /// are to be multiplied by when `v` is outside [1e-3, 1e4) (`None` inside, where plain decimals
 /// read best). Trailing zeros are dropped: 1.4999999999999991 -> "1.5".
@@ -109,6 +118,15 @@ pub fn mean_sd(v: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rounds_to_significant_digits() {
+        assert_eq!(round_significant(0.07957747154594767, 4), 0.07958);
+        assert_eq!(round_significant(-1234.5678, 4), -1235.0);
+        assert_eq!(round_significant(6.0221e23, 2), 6.0e23);
+        assert_eq!(round_significant(0.0, 4), 0.0);
+        assert!(round_significant(f64::NAN, 4).is_nan());
+    }
 
     #[test]
     fn fnv1a_matches_the_published_test_vectors() {

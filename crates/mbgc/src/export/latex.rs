@@ -278,6 +278,22 @@ pub fn display_tree(m: &Metamodel, response: usize) -> Expr {
     }
 }
 
+/// The equation as printed: [`display_tree`] with every constant rounded to the four
+/// significant digits [`constant`] writes, as a program over the model's scaled inputs. A reader
+/// who copies the printed equation computes this, so its accuracy is reported beside the saved
+/// equation's.
+pub fn printed_program(m: &Metamodel, response: usize) -> Vec<Node> {
+    fn round(e: Expr) -> Expr {
+        match e {
+            Expr::Const(c) => Expr::Const(crate::numeric::round_significant(c, 4)),
+            Expr::Unary(f, a) => Expr::Unary(f, Box::new(round(*a))),
+            Expr::Binary(f, a, b) => Expr::Binary(f, Box::new(round(*a)), Box::new(round(*b))),
+            v => v,
+        }
+    }
+    round(display_tree(m, response)).to_postfix()
+}
+
 /// An `align*` block with every response and the definitions of scaled inputs.
 pub fn document(m: &Metamodel) -> String {
     let mut out = String::from("\\begin{align*}\n");
@@ -334,6 +350,30 @@ mod tests {
         let names: Vec<String> = m.inputs.iter().map(|i| symbol(&i.name)).collect();
         let raw = latex(&Expr::from_postfix(&m.responses[k].program), &names).0;
         assert!(raw.contains("+ 4.624 - 9.193"), "{raw}");
+    }
+
+    /// The printed equation is the displayed tree with the printed digits: a reader who copies
+    /// it computes exactly these constants.
+    #[test]
+    fn the_printed_program_carries_the_printed_digits() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let m = Metamodel::load(&root.join("models/shear_box.json")).unwrap();
+        for k in 0..m.responses.len() {
+            let shown = display_tree(&m, k).to_postfix();
+            let printed = printed_program(&m, k);
+            assert_eq!(shown.len(), printed.len());
+            let mut rounded = 0;
+            for (a, b) in shown.iter().zip(&printed) {
+                match (a, b) {
+                    (Node::Const(a), Node::Const(b)) => {
+                        assert_eq!(format!("{:.3e}", a).parse::<f64>().unwrap(), *b);
+                        rounded += usize::from(a != b);
+                    }
+                    _ => assert_eq!(a, b),
+                }
+            }
+            assert!(rounded > 0, "the saved constants carry more than 4 digits");
+        }
     }
 
     #[test]
