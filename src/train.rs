@@ -51,11 +51,13 @@ pub struct TrainArgs {
     /// Fit in the raw inputs even where the experiment has dimensionless groups.
     #[arg(long)]
     pub no_similarity: bool,
-    /// Add effects to the model trained under this name (same --out-dir and --seed): --space is
-    /// its space plus the added effects' parameters, each with a range holding the value that
-    /// switches it off. Its runs become the new design's first rows on that face and are copied,
-    /// not rerun; only the new rows are simulated. --name must differ.
-    #[arg(long, value_name = "NAME", conflicts_with = "shard")]
+    /// Add effects to a trained model: its name (trained into the same --out-dir) or its model
+    /// file `<dir>/models/<name>.json` wherever it lies (e.g. the shipped
+    /// models/shear_box.json; its tables and record are read under <dir>), with the same --seed.
+    /// --space is its space plus the added effects' parameters, each with a range holding the
+    /// value that switches it off. Its runs become the new design's first rows on that face and
+    /// are copied into --out-dir, not rerun; only the new rows are simulated.
+    #[arg(long, value_name = "NAME|MODEL.json", conflicts_with = "shard")]
     pub extends: Option<String>,
     /// Stop after the simulate stage.
     #[arg(long)]

@@ -347,4 +347,58 @@ fn extends_copies_the_old_runs_onto_the_effect_off_face_and_runs_only_new_rows()
     .unwrap();
     assert_eq!(rec["extends"]["from"], "base");
     assert_eq!(rec["extends"]["added"][0], "epsd2");
+
+    // A model file from wherever it lies (the shipped model's case): extended from another
+    // directory into a third, its record's relative space path read under its own root. Issue 35:
+    // `--extends shear_box --out-dir mine` looked for the old record under mine/.
+    let elsewhere = tempfile::tempdir().unwrap();
+    let (model, space) = (d.join("models/base.json"), d.join("rolling.toml"));
+    let mine = elsewhere.path().join("mine");
+    let args = |from: &str| {
+        [
+            "train",
+            "--space",
+            space.to_str().unwrap(),
+            "--experiment",
+            "wall-impact",
+            "--name",
+            "rolling",
+            "--extends",
+            from,
+            "--out-dir",
+            mine.to_str().unwrap(),
+            "--n",
+            "20",
+            "--validation",
+            "6",
+            "--threads",
+            "1",
+            "--no-fit",
+        ]
+        .map(String::from)
+    };
+    let run = |a: &[String]| {
+        mbgc(
+            elsewhere.path(),
+            &a.iter().map(String::as_str).collect::<Vec<_>>(),
+        )
+    };
+    let o = run(&args("base.json"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("<dir>/models/<name>.json"),
+        "{e}"
+    );
+    let o = run(&args(model.to_str().unwrap()));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("copied 12 runs") && e.contains("12 already done, ran 8"),
+        "{e}"
+    );
+    assert_eq!(rows(&mine.join("training_data/rolling.csv")), 20);
+    assert_eq!(
+        std::fs::read_to_string(mine.join("sampling/rolling.csv")).unwrap(),
+        std::fs::read_to_string(d.join("sampling/rolling.csv")).unwrap()
+    );
 }

@@ -93,7 +93,9 @@ pub struct TrainRequest {
     pub responses: Vec<String>,
     /// Fit in the raw inputs even where the experiment has dimensionless groups.
     pub no_similarity: bool,
-    /// Add effects to the model trained under this name in the same directory and seed.
+    /// Add effects to a trained model: its name (trained into the same directory) or its model
+    /// file (`<root>/models/<name>.json`, its tables and record under `<root>`: the shipped model,
+    /// or any train's), with the same seed.
     pub extends: Option<String>,
     /// Stop after the simulate stage.
     pub no_fit: bool,
@@ -343,12 +345,11 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             continue;
         }
         let p = plan(experiment.as_ref(), design, *s, &settings, req.shard)?;
-        if let Some((from, ext)) = &extension {
-            let old = TrainPaths::new(&dir, from);
+        if let Some((old, ext)) = &extension {
             let old_table = if *what == "training" {
-                old.table
+                old.table.clone()
             } else {
-                old.validation_table
+                old.validation_table.clone()
             };
             if !table.exists() && old_table.exists() {
                 let n = extend::copy_table(&old_table, &p, table, ext)?;
@@ -421,8 +422,8 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             .flat_map(|s| &s.groups)
             .map(|g| format!("{} = {}", g.name, g.monomial.text()))
             .collect(),
-        extends: extension.as_ref().map(|(from, e)| ExtendsRecord {
-            from: from.clone(),
+        extends: extension.as_ref().map(|(_, e)| ExtendsRecord {
+            from: req.extends.clone().unwrap_or_default(),
             added: e.added.clone(),
             off_face: e.off_face.clone(),
         }),
@@ -548,13 +549,14 @@ fn prepare_extension(
     class: Option<ModelClass>,
     pairs: &[Pair],
     observer: &dyn TrainObserver,
-) -> Result<(String, Extension)> {
-    if from == name {
+) -> Result<(TrainPaths, Extension)> {
+    let (old_root, old_name) = extended(dir, from)?;
+    if old_name == name && old_root == dir {
         return Err(Error::invalid(format!(
             "--extends {from}: --name must differ from the model it extends"
         )));
     }
-    let old = TrainPaths::new(dir, from);
+    let old = TrainPaths::new(&old_root, &old_name);
     let text = read_to_string(&old.record).map_err(|e| {
         Error::invalid(format!(
             "--extends {from}: reading {} (written by `mbgc train --name {from}`): {e}",
@@ -590,7 +592,15 @@ fn prepare_extension(
             record.box_scale
         )));
     }
-    let old_space = Space::from_file(Path::new(&record.space)).map_err(|e| {
+    // A record names its space as `train --space` was given, relative to where train ran: the
+    // extended model's root when it lies elsewhere (the shipped model's
+    // `examples/space_shear_box.toml` is relative to the repository).
+    let space_path = if old_root == dir || Path::new(&record.space).is_absolute() {
+        PathBuf::from(&record.space)
+    } else {
+        old_root.join(&record.space)
+    };
+    let old_space = Space::from_file(&space_path).map_err(|e| {
         Error::invalid(format!(
             "the space of {from} (from {}): {e}",
             old.record.display()
@@ -647,5 +657,27 @@ fn prepare_extension(
             ),
         );
     }
-    Ok((from.to_string(), ext))
+    Ok((old, ext))
+}
+
+/// Where the model `--extends` names lies: `(root, name)` with its record, designs and tables
+/// under `root` as `train --out-dir root --name name` wrote them. A bare name is a train in this
+/// train's directory `dir`; a path to a `.json` model file is `<root>/models/<name>.json`.
+fn extended(dir: &Path, from: &str) -> Result<(PathBuf, String)> {
+    let path = Path::new(from);
+    if path.extension().is_none_or(|e| e != "json") {
+        return Ok((dir.to_path_buf(), from.to_string()));
+    }
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let models = path.parent().unwrap_or(Path::new(""));
+    if name.is_empty() || models.file_name().is_none_or(|n| n != "models") {
+        return Err(Error::invalid(format!(
+            "--extends {from}: expected a trained model's name or its model file              <dir>/models/<name>.json (the record and tables of a train lie beside models/, in              <dir>/training_data/)"
+        )));
+    }
+    let root = models.parent().unwrap_or(Path::new("")).to_path_buf();
+    Ok((root, name))
 }

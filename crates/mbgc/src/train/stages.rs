@@ -181,7 +181,7 @@ pub fn space_parameters(space: &Space) -> Vec<String> {
 /// What an extension added to which model, and where the copied runs lie.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ExtendsRecord {
-    /// The name of the extended train.
+    /// The extended train as `--extends` named it: its name or its model file.
     pub from: String,
     /// The effects the extension added.
     pub added: Vec<String>,
