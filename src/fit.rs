@@ -135,8 +135,9 @@ pub fn similarity_of(
     let e = mbgc::campaign::experiment_by_name(name, &settings)?;
     e.similarity().ok_or_else(|| {
         anyhow::anyhow!(
-            "--similarity {name}: {name} has no dimensionless groups{} (a dimensional effect \
-             parameter such as cohesion's energy density brings its own); fit without it",
+            "--similarity {name}: {name} has no dimensionless groups{} (an effect parameter \
+             of a dimension other than a stress, such as a spring in N/m, would need its own); \
+             fit without it",
             class
                 .map(|c| format!(" with the effects {c}"))
                 .unwrap_or_default()

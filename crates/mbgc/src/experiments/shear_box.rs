@@ -531,20 +531,22 @@ impl Experiment for ShearBox {
         Some(&self.class)
     }
 
-    /// Without a dimensional effect parameter (cohesion's energy density would bring its own
-    /// group), gravity, d50 and the box (k d_max) are the only lengths and E_p, E_w the only
-    /// stresses: E_p, E_w, rho_p and d50 act through K_p and K_w alone (bit-for-bit test below),
-    /// and the bulk density is rho_p times the solid fraction.
+    /// Gravity, d50 and the box (k d_max) are the only lengths, and E_p, E_w and any effect
+    /// parameter that is a stress (cohesion's energy density, J/m^3 = N/m^2) the only stresses:
+    /// E_p, E_w, rho_p and d50 act through K_p = E_p / (rho_p g d50), K_w, and one such group per
+    /// stress parameter (SJKR: C_pp = ced_pp / (rho_p g d50), C_pw), and the bulk density is
+    /// rho_p times the solid fraction (bit-for-bit tests below). An effect parameter of any other
+    /// dimension (a spring in N/m, a damper) would need a group of its own: no similarity then.
     fn similarity(&self) -> Option<Similarity> {
-        let dimensional = self
-            .class
-            .parameters(&Pair::BOTH)
+        let params = self.class.parameters(&Pair::BOTH);
+        let stress = |unit: &str| unit == "J/m^3" || unit == "Pa";
+        if params
             .iter()
-            .any(|(_, spec, _)| spec.unit != "-");
-        if dimensional {
+            .any(|(_, spec, _)| spec.unit != "-" && !stress(spec.unit))
+        {
             return None;
         }
-        let k = |e: &str| Monomial {
+        let per_weight = |e: &str| Monomial {
             // d50 is in mm.
             coefficient: 1.0 / (G * 1e-3),
             powers: vec![
@@ -553,6 +555,22 @@ impl Experiment for ShearBox {
                 ("d50".into(), -1.0),
             ],
         };
+        let k = per_weight;
+        let stress_groups: Vec<Group> = params
+            .iter()
+            .filter(|(_, spec, _)| stress(spec.unit))
+            .map(|(name, spec, _)| Group {
+                name: match name.strip_prefix("ced") {
+                    Some(pair) => format!("C{pair}"),
+                    None => format!("Pi_{name}"),
+                },
+                what: format!(
+                    "{} per particle weight per area, {name} / (rho_p g d50)",
+                    spec.what
+                ),
+                monomial: per_weight(name),
+            })
+            .collect();
         Some(Similarity {
             groups: vec![
                 Group {
@@ -565,7 +583,10 @@ impl Experiment for ShearBox {
                     what: "dimensionless wall stiffness E_w / (rho_p g d50)".into(),
                     monomial: k("E_w"),
                 },
-            ],
+            ]
+            .into_iter()
+            .chain(stress_groups)
+            .collect(),
             scaled: vec![ScaledResponse {
                 response: "bulk_density".into(),
                 factor: Monomial {
@@ -976,7 +997,13 @@ mod tests {
     /// A monodisperse scene scaled by powers of two: the scaled floating-point numbers are exact,
     /// so a run with the same dimensionless groups must repeat bit for bit.
     fn scaled_run(d50: f64, rho: f64, e: f64) -> (f64, f64, u64) {
-        let p = ParamSet::from_pairs(&[
+        scaled_cohesive_run(d50, rho, e, None)
+    }
+
+    /// The scaled run, with SJKR cohesion of energy density `ced` (particle-particle; the wall's
+    /// is half of it) when given.
+    fn scaled_cohesive_run(d50: f64, rho: f64, e: f64, ced: Option<f64>) -> (f64, f64, u64) {
+        let mut p = ParamSet::from_pairs(&[
             ("E_p", e),
             ("E_w", 2.0 * e),
             ("nu_p", 0.3),
@@ -989,10 +1016,15 @@ mod tests {
             ("mu_r_pp", 0.3),
             ("mu_r_pw", 0.3),
         ]);
-        let sb = ShearBox {
+        let mut sb = ShearBox {
             box_scale: 5.0,
             ..ShearBox::default()
         };
+        if let Some(c) = ced {
+            p.set("ced_pp", c);
+            p.set("ced_pw", 0.5 * c);
+            sb.class = ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap();
+        }
         let o = sb.run(&p, 7, &RunOptions::default()).unwrap();
         let get = |n: &str| o.responses.iter().find(|r| r.0 == n).unwrap().1;
         (get("shear_angle"), get("bulk_density"), o.diagnostics.steps)
@@ -1016,6 +1048,39 @@ mod tests {
         // And a different stiffness is a different run.
         let stiff = scaled_run(4.0, 2000.0, 16e6);
         assert_ne!(stiff.2, base.2);
+    }
+
+    /// With SJKR the energy density is one more stress: scaled with E (C = ced / (rho_p g d50)
+    /// held), the run repeats bit for bit; the similarity offers C_pp and C_pw as groups.
+    #[test]
+    fn cohesion_acts_through_its_energy_density_per_particle_weight() {
+        let base = scaled_cohesive_run(4.0, 2000.0, 4e6, Some(2e4));
+        assert!(base.0.is_finite(), "{base:?}");
+        let heavy = scaled_cohesive_run(4.0, 8000.0, 16e6, Some(8e4));
+        assert_eq!(heavy.0.to_bits(), base.0.to_bits(), "{heavy:?} {base:?}");
+        assert_eq!(heavy.1.to_bits(), (4.0 * base.1).to_bits());
+        assert_eq!(heavy.2, base.2);
+        let big = scaled_cohesive_run(16.0, 2000.0, 16e6, Some(8e4));
+        assert_eq!(big.0.to_bits(), base.0.to_bits(), "{big:?} {base:?}");
+        assert_eq!(big.1.to_bits(), base.1.to_bits());
+        // Cohesion changes the run: it is not a group that does nothing.
+        let dry = scaled_run(4.0, 2000.0, 4e6);
+        assert_ne!(dry.2, base.2);
+        let sb = ShearBox {
+            class: ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap(),
+            ..ShearBox::default()
+        };
+        let sim = sb.similarity().expect("sjkr keeps a similarity");
+        let names: Vec<&str> = sim.groups.iter().map(|g| g.name.as_str()).collect();
+        assert_eq!(names, ["K_p", "K_w", "C_pp", "C_pw"]);
+        let c = &sim.groups[2].monomial;
+        let v = c.value(|n| match n {
+            "ced_pp" => 2e4,
+            "rho_p" => 2000.0,
+            "d50" => 4.0,
+            _ => f64::NAN,
+        });
+        assert!((v - 2e4 / (2000.0 * G * 4e-3)).abs() < 1e-9 * v, "{v}");
     }
 
     #[test]
