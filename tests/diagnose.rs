@@ -149,6 +149,13 @@ fn hidden_rolling_resistance_is_ranked_first_over_cohesion() {
         .unavailable
         .iter()
         .any(|u| u.effect == "cdt" && u.reason.contains("no model")));
+    // And the verdict carries it as a caveat although another effect explains the data.
+    assert!(
+        d.verdict.starts_with("epsd2 explains it")
+            && d.verdict.contains("not evaluated for want of a model: cdt"),
+        "{}",
+        d.verdict
+    );
 }
 
 #[test]

@@ -452,6 +452,27 @@ fn verdict(
     alpha: f64,
 ) -> String {
     let strong = best.filter(|b| b.log_bayes_factor > STRONG);
+    let main = verdict_without_caveat(base, consistent, best, strong, alpha);
+    // A candidate no model could evaluate is a caveat of every verdict, never silently dropped:
+    // it might have explained the data as well or better.
+    if untested.is_empty() {
+        main
+    } else {
+        format!(
+            "{main}; not evaluated for want of a model: {} (add one with `mbgc train --extends \
+             <model file or name>`)",
+            untested.join(", ")
+        )
+    }
+}
+
+fn verdict_without_caveat(
+    base: &ClassFit,
+    consistent: bool,
+    best: Option<&Ranked>,
+    strong: Option<&Ranked>,
+    alpha: f64,
+) -> String {
     match (consistent, strong) {
         (true, None) => format!(
             "consistent, no effect needed: chi^2/dof {:.2} (p = {:.3}), no structure in the \
@@ -493,7 +514,7 @@ fn verdict(
             ),
                 None => format!(
                     "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}) and none of the evaluated \
-                 candidates explains it{}",
+                 candidates explains it",
                     base.chi2_dof,
                     base.p_value,
                     if base.structured.is_empty() {
@@ -501,15 +522,6 @@ fn verdict(
                     } else {
                         ", structured residuals"
                     },
-                    if untested.is_empty() {
-                        String::new()
-                    } else {
-                        format!(
-                            "; not evaluated for want of a model: {} (add one with `mbgc train \
-                         --extends`)",
-                            untested.join(", ")
-                        )
-                    }
                 ),
             }
         }
