@@ -1,0 +1,84 @@
+"""Measurement files of issue 35 from the DEM tables of make_sets.sh (standard library only).
+
+Each fraction's value is the mean of its three runs; sd = the pooled replicate sd of one run over
+the fractions, divided by sqrt(3) (as the earlier sets in docs/diagnose.md). A fraction whose runs
+have no shear angle (nothing flowed out of the box: too cohesive) gives its bulk density only.
+mu_pp and mu_r_pp are left unknown: the files fix every other parameter of the material.
+
+    python3 docs/data/diagnose/issue35/to_measurements.py
+"""
+
+import csv
+import math
+import os
+import statistics
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.abspath(os.path.join(HERE, "../../../.."))
+SETS = [
+    ("control", 0.0, "no cohesion (control)"),
+    ("ced1e4", 1e4, "cohesion ced_pp = 1e4 J/m3 hidden"),
+    ("ced2.5e4", 2.5e4, "cohesion ced_pp = 2.5e4 J/m3 hidden"),
+    ("ced4e4", 4e4, "cohesion ced_pp = 4e4 J/m3 hidden"),
+]
+RESPONSES = ["shear_angle", "bulk_density"]
+
+
+def main():
+    for name, ced, what in SETS:
+        table = os.path.join(HERE, f"{name}.csv")
+        if not os.path.exists(table):
+            print(f"{table}: not made yet; run make_sets.sh")
+            continue
+        with open(table, newline="") as f:
+            rows = [r for r in csv.DictReader(f) if r["status"] == "done"]
+        by_d = {}
+        for r in rows:
+            by_d.setdefault(float(r["d50"]), []).append(r)
+        if len(rows) < 15 or any(len(v) < 3 for v in by_d.values()):
+            print(f"{table}: {len(rows)} of 15 runs done; run make_sets.sh to finish")
+            continue
+        means, pooled = {}, {}
+        for resp in RESPONSES:
+            var, dof = 0.0, 0
+            for d, runs in by_d.items():
+                vals = [float(r[resp]) for r in runs if not math.isnan(float(r[resp]))]
+                if len(vals) == len(runs):
+                    means[(d, resp)] = statistics.fmean(vals)
+                    var += statistics.variance(vals) * (len(vals) - 1)
+                    dof += len(vals) - 1
+            pooled[resp] = (math.sqrt(var / dof), dof) if dof else (float("nan"), 0)
+        sd = {resp: pooled[resp][0] / math.sqrt(3) for resp in RESPONSES}
+        out = os.path.join(ROOT, "examples", "measurements", f"issue35_{name}.toml")
+        with open(out, "w") as f:
+            f.write(
+                f"# Synthetic (issue 35): three mbgc DEM shear-box runs per sieve fraction, {what};\n"
+                "# spheres E 4.5 MPa, nu 0.3, e 0.5, mu_pp 0.5, mu_pw 0.3, mu_r_pp 0.3, mu_r_pw 0,\n"
+                "# rho_p 2600, walls not cohesive. mu_pp and mu_r_pp are searched (unknown).\n"
+                "# Each value is the mean of 3 runs (campaign seed 35); sd = the pooled replicate sd\n"
+                f"# ({pooled['shear_angle'][0]:.2f} deg, {pooled['bulk_density'][0]:.2f} kg/m3, "
+                f"{pooled['shear_angle'][1]} and {pooled['bulk_density'][1]} dof) / sqrt(3).\n"
+                f"# DEM table: docs/data/diagnose/issue35/{name}.csv (make_sets.sh).\n"
+                f'name = "Spheres in five sieve fractions, {what}"\n\n'
+                '[model]\nclass = "hertz,mindlin,epsd2"\n\n'
+                "[fixed]\nE_p = 4.5e6\nE_w = 4.5e6\nnu_p = 0.3\ne_pp = 0.5\ne_pw = 0.5\n"
+                "mu_pw = 0.3\nrho_p = 2600\nmu_r_pw = 0\n\n"
+                "# Walls are not cohesive: the cohesion candidate fits the particle-particle energy\n"
+                "# density only.\n[candidates.sjkr]\nfixed = { ced_pw = 0 }\n"
+            )
+            for d in sorted(by_d):
+                f.write(
+                    f'\n[[sample]]\nname = "{d:g} mm"\nexperiment = "shear-box"\n'
+                    f"psd = {{ d50_mm = {d:g}, sigma_ln = 0.12 }}\n"
+                )
+                for resp in RESPONSES:
+                    if (d, resp) in means:
+                        f.write(
+                            f"measured.{resp} = {{ value = {means[(d, resp)]:.2f}, "
+                            f"sd = {sd[resp]:.2f} }}\n"
+                        )
+        print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
