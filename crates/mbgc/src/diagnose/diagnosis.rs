@@ -413,13 +413,16 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
     // Without degrees of freedom (p NaN) the chi^2 test cannot reject.
     let consistent = not_rejected(base.p_value, opts.alpha) && base.structured.is_empty();
     let untested: Vec<&str> = unavailable.iter().map(|u| u.effect.as_str()).collect();
-    let verdict = verdict(
+    let mut verdict = verdict(
         &base,
         consistent,
         ranked.first().map(|r| &r.0),
         &untested,
         opts.alpha,
     );
+    if let Some(tie) = inseparable(&base, &ranked, opts.alpha) {
+        verdict = format!("{tie}; {verdict}");
+    }
     Ok(Diagnosis {
         set: set.name.clone(),
         class: set.class.to_string(),
@@ -438,6 +441,36 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
             alpha: opts.alpha,
         },
     })
+}
+
+/// Two candidates that both explain the data, with evidence within a factor of 10 of each other:
+/// these measurements cannot tell them apart, and choosing the first would be a guess. Said with
+/// the correlation of the corrections the two fits make to the base fit's predictions (in units
+/// of each measurement's sigma): near 1, the effects move every measurement alike.
+fn inseparable(base: &ClassFit, ranked: &[(Ranked, ClassFit)], alpha: f64) -> Option<String> {
+    let explains = |r: &Ranked| {
+        r.log_bayes_factor > STRONG && not_rejected(r.p_value_after, alpha) && !r.structure_left
+    };
+    let [(a, fa), (b, fb), ..] = ranked else {
+        return None;
+    };
+    if !(explains(a) && explains(b) && a.log_bayes_factor - b.log_bayes_factor < STRONG) {
+        return None;
+    }
+    let shift = |f: &ClassFit| -> Vec<f64> {
+        f.residuals
+            .iter()
+            .zip(&base.residuals)
+            .map(|(r, r0)| (r.predicted - r0.predicted) / r0.sigma)
+            .collect()
+    };
+    let r = crate::numeric::correlation(&shift(fa), &shift(fb));
+    Some(format!(
+        "{} and {} both explain it and these data cannot separate them (ln Bayes factors {:.1} \
+         and {:.1}, within ln 10; the corrections they make to the predictions correlate at r = \
+         {:.2}): a measurement that responds to one and not the other would decide",
+        a.effect, b.effect, a.log_bayes_factor, b.log_bayes_factor, r
+    ))
 }
 
 fn not_rejected(p: f64, alpha: f64) -> bool {
@@ -525,5 +558,82 @@ fn verdict_without_caveat(
                 ),
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fit(predicted: &[f64]) -> ClassFit {
+        ClassFit {
+            class: "c".into(),
+            effect: None,
+            notes: vec![],
+            models: vec![],
+            parameters: vec![],
+            chi2: 1.0,
+            dof: 1,
+            chi2_dof: 1.0,
+            p_value: 0.5,
+            ln_evidence: 0.0,
+            residuals: predicted
+                .iter()
+                .map(|&p| Residual {
+                    sample: "s".into(),
+                    response: "r".into(),
+                    measured: 0.0,
+                    predicted: p,
+                    sd: 1.0,
+                    sigma: 1.0,
+                    z: -p,
+                })
+                .collect(),
+            samples: vec![],
+            rmse: vec![],
+            structure: vec![],
+            structured: vec![],
+        }
+    }
+
+    fn ranked(effect: &str, ln_bf: f64, p: f64) -> Ranked {
+        Ranked {
+            effect: effect.into(),
+            chi2_dof_after: 1.0,
+            p_value_after: p,
+            log_bayes_factor: ln_bf,
+            chi2_ratio: 10.0,
+            structure_left: false,
+            strength: vec![],
+        }
+    }
+
+    /// Two effects that both explain the data within a factor 10 of evidence are named together
+    /// with the correlation of their corrections; a decisive gap or a rival that fails is not a
+    /// tie.
+    #[test]
+    fn effects_the_data_cannot_separate_are_named_together() {
+        let base = fit(&[0.0, 0.0, 0.0, 0.0]);
+        let a = fit(&[1.0, 2.0, 3.0, 4.0]);
+        let b = fit(&[1.5, 1.6, 3.9, 3.8]);
+        let tie = [
+            (ranked("sjkr", 9.0, 0.5), a.clone()),
+            (ranked("epsd2", 8.0, 0.4), b.clone()),
+        ];
+        let text = inseparable(&base, &tie, 0.01).unwrap();
+        assert!(
+            text.starts_with("sjkr and epsd2 both explain it") && text.contains("r = 0.89"),
+            "{text}"
+        );
+        let decisive = [
+            (ranked("sjkr", 12.0, 0.5), a.clone()),
+            (ranked("epsd2", 8.0, 0.4), b.clone()),
+        ];
+        assert!(inseparable(&base, &decisive, 0.01).is_none());
+        let rival_fails = [
+            (ranked("sjkr", 9.0, 0.5), a),
+            (ranked("epsd2", 8.0, 0.001), b),
+        ];
+        assert!(inseparable(&base, &rival_fails, 0.01).is_none());
     }
 }
