@@ -2,7 +2,8 @@
 # The DEM measurement sets of issue 35: spheres in five sieve fractions (d50 1, 2, 4, 8 and
 # 16 mm, sigma_ln 0.12) with a hidden SJKR cohesion ced_pp of 1e4, 2.5e4 or 4e4 J/m3 (walls not
 # cohesive) and a control without cohesion; three runs per fraction (campaign seed 35, box scale
-# 10). The material: E 4.5 MPa (K_p from 1.1e4 at 16 mm to 1.76e5 at 1 mm, inside the shipped
+# 10). The 4e4 set has four fractions, 2-16 mm: at 1 mm its C = ced / (rho_p g d50) is 1568,
+# where nothing flows out of the box (examples/space_shear_box_sjkr.toml says what was seen). The material: E 4.5 MPa (K_p from 1.1e4 at 16 mm to 1.76e5 at 1 mm, inside the shipped
 # model's 9.8e3-1.94e5), nu 0.3, e 0.5, mu_pp 0.5, mu_pw 0.3, mu_r_pp 0.3, mu_r_pw 0, rho_p 2600.
 # The measurement files treat mu_pp and mu_r_pp as unknown.
 #
@@ -23,7 +24,9 @@ for set in control:0 ced1e4:1e4 ced2.5e4:2.5e4 ced4e4:4e4; do
     if [ ! -f "$design" ]; then
         {
             echo "$header"
-            for d in 1 2 4 8 16; do
+            sizes="1 2 4 8 16"
+            if [ "$name" = ced4e4 ]; then sizes="2 4 8 16"; fi
+            for d in $sizes; do
                 for _ in 1 2 3; do
                     echo "4.5e6,4.5e6,0.3,0.5,0.5,0.5,0.3,0.3,0,2600,0.12,$ced,0,$d"
                 done

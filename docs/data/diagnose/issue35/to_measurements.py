@@ -35,8 +35,10 @@ def main():
         by_d = {}
         for r in rows:
             by_d.setdefault(float(r["d50"]), []).append(r)
-        if len(rows) < 15 or any(len(v) < 3 for v in by_d.values()):
-            print(f"{table}: {len(rows)} of 15 runs done; run make_sets.sh to finish")
+        with open(os.path.join(HERE, f"{name}_design.csv"), newline="") as f:
+            planned = sum(1 for _ in csv.DictReader(f))
+        if len(rows) < planned or any(len(v) < 3 for v in by_d.values()):
+            print(f"{table}: {len(rows)} of {planned} runs done; run make_sets.sh to finish")
             continue
         means, pooled = {}, {}
         for resp in RESPONSES:
@@ -59,10 +61,13 @@ def main():
                 f"# ({pooled['shear_angle'][0]:.2f} deg, {pooled['bulk_density'][0]:.2f} kg/m3, "
                 f"{pooled['shear_angle'][1]} and {pooled['bulk_density'][1]} dof) / sqrt(3).\n"
                 f"# DEM table: docs/data/diagnose/issue35/{name}.csv (make_sets.sh).\n"
-                f'name = "Spheres in five sieve fractions, {what}"\n\n'
+                f'name = "Spheres in {len(by_d)} sieve fractions, {what}"\n\n'
                 '[model]\nclass = "hertz,mindlin,epsd2"\n\n'
                 "[fixed]\nE_p = 4.5e6\nE_w = 4.5e6\nnu_p = 0.3\ne_pp = 0.5\ne_pw = 0.5\n"
-                "mu_pw = 0.3\nrho_p = 2600\nmu_r_pw = 0\n\n"
+                "mu_pw = 0.3\nrho_p = 2600\n"
+                "# The runs had mu_r_pw = 0; the shipped model's data start at 0.00047, so the\n"
+                "# file gives its domain edge (no rolling resistance either way).\n"
+                "mu_r_pw = 0.0005\n\n"
                 "# Walls are not cohesive: the cohesion candidate fits the particle-particle energy\n"
                 "# density only.\n[candidates.sjkr]\nfixed = { ced_pw = 0 }\n"
             )
