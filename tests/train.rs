@@ -389,6 +389,29 @@ fn extends_copies_the_old_runs_onto_the_effect_off_face_and_runs_only_new_rows()
         !o.status.success() && e.contains("<dir>/models/<name>.json"),
         "{e}"
     );
+    // Into itself, however the directory is spelled: refused before anything is written.
+    let o = mbgc(
+        d,
+        &[
+            "train",
+            "--space",
+            "rolling.toml",
+            "--experiment",
+            "wall-impact",
+            "--name",
+            "base",
+            "--extends",
+            "./models/base.json",
+            "--n",
+            "20",
+            "--no-fit",
+        ],
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("--name must differ"),
+        "{e}"
+    );
     let o = run(&args(model.to_str().unwrap()));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{e}");

@@ -551,7 +551,17 @@ fn prepare_extension(
     observer: &dyn TrainObserver,
 ) -> Result<(TrainPaths, Extension)> {
     let (old_root, old_name) = extended(dir, from)?;
-    if old_name == name && old_root == dir {
+    // The same directory however it is spelled ("", ".", an absolute path): extending a model
+    // into itself would overwrite its own designs and tables.
+    let resolve = |d: &Path| {
+        let d = if d.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            d
+        };
+        std::fs::canonicalize(d).unwrap_or_else(|_| d.to_path_buf())
+    };
+    if old_name == name && resolve(&old_root) == resolve(dir) {
         return Err(Error::invalid(format!(
             "--extends {from}: --name must differ from the model it extends"
         )));
