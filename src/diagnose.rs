@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use mbgc::diagnose::build::{self, BuildOptions};
 use mbgc::diagnose::report::{figures, markdown};
 use mbgc::diagnose::{diagnose, Diagnosis, MeasurementSet, Options, Surrogate};
 use mbgc_output::say;
@@ -37,7 +38,28 @@ pub struct DiagnoseArgs {
     /// Standard output holds one JSON object; text goes to standard error.
     #[arg(long)]
     pub json: bool,
+    /// Build the models the diagnosis lacks before it runs: for each candidate effect (all, or
+    /// those named, e.g. `--build sjkr`) that no model covers for this material, a local model
+    /// around it (known values fixed; searched ones, the effect's strength and the samples' span
+    /// varied), trained into --build-dir and resumed by the next call.
+    #[arg(long, value_name = "EFFECTS", num_args = 0.., value_delimiter = ',')]
+    pub build: Option<Vec<String>>,
+    /// DEM runs per local model, a fifth of them validation runs (half the rest is run first,
+    /// the other half only if the model is still less precise than the measurements) [default:
+    /// 60].
+    #[arg(long, value_name = "N")]
+    pub budget_runs: Option<usize>,
+    /// Directory of the local models (spaces/, sampling/, training_data/, models/) [default:
+    /// diagnose_models].
+    #[arg(long, value_name = "DIR")]
+    pub build_dir: Option<PathBuf>,
+    /// Worker threads of the local models' campaigns [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
 }
+
+const BUDGET_RUNS: usize = 60;
+const BUILD_DIR: &str = "diagnose_models";
 
 pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     if !(a.alpha > 0.0 && a.alpha < 1.0) {
@@ -54,27 +76,159 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     if a.starts == 0 || a.starts > max_starts {
         anyhow::bail!("--starts {}: expected 1 to {max_starts}", a.starts);
     }
+    if a.build.is_none() {
+        for (given, flag) in [
+            (a.budget_runs.is_some(), "--budget-runs"),
+            (a.build_dir.is_some(), "--build-dir"),
+            (a.threads.is_some(), "--threads"),
+        ] {
+            if given {
+                anyhow::bail!("{flag}: sets how local models are built, so it needs --build");
+            }
+        }
+    }
+    let threads = match a.threads {
+        Some(0) => anyhow::bail!("--threads: expected at least 1"),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
     let out = Output::new(a.json);
     let set = MeasurementSet::from_file(&a.measurements)?;
-    let models = crate::builtin::models(&a.model)?
+    let mut models = crate::builtin::models(&a.model)?
         .into_iter()
         .map(|(m, label)| Surrogate::from_model(m, &label))
         .collect::<mbgc::error::Result<Vec<_>>>()?;
+    let mut build_opts = BuildOptions::new(
+        a.budget_runs.unwrap_or(BUDGET_RUNS),
+        a.build_dir
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(BUILD_DIR)),
+    );
+    build_opts.threads = threads;
+    build_opts.seed = a.seed;
+    let mut built_models = Vec::new();
+    if let Some(wanted) = &a.build {
+        let plans = build::plan(&set, &models, wanted)?;
+        if plans.is_empty() {
+            say!(
+                out,
+                "--build: the given models cover every candidate for this material; nothing to build"
+            );
+        }
+        for p in &plans {
+            say!(out, "{}", plan_text(p, &build_opts));
+            let printer = crate::train_progress::Printer::new(build_opts.config.generations);
+            let built = build::build(p, &build_opts, &printer);
+            printer.bar.finish_and_clear();
+            let built = built?;
+            say!(
+                out,
+                "local model {}: {} training runs; {}",
+                built.path.display(),
+                built.training_runs,
+                build::precision_text(&built)
+            );
+            if !built.precise_enough() {
+                say!(
+                    out,
+                    "warning: the local model's own error exceeds the measurement sd of a                      response, so it, not the measurements, limits the diagnosis; a larger                      --budget-runs extends its design (its runs are kept)"
+                );
+            }
+            models.push(build::surrogate(&built)?);
+            built_models.push(serde_json::json!({
+                "name": built.plan.name,
+                "model": built.path,
+                "class": built.plan.class.to_string(),
+                "experiment": built.plan.experiment,
+                "effect": built.plan.effect.map(|e| e.name),
+                "varied": built.plan.varied,
+                "training_runs": built.training_runs,
+                "precision": built.precision.iter().map(|(r, e, sd)| serde_json::json!({
+                    "response": r, "validation_rmse": e, "measurement_sd": sd,
+                })).collect::<Vec<_>>(),
+            }));
+        }
+    }
     let opts = Options {
         starts: a.starts,
         samples: a.samples,
         seed: a.seed,
         alpha: a.alpha,
     };
-    let d = diagnose(&set, &models, &opts)?;
+    let d = match diagnose(&set, &models, &opts) {
+        Ok(d) => d,
+        Err(e) if a.build.is_none() => match build::plan(&set, &models, &[]) {
+            Ok(plans) if !plans.is_empty() => anyhow::bail!(
+                "{e}\n`mbgc diagnose --measurements {} --build` would build what is missing \
+                 around this material: {}",
+                a.measurements.display(),
+                plans
+                    .iter()
+                    .map(|p| plan_text(p, &build_opts))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            ),
+            _ => return Err(e.into()),
+        },
+        Err(e) => return Err(e.into()),
+    };
     say!(out, "{}", markdown(&d).trim_end());
+    if a.build.is_none() && !d.unavailable.is_empty() {
+        match build::plan(&set, &models, &[]) {
+            Ok(plans) if !plans.is_empty() => {
+                say!(
+                    out,
+                    "\nThe missing models can be built around this material: `mbgc diagnose \
+                     --measurements {} --build{}` would train",
+                    a.measurements.display(),
+                    if a.model.is_empty() {
+                        String::new()
+                    } else {
+                        a.model
+                            .iter()
+                            .map(|m| format!(" --model {}", m.display()))
+                            .collect::<String>()
+                    }
+                );
+                for p in &plans {
+                    say!(out, "- {}", plan_text(p, &build_opts));
+                }
+            }
+            Ok(_) => {}
+            Err(e) => say!(out, "\nThe missing models cannot be built here: {e}"),
+        }
+    }
     if let Some(dir) = &a.plot {
         for f in figures(&d, dir)? {
             say!(out, "figure: {}", f.display());
         }
     }
-    out.object(&json(&d))?;
+    let mut report = json(&d);
+    report["built"] = serde_json::Value::Array(built_models);
+    out.object(&report)?;
     Ok(())
+}
+
+/// What a local model will be: class, experiment, what it varies and its budget.
+fn plan_text(p: &build::LocalPlan, o: &BuildOptions) -> String {
+    format!(
+        "local model {} ({}, {}; {}) over {}, {} DEM runs ({} of them validation) into {}",
+        p.name,
+        p.class,
+        p.experiment,
+        p.effect.map_or("the set's class".to_string(), |e| format!(
+            "candidate {}",
+            e.name
+        )),
+        p.varied
+            .iter()
+            .map(|(n, [lo, hi])| format!("{n} in [{lo:.4}, {hi:.4}]"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        o.budget_runs,
+        o.validation(),
+        o.dir.display()
+    )
 }
 
 /// The JSON report: the issue's keys first (`chi2_dof`, `residuals`, `ranking`), then the rest.

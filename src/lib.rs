@@ -27,6 +27,7 @@ pub mod sensitivity;
 pub mod simulate;
 pub mod slurm;
 pub mod train;
+pub mod train_progress;
 pub mod validate;
 
 #[derive(Debug, Parser)]

@@ -1,14 +1,11 @@
 //! `mbgc train`: sample (FSSF-f) -> simulate -> fit, every stage resumable (`mbgc::train`).
 
-use std::cell::RefCell;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-
-use mbgc::campaign::{ObserverHandle, Shard};
+use mbgc::campaign::Shard;
 use mbgc::dem::contact::ModelClass;
-use mbgc::train::{train, TrainObserver, TrainOutcome, TrainRequest, TrainStage};
+use mbgc::train::{train, TrainOutcome, TrainRequest};
 
 #[derive(Debug, Args)]
 pub struct TrainArgs {
@@ -133,7 +130,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         config,
         ..TrainRequest::new(a.space.clone(), &a.experiment, a.n)
     };
-    let observer = Printer::new(a.generations);
+    let observer = crate::train_progress::Printer::new(a.generations);
     let outcome = train(&req, &observer);
     observer.bar.finish_and_clear();
     match outcome? {
@@ -185,52 +182,4 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// The command line's view of a train: each stage's news on standard error, a bar per campaign
-/// and one for the fit's generations.
-struct Printer {
-    bar: ProgressBar,
-    current: RefCell<String>,
-}
-
-impl Printer {
-    fn new(generations: usize) -> Printer {
-        let bar = ProgressBar::hidden();
-        bar.set_length(generations as u64);
-        bar.set_style(
-            ProgressStyle::with_template("[3/3 fit] {prefix:>14} [{bar:30}] gen {pos}/{len} {msg}")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        Printer {
-            bar,
-            current: RefCell::new(String::new()),
-        }
-    }
-}
-
-impl TrainObserver for Printer {
-    fn note(&self, stage: TrainStage, text: &str) {
-        eprintln!("[{stage}] {text}");
-    }
-
-    fn campaign(&self, _table: &Path) -> Option<ObserverHandle> {
-        Some(crate::campaign_progress::bar())
-    }
-
-    fn fit_progress(&self, response: &str, p: &mbgc::gp::Progress) {
-        let mut current = self.current.borrow_mut();
-        if *current != response {
-            if current.is_empty() {
-                self.bar
-                    .set_draw_target(indicatif::ProgressDrawTarget::stderr());
-            }
-            *current = response.to_string();
-            self.bar.reset();
-            self.bar.set_prefix(current.clone());
-        }
-        self.bar.set_position(p.generation as u64 + 1);
-        self.bar.set_message(format!("1-R2 {:.3e}", p.best_nmse));
-    }
 }

@@ -412,12 +412,11 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
     });
     // Without degrees of freedom (p NaN) the chi^2 test cannot reject.
     let consistent = not_rejected(base.p_value, opts.alpha) && base.structured.is_empty();
-    let untested: Vec<&str> = unavailable.iter().map(|u| u.effect.as_str()).collect();
     let mut verdict = verdict(
         &base,
         consistent,
         ranked.first().map(|r| &r.0),
-        &untested,
+        &unavailable,
         opts.alpha,
     );
     if let Some(tie) = inseparable(&base, &ranked, opts.alpha) {
@@ -481,22 +480,43 @@ fn verdict(
     base: &ClassFit,
     consistent: bool,
     best: Option<&Ranked>,
-    untested: &[&str],
+    untested: &[Unavailable],
     alpha: f64,
 ) -> String {
     let strong = best.filter(|b| b.log_bayes_factor > STRONG);
     let main = verdict_without_caveat(base, consistent, best, strong, alpha);
     // A candidate no model could evaluate is a caveat of every verdict, never silently dropped:
     // it might have explained the data as well or better.
-    if untested.is_empty() {
-        main
-    } else {
-        format!(
-            "{main}; not evaluated for want of a model: {} (add one with `mbgc train --extends \
-             <model file or name>`)",
-            untested.join(", ")
-        )
+    let (lacking, other): (Vec<&Unavailable>, Vec<&Unavailable>) = untested
+        .iter()
+        .partition(|u| u.reason.starts_with("no model describes"));
+    let names = |v: &[&Unavailable]| {
+        v.iter()
+            .map(|u| u.effect.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut v = main;
+    if !lacking.is_empty() {
+        v.push_str(&format!(
+            "; not evaluated for want of a model: {} (build a local one around this material \
+             with `mbgc diagnose --build {}`, or a global one with `mbgc train --extends <model \
+             file or name>`)",
+            names(&lacking),
+            lacking
+                .iter()
+                .map(|u| u.effect.as_str())
+                .collect::<Vec<_>>()
+                .join(",")
+        ));
     }
+    if !other.is_empty() {
+        v.push_str(&format!(
+            "; not evaluated: {} (every parameter of it fixed)",
+            names(&other)
+        ));
+    }
+    v
 }
 
 fn verdict_without_caveat(

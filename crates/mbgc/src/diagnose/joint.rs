@@ -90,6 +90,11 @@ const PENALTY: f64 = 1e6;
 /// may lie and still be read at the domain's edge: a design rarely puts a point exactly on 0.
 const OFF_TOLERANCE: f64 = 0.02;
 
+/// How far a searched range may reach beyond a model's domain (share of its width) and be cut to
+/// it, with a note: a design's runs come near its space's bounds but rarely onto them, so a local
+/// model built over exactly the set's bounds has a domain a little inside them.
+const RANGE_TOLERANCE: f64 = 0.05;
+
 /// The class `base` with `effect` switched on in its slot.
 pub fn with_effect(base: &ModelClass, effect: &EffectSpec) -> Result<ModelClass, String> {
     let mut names: Vec<&str> = base
@@ -305,8 +310,21 @@ impl<'s> Joint<'s> {
                         } else {
                             set.bounds.iter().find(|(n, _)| n == input).map(|(_, b)| *b)
                         };
+                        let tol = RANGE_TOLERANCE * (d[1] - d[0]);
                         let (lo, hi) = match range {
                         Some([lo, hi]) if lo >= d[0] && hi <= d[1] => (lo, hi),
+                        Some([lo, hi]) if lo >= d[0] - tol && hi <= d[1] + tol => {
+                            let (a, b) = (lo.max(d[0]), hi.min(d[1]));
+                            let note = format!(
+                                "{input} searched in [{a:.4}, {b:.4}], the part of [{lo}, {hi}] \
+                                 inside {}'s domain",
+                                m.label
+                            );
+                            if !notes.contains(&note) {
+                                notes.push(note);
+                            }
+                            (a, b)
+                        }
                         Some([lo, hi]) => return Err(format!(
                             "the range [{lo}, {hi}] of {input} reaches outside {}'s domain [{}, {}]",
                             m.label, d[0], d[1]

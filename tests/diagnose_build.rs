@@ -1,0 +1,157 @@
+//! `mbgc diagnose --build` on the wall impact (milliseconds a run): a sphere's rebound measured at
+//! five speeds, made by DEM with a wall cohesion the set's class lacks. No model describes the
+//! wall impact, so the diagnosis builds a local model of the cohesive class around the material
+//! (the runs of the class without it first, on its ced = 0 face), names the cohesion, recovers
+//! its strength, and a second call reuses every run.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn mbgc(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run mbgc")
+}
+
+fn ok(dir: &Path, args: &[&str]) -> (String, String) {
+    let o = mbgc(dir, args);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{args:?} failed: {err}");
+    (String::from_utf8(o.stdout).unwrap(), err)
+}
+
+const HIDDEN_CED: f64 = 3e4;
+const SPEEDS: [f64; 5] = [0.05, 0.1, 0.2, 0.4, 0.6];
+
+/// The measurement set, made by DEM runs with the hidden cohesion (sd 0.01 on both
+/// coefficients of restitution, no noise added: the DEM is deterministic).
+fn measurement_set(d: &Path) {
+    let mut design =
+        String::from("E_p,nu_p,rho_p,d50,E_w,impact_speed,impact_angle,e_pw,mu_pw,ced_pw\n");
+    for v in SPEEDS {
+        design.push_str(&format!("5e6,0.3,2600,4,5e6,{v},30,0.7,0.3,{HIDDEN_CED}\n"));
+    }
+    std::fs::write(d.join("truth.csv"), design).unwrap();
+    ok(
+        d,
+        &[
+            "simulate",
+            "--design",
+            "truth.csv",
+            "--experiment",
+            "wall-impact",
+            "--model-class",
+            "hertz,mindlin,sjkr",
+            "--out",
+            "truth_runs.csv",
+            "--threads",
+            "1",
+        ],
+    );
+    let mut r = csv::Reader::from_path(d.join("truth_runs.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let mut set = String::from(
+        "name = \"bead on a plate\"\n[model]\nclass = \"hertz,mindlin\"\n[fixed]\nE_p = 5e6\n\
+         nu_p = 0.3\nrho_p = 2600\nd50 = 4\nE_w = 5e6\nimpact_angle = 30\nmu_pw = 0.3\n\
+         [bounds]\ne_pw = [0.4, 0.9]\n[candidates.sjkr]\nbounds = { ced_pw = [0, 6e4] }\n",
+    );
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let v = &rec[col("impact_speed")];
+        set.push_str(&format!(
+            "[[sample]]\nname = \"{v} m/s\"\nexperiment = \"wall-impact\"\n\
+             fixed = {{ impact_speed = {v} }}\nmeasured.cnr = {{ value = {}, sd = 0.01 }}\n\
+             measured.ctr = {{ value = {}, sd = 0.01 }}\n",
+            &rec[col("cnr")],
+            &rec[col("ctr")]
+        ));
+    }
+    std::fs::write(d.join("set.toml"), set).unwrap();
+}
+
+#[test]
+fn a_diagnosis_builds_the_local_model_it_lacks_and_names_the_hidden_effect() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    measurement_set(d);
+    let quick = ["--samples", "500", "--starts", "4"];
+    // Without --build: no model describes the wall impact; the error offers the build.
+    let o = mbgc(
+        d,
+        &[&["diagnose", "--measurements", "set.toml"][..], &quick].concat(),
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("no model describes") && e.contains("--build"),
+        "{e}"
+    );
+    // The build's settings need --build.
+    let o = mbgc(
+        d,
+        &[
+            "diagnose",
+            "--measurements",
+            "set.toml",
+            "--budget-runs",
+            "40",
+        ],
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("--budget-runs"), "{e}");
+    let args = [
+        &[
+            "diagnose",
+            "--measurements",
+            "set.toml",
+            "--build",
+            "sjkr",
+            "--budget-runs",
+            "60",
+            "--threads",
+            "1",
+            "--json",
+        ][..],
+        &quick,
+    ]
+    .concat();
+    let (out, err) = ok(d, &args);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // 60 runs: 12 validation, 48 training, of which 12 (and 3 validation) without cohesion.
+    assert!(err.contains("ran 12 (12 done"), "{err}");
+    assert!(err.contains("copied 12 runs"), "{err}");
+    let built = &j["built"][0];
+    assert_eq!(built["class"], "hertz,mindlin,sjkr", "{built}");
+    let model = d.join(built["model"].as_str().unwrap());
+    assert!(model.exists());
+    // The verdict names the cohesion, the error falls, the strength brackets the truth.
+    assert_eq!(j["ranking"][0]["effect"], "sjkr", "{}", j["verdict"]);
+    let v = j["verdict"].as_str().unwrap();
+    assert!(v.starts_with("sjkr explains it"), "{v}");
+    let before = j["chi2_dof"].as_f64().unwrap();
+    let after = j["ranking"][0]["chi2_dof_after"].as_f64().unwrap();
+    assert!(
+        before > 3.0 && after < 1.5 && before / after > 5.0,
+        "{before} -> {after}"
+    );
+    let s = &j["ranking"][0]["strength"][0];
+    assert_eq!(s["name"], "ced_pw");
+    let (lo, hi) = (s["q05"].as_f64().unwrap(), s["q95"].as_f64().unwrap());
+    assert!(
+        lo < HIDDEN_CED && HIDDEN_CED < hi && hi / lo < 3.0,
+        "[{lo}, {hi}]"
+    );
+    // A second call runs nothing: every run is in the tables.
+    let (out2, err2) = ok(d, &args);
+    assert!(!err2.contains("new)"), "{err2}");
+    assert!(
+        !err2
+            .lines()
+            .any(|l| l.contains(" ran ") && !l.contains(" ran 0 ")),
+        "{err2}"
+    );
+    let j2: serde_json::Value = serde_json::from_str(&out2).unwrap();
+    assert_eq!(j2["verdict"], j["verdict"]);
+}
