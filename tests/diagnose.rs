@@ -300,3 +300,68 @@ fn a_group_outside_the_model_is_named_not_a_zero_likelihood() {
     );
     assert!(!e.contains("likelihood is zero"), "{e}");
 }
+
+/// The model's own error where the material lies, not its average: a cohesion model whose error
+/// model says 0.1 deg and 0.5 kg/m3 at low cohesion and 3 deg and 12 kg/m3 at high. A material
+/// without cohesion is judged with the small errors; the set's `[model_error]` still overrides.
+#[test]
+fn the_model_error_is_taken_at_the_best_fit_where_the_model_knows_it() {
+    let varying = |models: Vec<Surrogate>| -> Vec<Surrogate> {
+        models
+            .into_iter()
+            .map(|m| {
+                let ced = m.input("ced_pp");
+                m.with_error_at(move |r, x| {
+                    let strong = ced.is_some_and(|k| x[k] > 2e4);
+                    Some(match (r, strong) {
+                        (0, false) => 0.1,
+                        (0, true) => 3.0,
+                        (_, false) => 0.5,
+                        (_, true) => 12.0,
+                    })
+                })
+            })
+            .collect()
+    };
+    let s = set("hertz,mindlin,epsd2", "", 0.5, 0.3, 0.0, 4);
+    let opts = Options {
+        samples: 500,
+        starts: 4,
+        ..Options::default()
+    };
+    let d = diagnose(&s, &varying(models()), &opts).unwrap();
+    for r in &d.base.residuals {
+        let e = if r.response == "shear_angle" {
+            0.1
+        } else {
+            0.5
+        };
+        assert!((r.sigma - r.sd.hypot(e)).abs() < 1e-9, "{r:?}");
+    }
+    assert!(
+        d.base
+            .notes
+            .iter()
+            .any(|n| n.contains("own error at the first best fit")),
+        "{:?}",
+        d.base.notes
+    );
+    let given = set(
+        "hertz,mindlin,epsd2",
+        "[model_error]\nshear_angle = 2.0\n",
+        0.5,
+        0.3,
+        0.0,
+        4,
+    );
+    assert_eq!(given.model_error, vec![("shear_angle".to_string(), 2.0)]);
+    let d = diagnose(&given, &varying(models()), &opts).unwrap();
+    for r in d
+        .base
+        .residuals
+        .iter()
+        .filter(|r| r.response == "shear_angle")
+    {
+        assert!((r.sigma - r.sd.hypot(2.0)).abs() < 1e-9, "{r:?}");
+    }
+}

@@ -208,8 +208,42 @@ fn p_value(chi2: f64, dof: isize) -> f64 {
     ChiSquared::new(dof as f64).map_or(f64::NAN, |d| 1.0 - d.cdf(chi2))
 }
 
-fn class_fit(set: &MeasurementSet, j: &Joint, opts: &Options) -> Result<ClassFit> {
-    let fit = j.fit(opts.starts, opts.seed);
+fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<ClassFit> {
+    let mut fit = j.fit(opts.starts, opts.seed);
+    // The models' error where the material lies, then the fit again with it.
+    let global: Vec<f64> = j.targets.iter().map(|t| t.model_error).collect();
+    if j.localise_errors(&fit.theta) {
+        fit = j.fit(opts.starts, opts.seed);
+        let mut seen: Vec<&str> = Vec::new();
+        let mut notes = Vec::new();
+        for t in &j.targets {
+            if seen.contains(&t.response.as_str()) {
+                continue;
+            }
+            seen.push(&t.response);
+            let (mut local, mut avg) = (Vec::new(), Vec::new());
+            for (u, g) in j.targets.iter().zip(&global) {
+                if u.response == t.response {
+                    local.push(u.model_error);
+                    avg.push(*g);
+                }
+            }
+            let lo = local.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = local.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            notes.push(format!(
+                "{}: the model's own error at the first best fit, {} (its validation RMSE {:.4})",
+                t.response,
+                if (hi - lo).abs() <= 1e-12 * hi.abs() {
+                    format!("{lo:.4}")
+                } else {
+                    format!("{lo:.4} to {hi:.4} over the samples")
+                },
+                avg.iter().sum::<f64>() / avg.len() as f64
+            ));
+        }
+        j.notes.extend(notes);
+    }
+    let j = &*j;
     let ev = j
         .evidence(opts.samples, opts.seed)
         .map_err(|e| Error::invalid(format!("TMCMC of {}: {e}", j.class)))?;
@@ -338,7 +372,7 @@ fn class_fit(set: &MeasurementSet, j: &Joint, opts: &Options) -> Result<ClassFit
 
 /// Runs the diagnosis of `set` against the models.
 pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> Result<Diagnosis> {
-    let base_joint = Joint::new(set, models, None).map_err(|e| {
+    let mut base_joint = Joint::new(set, models, None).map_err(|e| {
         Error::input(
             &set.source,
             "model.class",
@@ -358,7 +392,7 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
             ),
         ));
     }
-    let base = class_fit(set, &base_joint, opts)?;
+    let base = class_fit(set, &mut base_joint, opts)?;
     let mut effects = switchable_effects(&set.class);
     for c in &set.candidates {
         if !effects.iter().any(|e| e.name == c.effect.name) {
@@ -369,7 +403,7 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
     let mut unavailable = Vec::new();
     for e in effects {
         let settings = set.candidate(e);
-        let j = match Joint::new(set, models, Some(&settings)) {
+        let mut j = match Joint::new(set, models, Some(&settings)) {
             Ok(j) => j,
             Err(reason) => {
                 unavailable.push(Unavailable {
@@ -386,7 +420,7 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
             });
             continue;
         }
-        let fit = class_fit(set, &j, opts)?;
+        let fit = class_fit(set, &mut j, opts)?;
         let strength = j
             .effect_params
             .iter()

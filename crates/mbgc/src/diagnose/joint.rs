@@ -30,6 +30,8 @@ pub struct Target {
     pub sd: f64,
     /// The model's own error for this response.
     pub model_error: f64,
+    /// Whether the set gives the model error (`[model_error]`), which then stays as given.
+    error_given: bool,
 }
 
 impl Target {
@@ -395,11 +397,12 @@ impl<'s> Joint<'s> {
             let m = &surrogates[row.model];
             for r in &s.measured {
                 let model_response = m.response(&r.response).unwrap_or(0);
-                let model_error = set
+                let given = set
                     .model_error
                     .iter()
                     .find(|(n, _)| *n == r.response)
-                    .map_or(m.error[model_response], |(_, e)| *e);
+                    .map(|(_, e)| *e);
+                let model_error = given.unwrap_or(m.error[model_response]);
                 targets.push(Target {
                     sample: si,
                     response: r.response.clone(),
@@ -407,6 +410,7 @@ impl<'s> Joint<'s> {
                     value: r.value,
                     sd: r.sd,
                     model_error,
+                    error_given: given.is_some(),
                 });
             }
             rows.push(row);
@@ -533,6 +537,29 @@ impl<'s> Joint<'s> {
             l -= 0.5 * (((t.value - p) / s).powi(2) + (2.0 * std::f64::consts::PI * s * s).ln());
         }
         l
+    }
+
+    /// Sets each model error (unless the set gives it) to the model's own error at `theta`, for
+    /// models that know how their error varies; returns whether any changed. A fit's intervals
+    /// then carry the error of the equations where the material lies, not their average over the
+    /// whole space.
+    pub fn localise_errors(&mut self, theta: &[f64]) -> bool {
+        let mut changed = false;
+        for t in 0..self.targets.len() {
+            if self.targets[t].error_given {
+                continue;
+            }
+            let row = &self.rows[self.targets[t].sample];
+            let x = self.x(row, theta);
+            if let Some(e) = self.surrogates[row.model].error_at(self.targets[t].model_response, &x)
+            {
+                if e.is_finite() && e != self.targets[t].model_error {
+                    self.targets[t].model_error = e;
+                    changed = true;
+                }
+            }
+        }
+        changed
     }
 
     /// Degrees of freedom: measurements minus searched parameters.

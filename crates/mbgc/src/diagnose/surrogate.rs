@@ -10,6 +10,7 @@ use crate::metamodel::Metamodel;
 use mbgc_dem::contact::ModelClass;
 
 type Predict = dyn Fn(usize, &[f64]) -> f64 + Send + Sync;
+type ErrorAt = dyn Fn(usize, &[f64]) -> Option<f64> + Send + Sync;
 type Outside = dyn Fn(&[f64]) -> f64 + Send + Sync;
 /// Groups decided by the known inputs and outside their range: `(group = formula, value,
 /// range)`.
@@ -35,6 +36,8 @@ pub struct Surrogate {
     /// The model's own error per response, in the response's unit (its validation RMSE).
     pub error: Vec<f64>,
     predict: Box<Predict>,
+    /// The model's own error at a point, where it has an error model.
+    error_at: Box<ErrorAt>,
     /// Squared distance (in ln units) of derived groups outside their fitted range; 0 inside.
     outside: Box<Outside>,
     /// The groups that the known inputs of `x` (free ones NaN) already put outside their range.
@@ -65,7 +68,7 @@ impl Surrogate {
             .map(|r| r.validation.or(r.test).map_or(0.0, |v| v.rmse))
             .collect();
         let m = Arc::new(m);
-        let (mp, mo, mf) = (m.clone(), m.clone(), m.clone());
+        let (mp, mo, mf, me) = (m.clone(), m.clone(), m.clone(), m.clone());
         Ok(Surrogate {
             label,
             class,
@@ -80,6 +83,7 @@ impl Surrogate {
             responses: m.responses.iter().map(|r| r.name.clone()).collect(),
             error,
             predict: Box::new(move |r, x| mp.predict_point(&mp.responses[r], x)),
+            error_at: Box::new(move |r, x| me.error_at(&me.responses[r], x)),
             fixed_outside: Box::new(move |x| {
                 mf.groups
                     .iter()
@@ -137,6 +141,7 @@ impl Surrogate {
             responses: responses.iter().map(|(n, _)| n.to_string()).collect(),
             error: responses.iter().map(|(_, e)| *e).collect(),
             predict: Box::new(f),
+            error_at: Box::new(|_, _| None),
             outside: Box::new(|_| 0.0),
             fixed_outside: Box::new(|_| Vec::new()),
         }
@@ -146,6 +151,21 @@ impl Surrogate {
     /// unit.
     pub fn predict(&self, response: usize, x: &[f64]) -> f64 {
         (self.predict)(response, x)
+    }
+
+    /// The model's own error for `response` at `x`, where its error model says (`None`: only
+    /// the constant [`Surrogate::error`] is known).
+    pub fn error_at(&self, response: usize, x: &[f64]) -> Option<f64> {
+        (self.error_at)(response, x)
+    }
+
+    /// An exact model (see [`Surrogate::from_fn`]) whose own error varies: `e(response, x)`.
+    pub fn with_error_at(
+        mut self,
+        e: impl Fn(usize, &[f64]) -> Option<f64> + Send + Sync + 'static,
+    ) -> Surrogate {
+        self.error_at = Box::new(e);
+        self
     }
 
     /// Squared distance, in ln units, of the derived dimensionless groups at `x` outside their

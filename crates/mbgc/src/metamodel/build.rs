@@ -557,6 +557,7 @@ fn fit_response(
         validation: validation
             .as_ref()
             .map(|v| Metrics::of(&v.observed, &v.predicted)),
+        error_model: None,
     };
     let splits = ResponseSplits {
         response: target.to_string(),
@@ -675,7 +676,7 @@ pub fn fit(
         responses.push(model);
         splits.push(split);
     }
-    let model = Metamodel {
+    let mut model = Metamodel {
         model_class: class.map(|c| c.to_string()),
         format: FORMAT.into(),
         version: VERSION,
@@ -701,6 +702,9 @@ pub fn fit(
         }),
         constants: constants(table, settings),
     };
+    if let Some(v) = &settings.validation {
+        model.fit_error_models(v)?;
+    }
     Ok(Fit {
         model,
         splits,

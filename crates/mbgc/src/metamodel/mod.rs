@@ -5,6 +5,7 @@
 //! the fit used, so `mbgc predict`, the exported Rust and the fit agree to round-off.
 
 mod build;
+pub mod error_model;
 mod fit_settings;
 pub mod model;
 pub mod table;
@@ -13,6 +14,7 @@ mod training_table;
 pub use build::{
     fit, regression_problems, Fit, ProblemRows, RegressionProblem, ResponseSplits, SplitValues,
 };
+pub use error_model::ErrorModel;
 pub use fit_settings::FitSettings;
 pub use model::*;
 pub use training_table::TrainingTable;

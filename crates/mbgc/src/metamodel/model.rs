@@ -1,6 +1,8 @@
 //! The model file: equations per response, input transforms, domain, metrics, Pareto front,
 //! settings, seed and data hash, saved and loaded as JSON.
 
+use super::error_model::ErrorModel;
+use super::TrainingTable;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::similarity::{Group, Monomial};
 use mbgc_dem::contact::{ModelClass, Pair};
@@ -246,6 +248,10 @@ pub struct ResponseModel {
     /// Metrics on a separate validation table never trained on (`mbgc train`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub validation: Option<Metrics>,
+    /// The equation's own error as a function of the inputs, fitted to the validation
+    /// residuals ([`Metamodel::error_at`]); `None` without enough validation rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error_model: Option<ErrorModel>,
 }
 
 /// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
@@ -623,6 +629,51 @@ impl Metamodel {
             }
         }
         out
+    }
+
+    /// The inputs of `x` scaled to [0, 1] over the model's space (0.5 for an input the model
+    /// does not scale, which the error model does not vary).
+    fn unit(&self, x: &[f64]) -> Vec<f64> {
+        self.inputs
+            .iter()
+            .zip(x)
+            .map(|(i, &v)| match &i.transform {
+                Transform::Identity => 0.5,
+                t => t.apply(v),
+            })
+            .collect()
+    }
+
+    /// The equation's own standard error at `x` (physical inputs in `inputs` order), from its
+    /// error model; `None` when it has none.
+    pub fn error_at(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
+        response.error_model.as_ref().map(|e| e.sd(&self.unit(x)))
+    }
+
+    /// Fits each response's error model to its residuals on `validation` (a table of runs never
+    /// trained on, with the model's inputs and responses as columns). A response with fewer than
+    /// [`crate::metamodel::error_model::MIN_POINTS`] finite residuals gets none.
+    pub fn fit_error_models(&mut self, validation: &TrainingTable) -> Result<()> {
+        let cols = self
+            .inputs
+            .iter()
+            .map(|i| validation.column(&i.name).map(<[f64]>::to_vec))
+            .collect::<Result<Vec<_>>>()?;
+        let n = validation.rows();
+        let u: Vec<Vec<f64>> = (0..n)
+            .map(|r| self.unit(&cols.iter().map(|c| c[r]).collect::<Vec<_>>()))
+            .collect();
+        for k in 0..self.responses.len() {
+            let observed = validation.column(&self.responses[k].name)?.to_vec();
+            let predicted = self.predict(&self.responses[k], &cols);
+            let r: Vec<f64> = observed
+                .iter()
+                .zip(&predicted)
+                .map(|(o, p)| o - p)
+                .collect();
+            self.responses[k].error_model = ErrorModel::fit(&u, &r);
+        }
+        Ok(())
     }
 
     /// One prediction at a physical input point.
