@@ -131,7 +131,9 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
             if !built.precise_enough() {
                 say!(
                     out,
-                    "warning: the local model's own error exceeds the measurement sd of a                      response, so it, not the measurements, limits the diagnosis; a larger                      --budget-runs extends its design (its runs are kept)"
+                    "warning: the local model's own error exceeds the measurement sd of a \
+                     response, so it, not the measurements, limits the diagnosis; a larger \
+                     --budget-runs extends its design (its runs are kept)"
                 );
             }
             models.push(build::surrogate(&built)?);
