@@ -406,3 +406,73 @@ fn removing_particles_keeps_the_rest_of_the_packing() {
     );
     sim.run(500).unwrap();
 }
+
+/// A bed of 64 spheres settles in a frictionless box: the floor carries its whole weight and the
+/// walls' forces balance, measured by `Simulation::wall_force` (the servo and the stresses of
+/// the shear cell rest on it).
+#[test]
+fn the_floor_carries_the_weight_of_a_settled_bed() {
+    let mut rng = mbgc::sampling::rng(12);
+    let mut p = Particles::new();
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let x = [
+                    0.01 + 0.02 * i as f64,
+                    0.01 + 0.02 * j as f64,
+                    0.01 + 0.02 * k as f64,
+                ];
+                p.add(x, 0.004 + 0.002 * rng.random::<f64>(), 2500.0, 0)
+                    .unwrap();
+            }
+        }
+    }
+    let weight: f64 = p.m.iter().sum::<f64>() * 9.81;
+    let lo = [0.0; 3];
+    let hi = [0.08, 0.08, 0.2];
+    let walls = box_planes(lo, hi, 0);
+    let model = ModelClass::from_names(&["hertz", "mindlin"]).unwrap();
+    let mut sim = Simulation::new(scene(
+        p,
+        walls,
+        materials(0.3, 0.0, 0.0, 1e7),
+        model,
+        [0.0, 0.0, -9.81],
+        2e-5,
+        ([-0.01; 3], [0.09, 0.09, 0.21]),
+    ))
+    .unwrap();
+    // A clone is an independent copy, histories included: both go on exactly alike.
+    sim.run(3_000).unwrap();
+    let mut twin = sim.clone();
+    sim.run(2_000).unwrap();
+    twin.run(2_000).unwrap();
+    assert_eq!(sim.particles.x, twin.particles.x);
+    sim.run(55_000).unwrap();
+    let (t, _) = sim.kinetic_energy();
+    assert!(t < 1e-9, "not settled: {t} J");
+    let floor = (0..sim.walls.len())
+        .find(|&w| matches!(sim.walls[w].shape, Shape::Plane { normal, .. } if normal[2] > 0.5))
+        .unwrap();
+    let f = sim.wall_force(floor);
+    assert!(
+        (f[2] + weight).abs() < 1e-3 * weight,
+        "{f:?} vs weight {weight}"
+    );
+    let mut total = [0.0; 3];
+    for w in 0..sim.walls.len() {
+        let fw = sim.wall_force(w);
+        for k in 0..3 {
+            total[k] += fw[k];
+        }
+    }
+    // The walls hold the bed: their forces add up to its weight, sideways to nothing.
+    assert!(
+        total[0].abs() < 1e-3 * weight && total[1].abs() < 1e-3 * weight,
+        "{total:?}"
+    );
+    assert!((total[2] + weight).abs() < 1e-3 * weight, "{total:?}");
+    // An inactive wall carries nothing.
+    sim.set_wall_active(floor, false);
+    assert_eq!(sim.wall_force(floor), [0.0; 3]);
+}

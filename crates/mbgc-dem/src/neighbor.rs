@@ -11,7 +11,7 @@ use super::particles::{Particles, PermuteScratch};
 use super::vec3::*;
 
 /// The half Verlet list in compressed rows (CSR), with one contact history per entry.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct NeighborList {
     /// Skin distance, m: pairs within r_i + r_j + skin are listed, so the list stays valid until
     /// some particle has moved skin / 2. Larger skins rebuild less often but list more pairs;

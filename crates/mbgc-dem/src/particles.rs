@@ -167,7 +167,7 @@ impl Particles {
 
 /// Scratch buffers for [`Particles::permute`], kept between calls so that reordering allocates
 /// nothing once warmed up.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct PermuteScratch {
     v3: Vec<V3>,
     f: Vec<f64>,

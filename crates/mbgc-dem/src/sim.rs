@@ -46,6 +46,11 @@ pub struct Scene {
 ///
 /// The particle arrays are reordered at every neighbour-list rebuild; look particles up by
 /// [`Particles::id`] (e.g. through [`Particles::index_of_ids`]) rather than by index.
+///
+/// A clone is an independent copy of the state, contact histories included: an experiment can
+/// branch several tests from one prepared sample (the shear cell's failure points from one
+/// pre-sheared state).
+#[derive(Clone)]
 pub struct Simulation {
     /// The spheres' current state.
     pub particles: Particles,
@@ -383,6 +388,24 @@ impl Simulation {
         }
         let model = self.class;
         with_law!(model, |law| step::add_contact_forces(self, &law));
+    }
+
+    /// The force the particles exert on wall `w` now, N (zero for an inactive wall): minus the
+    /// sum of its contact forces, computed from the current positions, velocities and contact
+    /// histories. A tangential spring is taken one increment on from the force the last step
+    /// applied, so this is the force the next step applies, not the last one.
+    pub fn wall_force(&self, w: usize) -> V3 {
+        let model = self.class;
+        with_law!(model, |law| step::wall_force(
+            &law,
+            &self.materials,
+            self.dt,
+            &self.walls[w],
+            &self.particles,
+            &self.wall_nb[w],
+            &self.wall_hist,
+            (self.walls.len(), w),
+        ))
     }
 
     /// Kinetic energy (translational, rotational), J.

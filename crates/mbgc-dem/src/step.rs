@@ -29,7 +29,7 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::blowup::BlowUp;
-use super::contact::{Contact, ContactLaw, History};
+use super::contact::{Contact, ContactLaw, ContactOutput, History};
 use super::material::Materials;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
@@ -671,37 +671,87 @@ fn wall_contacts<L: ContactLaw>(
         let hi = list.partition_point(|&i| (i as usize) < range.end);
         for &i in &list[lo..hi] {
             let i = i as usize;
-            let ri = p.r[i];
             let h = &mut wall_hist[i * n_walls + wi - hist_base];
-            let Some(gap) = wall.gap(p.x[i], ri) else {
+            let Some(out) = wall_contact(law, materials, dt, wall, p, i, h) else {
                 *h = History::default();
                 continue;
             };
-            let overlap = ri - gap.distance;
-            let area = if L::NEEDS_AREA {
-                std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
-            } else {
-                0.0
-            };
-            let lever = ri - 0.5 * overlap;
-            let c = Contact::new(
-                gap.normal,
-                overlap,
-                ri,
-                p.m[i],
-                sub(p.v[i], wall.velocity),
-                p.w[i],
-                [0.0; 3],
-                lever,
-                0.0,
-                area,
-            );
-            let pc = materials.pair(p.mat[i], wall.material);
-            let out = law.force(&c, pc, h, dt);
             add_assign(&mut f[i], out.force);
             add_assign(&mut t[i], out.torque_i);
         }
     }
+}
+
+/// The contact of particle `i` with `wall` (`None` if they do not touch), advancing its history.
+#[inline(always)]
+fn wall_contact<L: ContactLaw>(
+    law: &L,
+    materials: &Materials,
+    dt: f64,
+    wall: &Wall,
+    p: P,
+    i: usize,
+    h: &mut History,
+) -> Option<ContactOutput> {
+    let ri = p.r[i];
+    let gap = wall.gap(p.x[i], ri)?;
+    let overlap = ri - gap.distance;
+    let area = if L::NEEDS_AREA {
+        std::f64::consts::PI * (2.0 * ri * overlap - overlap * overlap).max(0.0)
+    } else {
+        0.0
+    };
+    let lever = ri - 0.5 * overlap;
+    let c = Contact::new(
+        gap.normal,
+        overlap,
+        ri,
+        p.m[i],
+        sub(p.v[i], wall.velocity),
+        p.w[i],
+        [0.0; 3],
+        lever,
+        0.0,
+        area,
+    );
+    let pc = materials.pair(p.mat[i], wall.material);
+    Some(law.force(&c, pc, h, dt))
+}
+
+/// The force the particles in `near` (those within reach of `wall`) exert on it in their
+/// current state: minus the sum of its contact forces, each from a copy of its history (entry
+/// `i * stride + offset` of `wall_hist`), which the step is not given back.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn wall_force<L: ContactLaw>(
+    law: &L,
+    materials: &Materials,
+    dt: f64,
+    wall: &Wall,
+    q: &Particles,
+    near: &[u32],
+    wall_hist: &[History],
+    (stride, offset): (usize, usize),
+) -> V3 {
+    if !wall.active {
+        return [0.0; 3];
+    }
+    let p = P {
+        x: &q.x,
+        v: &q.v,
+        w: &q.w,
+        r: &q.r,
+        m: &q.m,
+        mat: &q.material,
+    };
+    let mut total = [0.0; 3];
+    for &i in near {
+        let i = i as usize;
+        let mut h = wall_hist[i * stride + offset];
+        if let Some(out) = wall_contact(law, materials, dt, wall, p, i, &mut h) {
+            sub_assign(&mut total, out.force);
+        }
+    }
+    total
 }
 
 /// Contacts of rows `rows`; `hist` starts at list entry `base`.
