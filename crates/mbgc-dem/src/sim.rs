@@ -12,7 +12,7 @@ use super::step::{self, Host, Params, Plan, Raw};
 use super::team;
 use super::timestep::rayleigh_time;
 use super::vec3::*;
-use super::walls::Wall;
+use super::walls::{Shape, Wall};
 use crate::error::{Error, Result};
 use crate::with_law;
 
@@ -326,6 +326,27 @@ impl Simulation {
             self.wall_hist[i * n_walls + wall] = History::default();
         }
         self.rebuild_lists();
+    }
+
+    /// Puts wall `w` at a new place (a lid lowered onto a settled bed), ends its contacts and
+    /// rebuilds the lists, so that no particle within its new reach goes unlisted. Refuses a
+    /// shape of another kind or one that [`Wall::new`] refuses.
+    pub fn place_wall(&mut self, w: usize, shape: Shape) -> Result<()> {
+        let old = &self.walls[w];
+        if std::mem::discriminant(&old.shape) != std::mem::discriminant(&shape) {
+            return Err(Error::invalid(format!(
+                "wall {}: placed with a shape of another kind",
+                old.name
+            )));
+        }
+        let placed = Wall::new(&old.name, shape, old.material)?;
+        self.walls[w].shape = placed.shape;
+        let n_walls = self.walls.len();
+        for i in 0..self.particles.len() {
+            self.wall_hist[i * n_walls + w] = History::default();
+        }
+        self.rebuild_lists();
+        Ok(())
     }
 
     pub(crate) fn positions_finite(&self) -> bool {

@@ -4,6 +4,7 @@ use super::backend::Backend;
 use crate::error::{Error, Result};
 use crate::experiments::hopper::Hopper;
 use crate::experiments::shear_box::ShearBox;
+use crate::experiments::shear_cell::ShearCell;
 use crate::experiments::wall_impact::WallImpact;
 use crate::experiments::Experiment;
 use crate::liggghts::shear_box_experiment::{DeckMode, LiggghtsShearBox};
@@ -113,6 +114,7 @@ fn no_box_scale(name: &str, s: &ExperimentSettings, why: &str) -> Result<()> {
 pub fn effective_box_scale(experiment: &str, given: Option<f64>) -> Option<f64> {
     match experiment {
         "shear-box" => Some(given.unwrap_or(ShearBox::default().box_scale)),
+        "shear-cell" => Some(given.unwrap_or(ShearCell::default().cell_scale)),
         _ => given,
     }
 }
@@ -139,6 +141,13 @@ const EXPERIMENTS: &[(&str, Constructor)] = &[
             box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),
             class: s.model_class.unwrap_or_default(),
             ..ShearBox::default()
+        }))
+    }),
+    ("shear-cell", |s| {
+        Ok(Box::new(ShearCell {
+            cell_scale: s.box_scale.unwrap_or(ShearCell::default().cell_scale),
+            class: s.model_class.unwrap_or_default(),
+            ..ShearCell::default()
         }))
     }),
 ];

@@ -2,7 +2,7 @@
 //! settings, seed and data hash, saved and loaded as JSON.
 
 use super::error_model::ErrorModel;
-use super::TrainingTable;
+use super::training_table::TrainingTable;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::similarity::{Group, Monomial};
 use mbgc_dem::contact::{ModelClass, Pair};
