@@ -239,3 +239,69 @@ mod tests {
         assert_eq!(m.text(), "101.9 E / (rho d)");
     }
 }
+
+/// `name / (rho_p g d50)` with d50 in mm: a stress per particle weight per area.
+pub fn per_particle_weight(name: &str) -> Monomial {
+    Monomial {
+        // g in m/s^2, d50 in mm.
+        coefficient: 1.0 / (9.81 * 1e-3),
+        powers: vec![
+            (name.into(), 1.0),
+            ("rho_p".into(), -1.0),
+            ("d50".into(), -1.0),
+        ],
+    }
+}
+
+/// The groups of a bulk experiment under gravity whose only lengths are d50 and sizes in units
+/// of it, and whose stresses are E_p, E_w, `stresses` (the experiment's own, as (group name,
+/// parameter, meaning)) and any effect parameter of the class that is a stress (cohesion's
+/// energy density): K_p = E_p / (rho_p g d50), K_w, the experiment's, then C_pp =
+/// ced_pp / (rho_p g d50) and the like. `None` when the class has an effect parameter of
+/// another dimension (a spring in N/m), which would need a group of its own.
+pub fn bulk_groups(
+    class: &mbgc_dem::contact::ModelClass,
+    stresses: &[(&str, &str, &str)],
+) -> Option<Vec<Group>> {
+    let params = class.parameters(&mbgc_dem::contact::Pair::BOTH);
+    let stress = |unit: &str| unit == "J/m^3" || unit == "Pa";
+    if params
+        .iter()
+        .any(|(_, spec, _)| spec.unit != "-" && !stress(spec.unit))
+    {
+        return None;
+    }
+    let mut groups = vec![
+        Group {
+            name: "K_p".into(),
+            what: "dimensionless particle stiffness E_p / (rho_p g d50)".into(),
+            monomial: per_particle_weight("E_p"),
+        },
+        Group {
+            name: "K_w".into(),
+            what: "dimensionless wall stiffness E_w / (rho_p g d50)".into(),
+            monomial: per_particle_weight("E_w"),
+        },
+    ];
+    for (group, name, what) in stresses {
+        groups.push(Group {
+            name: group.to_string(),
+            what: format!("{what} per particle weight per area, {name} / (rho_p g d50)"),
+            monomial: per_particle_weight(name),
+        });
+    }
+    for (name, spec, _) in params.iter().filter(|(_, spec, _)| stress(spec.unit)) {
+        groups.push(Group {
+            name: match name.strip_prefix("ced") {
+                Some(pair) => format!("C{pair}"),
+                None => format!("Pi_{name}"),
+            },
+            what: format!(
+                "{} per particle weight per area, {name} / (rho_p g d50)",
+                spec.what
+            ),
+            monomial: per_particle_weight(name),
+        });
+    }
+    Some(groups)
+}

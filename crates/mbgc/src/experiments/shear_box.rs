@@ -25,7 +25,7 @@ use super::{
 use crate::error::{Error, Result};
 use crate::psd::draw::truncated_q3;
 use crate::psd::{default_range, draw_by_number, Distribution, LogNormal, MassDistribution};
-use crate::similarity::{Group, Monomial, ScaledResponse, Similarity};
+use crate::similarity::{Monomial, ScaledResponse, Similarity};
 use mbgc_dem::analysis::sphere_box_volume;
 use mbgc_dem::contact::{ModelClass, Pair};
 use mbgc_dem::insertion::random_pack;
@@ -538,55 +538,8 @@ impl Experiment for ShearBox {
     /// rho_p times the solid fraction (bit-for-bit tests below). An effect parameter of any other
     /// dimension (a spring in N/m, a damper) would need a group of its own: no similarity then.
     fn similarity(&self) -> Option<Similarity> {
-        let params = self.class.parameters(&Pair::BOTH);
-        let stress = |unit: &str| unit == "J/m^3" || unit == "Pa";
-        if params
-            .iter()
-            .any(|(_, spec, _)| spec.unit != "-" && !stress(spec.unit))
-        {
-            return None;
-        }
-        let per_weight = |e: &str| Monomial {
-            // d50 is in mm.
-            coefficient: 1.0 / (G * 1e-3),
-            powers: vec![
-                (e.into(), 1.0),
-                ("rho_p".into(), -1.0),
-                ("d50".into(), -1.0),
-            ],
-        };
-        let k = per_weight;
-        let stress_groups: Vec<Group> = params
-            .iter()
-            .filter(|(_, spec, _)| stress(spec.unit))
-            .map(|(name, spec, _)| Group {
-                name: match name.strip_prefix("ced") {
-                    Some(pair) => format!("C{pair}"),
-                    None => format!("Pi_{name}"),
-                },
-                what: format!(
-                    "{} per particle weight per area, {name} / (rho_p g d50)",
-                    spec.what
-                ),
-                monomial: per_weight(name),
-            })
-            .collect();
         Some(Similarity {
-            groups: vec![
-                Group {
-                    name: "K_p".into(),
-                    what: "dimensionless particle stiffness E_p / (rho_p g d50)".into(),
-                    monomial: k("E_p"),
-                },
-                Group {
-                    name: "K_w".into(),
-                    what: "dimensionless wall stiffness E_w / (rho_p g d50)".into(),
-                    monomial: k("E_w"),
-                },
-            ]
-            .into_iter()
-            .chain(stress_groups)
-            .collect(),
+            groups: crate::similarity::bulk_groups(&self.class, &[])?,
             scaled: vec![ScaledResponse {
                 response: "bulk_density".into(),
                 factor: Monomial {

@@ -34,8 +34,8 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::psd::{default_range, draw_by_number, Distribution, LogNormal};
-use crate::similarity::{Group, Monomial, ScaledResponse, Similarity};
-use mbgc_dem::contact::{ModelClass, Pair};
+use crate::similarity::{Monomial, ScaledResponse, Similarity};
+use mbgc_dem::contact::ModelClass;
 use mbgc_dem::insertion::random_pack;
 use mbgc_dem::particles::Particles;
 use mbgc_dem::sim::{Scene, Simulation};
@@ -511,52 +511,10 @@ impl Experiment for ShearCell {
     }
 
     fn similarity(&self) -> Option<Similarity> {
-        let params = self.class.parameters(&Pair::BOTH);
-        let stress = |unit: &str| unit == "J/m^3" || unit == "Pa";
-        if params
-            .iter()
-            .any(|(_, spec, _)| spec.unit != "-" && !stress(spec.unit))
-        {
-            return None;
-        }
-        let per_weight = |e: &str| Monomial {
-            coefficient: 1.0 / (G * 1e-3),
-            powers: vec![
-                (e.into(), 1.0),
-                ("rho_p".into(), -1.0),
-                ("d50".into(), -1.0),
-            ],
-        };
-        let mut groups = vec![
-            Group {
-                name: "K_p".into(),
-                what: "dimensionless particle stiffness E_p / (rho_p g d50)".into(),
-                monomial: per_weight("E_p"),
-            },
-            Group {
-                name: "K_w".into(),
-                what: "dimensionless wall stiffness E_w / (rho_p g d50)".into(),
-                monomial: per_weight("E_w"),
-            },
-            Group {
-                name: "S".into(),
-                what: "pre-shear normal stress per particle weight per area, normal_stress / (rho_p g d50)".into(),
-                monomial: per_weight("normal_stress"),
-            },
-        ];
-        for (name, spec, _) in params.iter().filter(|(_, spec, _)| stress(spec.unit)) {
-            groups.push(Group {
-                name: match name.strip_prefix("ced") {
-                    Some(pair) => format!("C{pair}"),
-                    None => format!("Pi_{name}"),
-                },
-                what: format!(
-                    "{} per particle weight per area, {name} / (rho_p g d50)",
-                    spec.what
-                ),
-                monomial: per_weight(name),
-            });
-        }
+        let groups = crate::similarity::bulk_groups(
+            &self.class,
+            &[("S", "normal_stress", "pre-shear normal stress")],
+        )?;
         let by = |n: &str| Monomial {
             coefficient: 1.0,
             powers: vec![(n.into(), 1.0)],
