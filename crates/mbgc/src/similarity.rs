@@ -194,52 +194,6 @@ impl Similarity {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use mbgc_sr::eval::Evaluator;
-
-    fn k() -> Monomial {
-        Monomial {
-            coefficient: 1.0 / 9.81e-3,
-            powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
-        }
-    }
-
-    fn eval(prog: &[Node], x: &[f64]) -> f64 {
-        let cols: Vec<Vec<f64>> = x.iter().map(|&v| vec![v]).collect();
-        let mut out = [0.0];
-        assert!(Evaluator::new().eval(prog, &cols, &mut out));
-        out[0]
-    }
-
-    #[test]
-    fn programs_compute_the_monomial_and_its_log() {
-        let var = |n: &str| ["E", "rho", "d"].iter().position(|m| *m == n).unwrap() as u16;
-        let x = [5e6, 2600.0, 8.0];
-        let m = k();
-        let want = 5e6 / (2600.0 * 9.81e-3 * 8.0);
-        let got = m.value(|n| x[var(n) as usize]);
-        assert!((got / want - 1.0).abs() < 1e-14, "{got} {want}");
-        assert!((eval(&m.ln_program(&var), &x) - want.ln()).abs() < 1e-12);
-        assert!((eval(&m.program(&var), &x) / want - 1.0).abs() < 1e-12);
-        let rho = Monomial {
-            coefficient: 1.0,
-            powers: vec![("rho".into(), 1.0)],
-        };
-        assert_eq!(rho.program(&var), vec![Node::Var(1)]);
-        let sq = Monomial {
-            coefficient: 2.0,
-            powers: vec![("d".into(), 2.0), ("E".into(), -0.5)],
-        };
-        let want = 2.0 * 64.0 / 5e6f64.sqrt();
-        assert!((eval(&sq.program(&var), &x) / want - 1.0).abs() < 1e-12);
-        assert!((m.log_derivative("rho", 2600.0) + 1.0 / 2600.0).abs() < 1e-18);
-        assert_eq!(m.log_derivative("nu", 0.3), 0.0);
-        assert_eq!(m.text(), "101.9 E / (rho d)");
-    }
-}
-
 /// `name / (rho_p g d50)` with d50 in mm: a stress per particle weight per area.
 pub fn per_particle_weight(name: &str) -> Monomial {
     Monomial {
@@ -304,4 +258,50 @@ pub fn bulk_groups(
         });
     }
     Some(groups)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mbgc_sr::eval::Evaluator;
+
+    fn k() -> Monomial {
+        Monomial {
+            coefficient: 1.0 / 9.81e-3,
+            powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
+        }
+    }
+
+    fn eval(prog: &[Node], x: &[f64]) -> f64 {
+        let cols: Vec<Vec<f64>> = x.iter().map(|&v| vec![v]).collect();
+        let mut out = [0.0];
+        assert!(Evaluator::new().eval(prog, &cols, &mut out));
+        out[0]
+    }
+
+    #[test]
+    fn programs_compute_the_monomial_and_its_log() {
+        let var = |n: &str| ["E", "rho", "d"].iter().position(|m| *m == n).unwrap() as u16;
+        let x = [5e6, 2600.0, 8.0];
+        let m = k();
+        let want = 5e6 / (2600.0 * 9.81e-3 * 8.0);
+        let got = m.value(|n| x[var(n) as usize]);
+        assert!((got / want - 1.0).abs() < 1e-14, "{got} {want}");
+        assert!((eval(&m.ln_program(&var), &x) - want.ln()).abs() < 1e-12);
+        assert!((eval(&m.program(&var), &x) / want - 1.0).abs() < 1e-12);
+        let rho = Monomial {
+            coefficient: 1.0,
+            powers: vec![("rho".into(), 1.0)],
+        };
+        assert_eq!(rho.program(&var), vec![Node::Var(1)]);
+        let sq = Monomial {
+            coefficient: 2.0,
+            powers: vec![("d".into(), 2.0), ("E".into(), -0.5)],
+        };
+        let want = 2.0 * 64.0 / 5e6f64.sqrt();
+        assert!((eval(&sq.program(&var), &x) / want - 1.0).abs() < 1e-12);
+        assert!((m.log_derivative("rho", 2600.0) + 1.0 / 2600.0).abs() < 1e-18);
+        assert_eq!(m.log_derivative("nu", 0.3), 0.0);
+        assert_eq!(m.text(), "101.9 E / (rho d)");
+    }
 }
