@@ -211,7 +211,7 @@ pub struct Schedule {
     pub max_preshear: f64,
     /// Steps of the consolidation before the pre-shear (the lid settles onto the bed).
     pub consolidate_steps: u64,
-    /// Failure: travel limit, m (1.5 d50).
+    /// Failure: travel limit, m (2 d50).
     pub max_failure: f64,
 }
 
@@ -245,7 +245,7 @@ impl ShearCell {
             min_preshear: 1.5 * lay.d50,
             max_preshear: 0.2 * l,
             consolidate_steps: steps(2.0 * lay.d_max / v_shear),
-            max_failure: 1.5 * lay.d50,
+            max_failure: 2.0 * lay.d50,
         }
     }
 }
@@ -710,7 +710,10 @@ impl Experiment for ShearCell {
             }
             set_shear(&mut c, sch.v_shear);
             let start = c.time;
-            let mut bins = Bins::new(0.5 * sch.bin, 0.0);
+            // The peak of a running mean over 0.3 d50 of travel: the largest single bin would
+            // pick the noise's largest excursion, a bias of the same size at every normal stress
+            // that shows up as a cohesion.
+            let mut bins = Bins::new(sch.bin, 0.0);
             let mut peak: Option<(f64, f64)> = None;
             let mut past_peak = false;
             let mut t = 0.0;
@@ -722,11 +725,11 @@ impl Experiment for ShearCell {
                 servo(&mut c, &s, target, sch.v_servo);
                 let before = bins.done.len();
                 bins.add(t, &s);
-                if bins.done.len() > before {
-                    let b = *bins.done.last().unwrap();
+                if bins.done.len() > before && bins.done.len() >= 3 {
+                    let b = bins.last(3).unwrap();
                     if peak.is_none_or(|p| b.1 > p.1) {
                         peak = Some(b);
-                    } else if t > 0.3 * lay.d50 && b.1 < 0.95 * peak.unwrap().1 {
+                    } else if t > 0.5 * lay.d50 && b.1 < 0.95 * peak.unwrap().1 {
                         past_peak = true;
                         break;
                     }
