@@ -105,6 +105,9 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
             .unwrap_or_else(|| PathBuf::from(BUILD_DIR)),
     );
     build_opts.threads = threads;
+    if a.build.is_some() {
+        build::check_budget(build_opts.budget_runs)?;
+    }
     build_opts.seed = a.seed;
     let mut built_models = Vec::new();
     if let Some(wanted) = &a.build {

@@ -93,6 +93,24 @@ impl BuildOptions {
     }
 }
 
+/// Refuses a budget too small to validate and fit a model, or larger than a train's design may
+/// be.
+pub fn check_budget(budget: usize) -> Result<()> {
+    if budget < MIN_BUDGET {
+        return Err(Error::invalid(format!(
+            "--budget-runs {budget}: expected at least {MIN_BUDGET} runs per local model (3 to \
+             validate it, 10 for the cross-validation that picks its equation)"
+        )));
+    }
+    if budget > crate::train::MAX_RUNS {
+        return Err(Error::invalid(format!(
+            "--budget-runs {budget}: expected at most {} runs per local model (each a DEM run)",
+            crate::train::MAX_RUNS
+        )));
+    }
+    Ok(())
+}
+
 /// A local model built (or resumed) and fitted.
 #[derive(Clone, Debug)]
 pub struct Built {
@@ -516,12 +534,13 @@ pub fn split(budget: usize, with_base: bool) -> (usize, usize, usize, usize, usi
 /// runs the rest and fits again only if the model's validation error exceeds the measurement sd
 /// of a response.
 pub fn build(plan: &LocalPlan, opts: &BuildOptions, observer: &dyn TrainObserver) -> Result<Built> {
-    if opts.budget_runs < MIN_BUDGET {
-        return Err(Error::invalid(format!(
-            "--budget-runs {}: expected at least {MIN_BUDGET} runs per local model (3 to validate \
-             it, 10 for the cross-validation that picks its equation)",
-            opts.budget_runs
-        )));
+    check_budget(opts.budget_runs)?;
+    if opts.dir.exists() && !opts.dir.is_dir() {
+        return Err(Error::input(
+            opts.dir.display().to_string(),
+            "--build-dir",
+            "a directory for the local models (this is a file)",
+        ));
     }
     let space_path = write_space(&opts.dir, &plan.name, &plan.space)?;
     let (base_n, base_validation, first, total, validation) =
