@@ -118,7 +118,8 @@ impl ShearCell {
         let sigma = p.optional("sigma_ln", 0.0, 0.0, 2.0)?;
         if !(self.cell_scale >= 4.0 && self.cell_scale.is_finite()) {
             return Err(Error::invalid(format!(
-                "cell scale k = {}: expected at least 4 particle diameters across the cell",
+                "--box-scale {} (the shear cell's k): expected at least 4 particle diameters \
+                 across the cell",
                 self.cell_scale
             )));
         }
@@ -152,8 +153,8 @@ impl ShearCell {
         let n = (SOLID_SHARE * size[0] * size[1] * size[2] / mean_vol).ceil() as usize;
         if n > self.max_particles {
             return Err(Error::invalid(format!(
-                "shear cell: {n} particles (k = {k}, d_max = {d_max_mm:.3} mm for d50 = {d50_mm} \
-                 mm, sigma_ln = {sigma}), more than the limit {}; expected a smaller cell scale \
+                "--box-scale {k}: the shear cell would hold {n} particles (d_max = \
+                 {d_max_mm:.3} mm for d50 = {d50_mm} mm, sigma_ln = {sigma}), more than the limit {}; expected a smaller box scale \
                  or a narrower PSD",
                 self.max_particles
             )));
