@@ -470,3 +470,48 @@ fn the_floor_carries_the_weight_of_a_settled_bed() {
     sim.set_wall_active(floor, false);
     assert_eq!(sim.wall_force(floor), [0.0; 3]);
 }
+
+/// A wall placed onto a settled bed takes load at once (its lists are rebuilt), and a shape of
+/// another kind is refused.
+#[test]
+fn a_placed_wall_touches_what_lies_at_its_new_place() {
+    let mut rng = mbgc::sampling::rng(13);
+    let p = grid_of_spheres(&mut rng);
+    let top =
+        p.x.iter()
+            .zip(&p.r)
+            .map(|(x, r)| x[2] + r)
+            .fold(0.0, f64::max);
+    let mut walls = box_planes([0.0; 3], [0.08, 0.08, 0.3], 0);
+    let lid = |z: f64| Shape::Rect {
+        center: [0.04, 0.04, z],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 1.0, 0.0],
+        half_u: 0.04,
+        half_v: 0.04,
+    };
+    walls.push(Wall::new("lid", lid(0.25), 0).unwrap());
+    let n = walls.len() - 1;
+    let mut sim = Simulation::new(scene(
+        p,
+        walls,
+        materials(0.3, 0.3, 0.0, 1e7),
+        ModelClass::from_names(&["hertz", "mindlin"]).unwrap(),
+        [0.0; 3],
+        2e-5,
+        ([-0.01; 3], [0.09, 0.09, 0.31]),
+    ))
+    .unwrap();
+    sim.run(10).unwrap();
+    assert_eq!(sim.wall_force(n), [0.0; 3]);
+    // Pressed 0.5 mm into the top spheres.
+    sim.place_wall(n, lid(top - 5e-4)).unwrap();
+    let f = sim.wall_force(n);
+    assert!(f[2] > 0.0, "{f:?}");
+    let plane = Shape::Plane {
+        point: [0.0; 3],
+        normal: [0.0, 0.0, 1.0],
+    };
+    let e = sim.place_wall(n, plane).unwrap_err().to_string();
+    assert!(e.contains("lid") && e.contains("another kind"), "{e}");
+}
