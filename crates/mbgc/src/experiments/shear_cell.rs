@@ -842,6 +842,16 @@ mod tests {
     #[test]
     fn a_small_cell_gives_a_yield_locus_and_scales_with_its_groups() {
         let base = small_run(4.0, 5e6, 2000.0);
+        // A cell 8 d50 long allows 1.6 d50 of pre-shear travel: too short for the steadiness
+        // test (two windows of 0.5 d50 after 1.5 d50), which the run must say, not hide.
+        assert!(!base.diagnostics.settled);
+        assert!(
+            base.diagnostics
+                .warnings
+                .iter()
+                .any(|w| w.contains("no steady shear stress within a travel of 1.6 d50")),
+            "{base:?}"
+        );
         let get = |o: &Outcome, n: &str| o.get(n).unwrap();
         let phi = get(&base, "internal_friction");
         let ratio = get(&base, "shear_ratio");
