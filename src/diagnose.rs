@@ -44,9 +44,9 @@ pub struct DiagnoseArgs {
     /// varied), trained into --build-dir and resumed by the next call.
     #[arg(long, value_name = "EFFECTS", num_args = 0.., value_delimiter = ',')]
     pub build: Option<Vec<String>>,
-    /// DEM runs per local model, a fifth of them validation runs (half the rest is run first,
-    /// the other half only if the model is still less precise than the measurements) [default:
-    /// 60].
+    /// DEM runs per local model: a fifth validate it; of the rest, a quarter are of the set's
+    /// own class (the effect off) and half of the remainder is run and fitted first, the last
+    /// half only if the model is still less precise than the measurements [default: 60].
     #[arg(long, value_name = "N")]
     pub budget_runs: Option<usize>,
     /// Directory of the local models (spaces/, sampling/, training_data/, models/) [default:
