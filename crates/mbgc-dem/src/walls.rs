@@ -138,6 +138,27 @@ impl Wall {
         })
     }
 
+    /// A rectangle about `center` with unit axes `u`, `v` and half extents `half_u`, `half_v`.
+    pub fn rect(
+        name: &str,
+        center: V3,
+        (u, v): (V3, V3),
+        (half_u, half_v): (f64, f64),
+        material: u16,
+    ) -> Result<Wall> {
+        Wall::new(
+            name,
+            Shape::Rect {
+                center,
+                u,
+                v,
+                half_u,
+                half_v,
+            },
+            material,
+        )
+    }
+
     /// The wall translating at `v`, m/s (a shear box's upper frame, a lid pressing down).
     pub fn with_velocity(mut self, v: V3) -> Self {
         self.velocity = v;

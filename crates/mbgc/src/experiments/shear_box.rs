@@ -33,7 +33,7 @@ use mbgc_dem::particles::Particles;
 use mbgc_dem::sim::{Scene, Simulation};
 use mbgc_dem::timestep::rayleigh_time;
 use mbgc_dem::vec3::V3;
-use mbgc_dem::walls::{Shape, Wall};
+use mbgc_dem::walls::Wall;
 
 /// The shear box's responses in table order (the first two are the calibration responses); the
 /// embedded run and the LIGGGHTS backend both name them through [`Responses::named`].
@@ -603,17 +603,7 @@ impl ShearBox {
         // Floor, back wall, two side walls and the flap, tall enough for the falling column.
         let wall_h = sched.wall_h;
         let rect = |name: &str, center: V3, u: V3, v: V3, hu: f64, hv: f64| {
-            Wall::new(
-                name,
-                Shape::Rect {
-                    center,
-                    u,
-                    v,
-                    half_u: hu,
-                    half_v: hv,
-                },
-                wall_mat,
-            )
+            Wall::rect(name, center, (u, v), (hu, hv), wall_mat)
         };
         let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
         let walls = vec![

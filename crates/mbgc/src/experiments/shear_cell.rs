@@ -268,17 +268,7 @@ fn walls(lay: &Layout, top: f64, shelf: f64, wall_mat: u16) -> Result<Vec<Wall>>
     let zs = lay.split;
     let hu = top - zs;
     let rect = |name: &str, center: V3, u: V3, v: V3, hu: f64, hv: f64| {
-        Wall::new(
-            name,
-            Shape::Rect {
-                center,
-                u,
-                v,
-                half_u: hu,
-                half_v: hv,
-            },
-            wall_mat,
-        )
+        Wall::rect(name, center, (u, v), (hu, hv), wall_mat)
     };
     let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
     Ok(vec![
