@@ -154,8 +154,31 @@ pub fn run(a: &SampleArgs) -> anyhow::Result<()> {
             None => String::new(),
         }
     );
+    // The box is sampled whole, so that a design extends the same way with or without
+    // constraints; `train` runs only the rows inside them.
+    let outside = space.as_ref().map_or(0, |s| {
+        design
+            .values
+            .iter()
+            .filter(|x| s.violated(x).is_some())
+            .count()
+    });
+    if let Some(s) = space.as_ref().filter(|_| outside > 0) {
+        say!(
+            out,
+            "{outside} of the {} points lie outside the space's constraints ({}): `mbgc train` \
+             does not run them",
+            design.len(),
+            s.constraints
+                .iter()
+                .map(|c| c.text.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     out.object(&serde_json::json!({
         "out": a.out,
+        "outside_constraints": outside,
         "method": a.method.name(),
         "seed": a.seed,
         "dim": dim,

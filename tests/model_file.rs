@@ -89,3 +89,40 @@ fn broken_models_are_refused_by_field() {
         assert!(e.contains("m.json") && e.contains(field), "{what}: {e}");
     }
 }
+
+/// A model's constraints: refused when they name something it does not have, measured as a
+/// relative excess whose gradient matches finite differences, and kept through a save.
+#[test]
+fn constraints_are_checked_measured_and_kept() {
+    let mut v = tiny();
+    v["constraints"] = json!(["z <= 0.5*x + w"]);
+    let e = load(&v).unwrap_err();
+    assert!(e.contains("constraints[0]") && e.contains("\"w\""), "{e}");
+    v["constraints"] = json!(["z <= 0.5*x"]);
+    let m = load(&v).unwrap();
+    assert_eq!(m.constraint_excess(&[0.8, 0.3]), 0.0);
+    assert!(m.violated_constraint(&[0.8, 0.3]).is_none());
+    assert_eq!(m.violated_constraint(&[0.4, 0.3]), Some("z <= 0.5*x"));
+    // (0.3 - 0.2) / (0.3 + 0.2) = 0.2, squared.
+    let x = [0.4, 0.3];
+    let (e, g) = m.constraint_excess_with_gradient(&x);
+    assert!(
+        (e - 0.04).abs() < 1e-12 && (m.constraint_excess(&x) - e).abs() < 1e-15,
+        "{e}"
+    );
+    for k in 0..2 {
+        let h = 1e-7;
+        let mut xp = x;
+        xp[k] += h;
+        let mut xm = x;
+        xm[k] -= h;
+        let fd = (m.constraint_excess(&xp) - m.constraint_excess(&xm)) / (2.0 * h);
+        assert!((fd - g[k]).abs() < 1e-6, "d/dx{k}: {fd} vs {}", g[k]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.json");
+    m.save(&path).unwrap();
+    let back = Metamodel::load(&path).unwrap();
+    assert_eq!(back.constraints, ["z <= 0.5*x"]);
+    assert_eq!(back.constraint_excess(&x), e);
+}

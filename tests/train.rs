@@ -425,3 +425,109 @@ fn extends_copies_the_old_runs_onto_the_effect_off_face_and_runs_only_new_rows()
         std::fs::read_to_string(d.join("sampling/rolling.csv")).unwrap()
     );
 }
+
+/// A space's `[constraints]`: the rows outside are not run, rows run before the constraint was
+/// set are not fitted, the model keeps the limit, and a calibration stays inside it.
+#[test]
+fn constraints_limit_the_runs_the_fit_and_the_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("space.toml"), SPACE).unwrap();
+    std::fs::write(
+        d.join("limited.toml"),
+        format!("{SPACE}[constraints]\nexpr = [\"y <= x\"]\n"),
+    )
+    .unwrap();
+    let args = |space: &'static str| {
+        vec![
+            "train",
+            "--space",
+            space,
+            "--experiment",
+            "sleep-test",
+            "--n",
+            "24",
+            "--validation",
+            "8",
+            "--responses",
+            "f",
+            "--population",
+            "300",
+            "--generations",
+            "10",
+            "--threads",
+            "1",
+        ]
+    };
+    // A fresh train runs only the rows inside.
+    let sub = tempfile::tempdir().unwrap();
+    let s = sub.path();
+    std::fs::copy(d.join("limited.toml"), s.join("limited.toml")).unwrap();
+    let err = ok(s, &args("limited.toml"));
+    let design = std::fs::read_to_string(s.join("sampling/sleep_test.csv")).unwrap();
+    let inside = design
+        .lines()
+        .skip(1)
+        .filter(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            v[1] <= v[0]
+        })
+        .count();
+    assert!(inside > 4 && inside < 24, "{design}");
+    assert!(
+        err.contains(&format!(
+            "{} of 24 design rows lie outside the space's constraints (y <= x): not run",
+            24 - inside
+        )),
+        "{err}"
+    );
+    assert_eq!(rows(&s.join("training_data/sleep_test.csv")), inside);
+    // Run without the limit first, then fitted with it: the rows outside are left out.
+    ok(d, &[&args("space.toml")[..], &["--no-fit"]].concat());
+    assert_eq!(rows(&d.join("training_data/sleep_test.csv")), 24);
+    let err = ok(d, &args("limited.toml"));
+    assert!(err.contains("lie outside the space's constraints"), "{err}");
+    let path = d.join("models/sleep_test.json");
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(model["constraints"][0], "y <= x", "{model}");
+    assert_eq!(model["data"]["rows"], inside, "{model}");
+    assert_eq!(model["data"]["outside_rows"], 24 - inside, "{model}");
+    // f = x + 2 y = 2.4: along the line, only x >= 0.8 keeps y <= x.
+    std::fs::write(
+        d.join("m.toml"),
+        "name = \"m\"\n[measured]\nf = { value = 2.4, sd = 0.01 }\n",
+    )
+    .unwrap();
+    let o = mbgc(
+        d,
+        &[
+            "calibrate",
+            "--material",
+            "m.toml",
+            "--model",
+            "models/sleep_test.json",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value =
+        serde_json::from_str(&json).unwrap_or_else(|e| panic!("{e}: {json}"));
+    // Local optima that do not fit (beyond the limit, held at it by the penalty) are listed
+    // as such; every one that fits lies inside.
+    let solutions: Vec<&serde_json::Value> = v["solutions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["fits"] == true)
+        .collect();
+    assert!(!solutions.is_empty(), "{v}");
+    for sol in solutions {
+        let (x, y) = (
+            sol["params"]["x"].as_f64().unwrap(),
+            sol["params"]["y"].as_f64().unwrap(),
+        );
+        assert!(y <= x + 1e-3 && x > 0.79, "{sol}");
+    }
+}

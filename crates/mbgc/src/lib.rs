@@ -100,6 +100,7 @@
 
 pub mod calibrate;
 pub mod campaign;
+pub mod constraint;
 pub mod diagnose;
 pub mod error;
 pub mod experiments;

@@ -24,6 +24,8 @@ use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 use crate::model_table::{refuse_inactive_parameters, ModelTable};
 use mbgc_dem::contact::ModelClass;
 
+pub use crate::constraint::Constraint;
+
 /// A bulk measurement of the material, an entry of `[measured]`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Measured {
@@ -56,26 +58,6 @@ pub enum PsdSpec {
 /// The smallest accepted standard deviation of a measurement, relative to its value.
 pub const MIN_RELATIVE_SD: f64 = 1e-9;
 
-/// `sum coef * x[name] + constant <= 0`, from a text such as `e_pw <= e_pp` or
-/// `mu_pp + 0.5*mu_r_pp <= 1`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Constraint {
-    /// The inequality as written (trimmed), for messages.
-    pub text: String,
-    /// `(parameter, coefficient)` pairs, scaled so the largest |coefficient| is 1.
-    pub terms: Vec<(String, f64)>,
-    /// The constant term, on the same scale.
-    pub constant: f64,
-}
-
-impl Constraint {
-    /// Positive by how much the constraint is violated at `value(name)`.
-    pub fn violation(&self, value: impl Fn(&str) -> f64) -> f64 {
-        let g: f64 = self.terms.iter().map(|(n, c)| c * value(n)).sum::<f64>() + self.constant;
-        g.max(0.0)
-    }
-}
-
 /// A bulk material to calibrate: its measurements and what is known of it, read from a material
 /// file (see the module example).
 #[derive(Clone, Debug, PartialEq)]
@@ -96,165 +78,6 @@ pub struct Material {
     pub constraints: Vec<Constraint>,
     /// The `[model] class` the material declares it needs; `None`: whatever the metamodel's.
     pub model_class: Option<ModelClass>,
-}
-
-/// Parses a linear expression such as `0.5*mu_r_pp + mu_pp - 3e-1` into terms and a constant.
-/// Grammar: `expr = ["+"|"-"] term {("+"|"-") term}`, `term = number | name | number "*" name |
-/// name "*" number`; numbers as in Rust and TOML (`3e-1`, `1.5E+2`, `.5`), finite only.
-fn linear(side: &str, file: &str, field: &str) -> Result<(Vec<(String, f64)>, f64)> {
-    #[derive(Debug, PartialEq)]
-    enum Tok {
-        Num(f64),
-        Name(String),
-        Plus,
-        Minus,
-        Times,
-    }
-    let expected = "a linear inequality such as \"e_pw <= e_pp\" or \"mu_pp + 0.5*mu_r_pp <= 1\"";
-    let bad = |what: String| Error::input(file, field, format!("{expected}; {what}"));
-    let c: Vec<char> = side.chars().collect();
-    let mut toks = Vec::new();
-    let mut i = 0;
-    while i < c.len() {
-        let ch = c[i];
-        if ch.is_whitespace() {
-            i += 1;
-        } else if ch.is_ascii_digit() || ch == '.' {
-            let start = i;
-            while i < c.len() && (c[i].is_ascii_digit() || c[i] == '.') {
-                i += 1;
-            }
-            if i < c.len() && (c[i] == 'e' || c[i] == 'E') {
-                i += 1;
-                if i < c.len() && (c[i] == '+' || c[i] == '-') {
-                    i += 1;
-                }
-                while i < c.len() && c[i].is_ascii_digit() {
-                    i += 1;
-                }
-            }
-            let text: String = c[start..i].iter().collect();
-            match text.parse::<f64>() {
-                Ok(v) if v.is_finite() => toks.push(Tok::Num(v)),
-                _ => return Err(bad(format!("\"{text}\" is not a finite number"))),
-            }
-        } else if ch.is_alphabetic() || ch == '_' {
-            let start = i;
-            while i < c.len() && (c[i].is_alphanumeric() || c[i] == '_') {
-                i += 1;
-            }
-            let name: String = c[start..i].iter().collect();
-            // f64's parser would read these as numbers; a bound of infinity or NaN means nothing.
-            if ["inf", "infinity", "nan"].contains(&name.to_ascii_lowercase().as_str()) {
-                return Err(bad(format!("\"{name}\": expected a finite number")));
-            }
-            toks.push(Tok::Name(name));
-        } else {
-            toks.push(match ch {
-                '+' => Tok::Plus,
-                '-' => Tok::Minus,
-                '*' => Tok::Times,
-                other => return Err(bad(format!("unexpected \"{other}\""))),
-            });
-            i += 1;
-        }
-    }
-    let mut terms: Vec<(String, f64)> = Vec::new();
-    let mut constant = 0.0;
-    let mut k = 0;
-    let mut first = true;
-    while k < toks.len() || first {
-        let mut sign = 1.0;
-        match toks.get(k) {
-            Some(Tok::Plus) => k += 1,
-            Some(Tok::Minus) => {
-                sign = -1.0;
-                k += 1;
-            }
-            _ if first => {}
-            _ => return Err(bad("expected + or - between terms".into())),
-        }
-        first = false;
-        let term = match (toks.get(k), toks.get(k + 1), toks.get(k + 2)) {
-            (Some(Tok::Num(a)), Some(Tok::Times), Some(Tok::Name(n))) => {
-                k += 3;
-                (Some(n.clone()), *a)
-            }
-            (Some(Tok::Name(n)), Some(Tok::Times), Some(Tok::Num(a))) => {
-                k += 3;
-                (Some(n.clone()), *a)
-            }
-            (Some(Tok::Num(a)), _, _) => {
-                k += 1;
-                (None, *a)
-            }
-            (Some(Tok::Name(n)), _, _) => {
-                k += 1;
-                (Some(n.clone()), 1.0)
-            }
-            _ => return Err(bad("expected a number or a parameter name".into())),
-        };
-        match term {
-            (Some(n), coef) if crate::space::is_identifier(&n) => terms.push((n, sign * coef)),
-            (Some(n), _) => return Err(bad(format!("\"{n}\" is not a parameter name"))),
-            (None, v) => constant += sign * v,
-        }
-    }
-    Ok((terms, constant))
-}
-
-fn constraint(text: &str, file: &str, field: &str) -> Result<Constraint> {
-    let (lhs, rhs, flip) = if let Some((l, r)) = text.split_once("<=") {
-        (l, r, false)
-    } else if let Some((l, r)) = text.split_once(">=") {
-        (l, r, true)
-    } else {
-        return Err(Error::input(
-            file,
-            field,
-            format!("an inequality with <= or >=, got \"{text}\""),
-        ));
-    };
-    let (lt, lc) = linear(lhs, file, field)?;
-    let (rt, rc) = linear(rhs, file, field)?;
-    // lhs - rhs <= 0 (or rhs - lhs <= 0 for >=).
-    let s = if flip { -1.0 } else { 1.0 };
-    let mut terms: Vec<(String, f64)> = Vec::new();
-    for (n, c) in lt
-        .into_iter()
-        .map(|(n, c)| (n, s * c))
-        .chain(rt.into_iter().map(|(n, c)| (n, -s * c)))
-    {
-        match terms.iter_mut().find(|(m, _)| *m == n) {
-            Some((_, k)) => *k += c,
-            None => terms.push((n, c)),
-        }
-    }
-    terms.retain(|(_, c)| *c != 0.0);
-    if terms.is_empty() {
-        return Err(Error::input(
-            file,
-            field,
-            format!("an inequality between parameters, \"{text}\" names none"),
-        ));
-    }
-    // Scaled so that the largest coefficient is 1: the penalty then means the same for
-    // `1e300*x >= 1e300` as for `x >= 1` and cannot overflow.
-    let scale = terms.iter().map(|(_, c)| c.abs()).fold(0.0, f64::max);
-    let constant = s * (lc - rc) / scale;
-    let terms: Vec<(String, f64)> = terms.into_iter().map(|(n, c)| (n, c / scale)).collect();
-    if !constant.is_finite() || terms.iter().any(|(_, c)| !c.is_finite()) {
-        return Err(Error::input(
-            file,
-            field,
-            format!("\"{text}\": coefficients and bounds must be finite once scaled"),
-        ));
-    }
-    Ok(Constraint {
-        text: text.trim().to_string(),
-        terms,
-        constant,
-    })
 }
 
 // The file as written. Required keys are `Option`s so that `validate` can say what a missing
@@ -471,7 +294,7 @@ impl MaterialFile {
             .map_or(Vec::new(), |c| c.expr)
             .iter()
             .enumerate()
-            .map(|(i, text)| constraint(text, file, &format!("constraints.expr[{i}]")))
+            .map(|(i, text)| Constraint::parse(text, file, &format!("constraints.expr[{i}]")))
             .collect::<Result<Vec<_>>>()?;
         let model_class = self.model.map(|m| m.class(file)).transpose()?;
         if let Some(c) = &model_class {
@@ -731,7 +554,7 @@ expr = ["e_pw <= e_pp", "mu_pp + 0.5*mu_r_pp >= 0.2"]
 
     #[test]
     fn constraints_read_rust_numbers_and_refuse_non_finite_bounds() {
-        let c = |t: &str| constraint(t, "m.toml", "constraints.expr[0]");
+        let c = |t: &str| Constraint::parse(t, "m.toml", "constraints.expr[0]");
         // `3e-1` used to be split at its minus sign.
         let k = c("mu_pw <= 3e-1").unwrap();
         assert_eq!(k.terms, [("mu_pw".to_string(), 1.0)]);

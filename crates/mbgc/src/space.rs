@@ -19,6 +19,7 @@ use std::path::Path;
 use serde::de::IgnoredAny;
 use serde::Deserialize;
 
+use crate::constraint::Constraint;
 use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 use crate::model_table::{refuse_inactive_parameters, ModelTable};
 use mbgc_dem::contact::{ModelClass, Pair};
@@ -101,6 +102,10 @@ pub struct Space {
     pub model_class: Option<ModelClass>,
     /// Where the space came from (file path), used in error messages.
     pub source: String,
+    /// `[constraints] expr`: linear limits between parameters that carve the valid region out of
+    /// the box (`ced_pp <= 0.01*E_p`: where the experiment still measures). A train runs only
+    /// the design rows inside them, and its model keeps them, so a calibration stays inside too.
+    pub constraints: Vec<Constraint>,
 }
 
 // The file as written. Required keys are `Option`s so that `validate` can say what a missing
@@ -115,6 +120,17 @@ struct SpaceFile {
     description: Option<IgnoredAny>,
     parameters: Option<Entries<ParameterFile>>,
     model: Option<ModelTable>,
+    constraints: Option<ConstraintsFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table with `expr = [\"ced_pp <= 0.01*E_p\", ...]`"
+)]
+struct ConstraintsFile {
+    #[serde(default)]
+    expr: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -206,12 +222,35 @@ impl Space {
                 ));
             }
         }
+        let constraints = file
+            .constraints
+            .map(|c| c.expr)
+            .unwrap_or_default()
+            .iter()
+            .enumerate()
+            .map(|(i, text)| space_constraint(text, &parameters, source, i))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Space {
             name: file.name,
             parameters,
             model_class,
             source: source.to_string(),
+            constraints,
         })
+    }
+
+    /// The first constraint that physical values of all parameters (file order) violate.
+    pub fn violated(&self, x: &[f64]) -> Option<&Constraint> {
+        assert_eq!(x.len(), self.parameters.len());
+        let value = |n: &str| {
+            self.parameters
+                .iter()
+                .position(|p| p.name == n)
+                .map_or(f64::NAN, |i| x[i])
+        };
+        self.constraints
+            .iter()
+            .find(|c| c.violation(value) > CONSTRAINT_SLACK)
     }
 
     /// The model class of the space (seed 004's when the file names none).
@@ -266,6 +305,66 @@ impl Space {
             .map(|(p, &v)| p.to_unit(v).clamp(0.0, 1.0))
             .collect()
     }
+}
+
+/// Violation tolerated by [`Space::violated`] (constraints are scaled so that the largest
+/// coefficient is 1): a point written at the limit and read back is inside.
+const CONSTRAINT_SLACK: f64 = 1e-9;
+
+/// A space's constraint: its names are parameters of the space, and it can bind somewhere in the
+/// box and hold somewhere (else it would refuse every design row or do nothing).
+fn space_constraint(
+    text: &str,
+    parameters: &[Parameter],
+    source: &str,
+    i: usize,
+) -> Result<Constraint> {
+    let field = format!("constraints.expr[{i}]");
+    let c = Constraint::parse(text, source, &field)?;
+    for (n, _) in &c.terms {
+        if !parameters.iter().any(|p| &p.name == n) {
+            return Err(Error::input(
+                source,
+                &field,
+                format!("\"{n}\" is not a parameter of this space"),
+            ));
+        }
+    }
+    // Over the box (fixed parameters at their value), the linear form's range.
+    let (mut lo, mut hi) = (c.constant, c.constant);
+    for (n, coef) in &c.terms {
+        let p = parameters
+            .iter()
+            .find(|p| &p.name == n)
+            .expect("checked above");
+        let (a, b) = match p.fixed {
+            Some(v) => (v, v),
+            None => (p.min, p.max),
+        };
+        lo += (coef * a).min(coef * b);
+        hi += (coef * a).max(coef * b);
+    }
+    if lo > CONSTRAINT_SLACK {
+        return Err(Error::input(
+            source,
+            &field,
+            format!(
+                "\"{}\" holds nowhere in the parameters' ranges: no point could be sampled",
+                c.text
+            ),
+        ));
+    }
+    if hi <= CONSTRAINT_SLACK {
+        return Err(Error::input(
+            source,
+            &field,
+            format!(
+                "\"{}\" holds everywhere in the parameters' ranges, so it limits nothing; remove it",
+                c.text
+            ),
+        ));
+    }
+    Ok(c)
 }
 
 impl ParameterFile {
@@ -396,6 +495,42 @@ e_pp = { min = 0.05, max = 0.95, fixed = 0.6 }
             .unwrap_err()
             .to_string();
         assert!(e.contains("model.class") && e.contains("tangential"), "{e}");
+    }
+
+    #[test]
+    fn constraints_carve_the_box_and_refuse_what_limits_nothing_or_everything() {
+        let s = Space::from_toml_str(
+            &format!("{GOOD}[constraints]\nexpr = [\"mu_pp <= 2e-9*E_p\"]\n"),
+            "c.toml",
+        )
+        .unwrap();
+        assert_eq!(s.constraints.len(), 1);
+        // mu_pp 0.5 is allowed from E_p 2.5e8 up.
+        assert!(s.violated(&[1e8, 0.5, 0.6]).is_some());
+        assert!(s.violated(&[3e8, 0.5, 0.6]).is_none());
+        let bad = |expr: &str| err(&format!("{GOOD}[constraints]\nexpr = [\"{expr}\"]\n"));
+        let e = bad("mu_r_pp <= mu_pp");
+        assert!(
+            e.contains("constraints.expr[0]")
+                && e.contains("mu_r_pp")
+                && e.contains("not a parameter"),
+            "{e}"
+        );
+        let e = bad("mu_pp <= 2");
+        assert!(
+            e.contains("holds everywhere") && e.contains("remove it"),
+            "{e}"
+        );
+        let e = bad("mu_pp >= 1e-6*E_p + 1");
+        assert!(e.contains("holds nowhere"), "{e}");
+        // The fixed e_pp = 0.6 counts at its value: mu_pp <= e_pp binds (mu_pp reaches 1).
+        assert!(Space::from_toml_str(
+            &format!("{GOOD}[constraints]\nexpr = [\"mu_pp <= e_pp\"]\n"),
+            "c.toml"
+        )
+        .is_ok());
+        let e = bad("mu_pp <=");
+        assert!(e.contains("constraints.expr[0]"), "{e}");
     }
 
     #[test]

@@ -280,6 +280,12 @@ impl<'m> Problem<'m> {
                     .join(", ")
             ));
         }
+        if !model.constraints.is_empty() {
+            notes.push(format!(
+                "the model holds where its training runs were, inside {}: kept there",
+                model.constraints.join(", ")
+            ));
+        }
         let mut lower: Vec<f64> = model.inputs.iter().map(|i| i.domain[0]).collect();
         let mut upper: Vec<f64> = model.inputs.iter().map(|i| i.domain[1]).collect();
         for (name, [lo, hi]) in &material.bounds {
@@ -384,6 +390,7 @@ impl<'m> Problem<'m> {
             .map(|g| self.group_excess(g, &x).powi(2))
             .sum();
         groups
+            + self.model.constraint_excess(&x)
             + self
                 .constraints
                 .iter()
@@ -453,6 +460,14 @@ impl<'m> Problem<'m> {
                 for (j, &k) in self.free.iter().enumerate() {
                     g[j] += 2.0 * PENALTY * v * m.log_derivative(&self.names[k], x[k]);
                 }
+            }
+        }
+        // Where the model's training runs did not go (a limit of its space), as for a group.
+        let (e, de) = self.model.constraint_excess_with_gradient(&x);
+        if e > 0.0 {
+            f += PENALTY * e;
+            for (j, &k) in self.free.iter().enumerate() {
+                g[j] += PENALTY * de[k];
             }
         }
         for (c, terms) in &self.constraints {

@@ -115,7 +115,8 @@ impl Surrogate {
                             0.0
                         }
                     })
-                    .sum()
+                    .sum::<f64>()
+                    + mo.constraint_excess(x)
             }),
         })
     }
@@ -169,7 +170,7 @@ impl Surrogate {
     }
 
     /// Squared distance, in ln units, of the derived dimensionless groups at `x` outside their
-    /// fitted range; 0 inside. The joint fit penalises it to keep away from extrapolation.
+    /// fitted range, plus the model's relative constraint excess; 0 inside. The joint fit penalises it to keep away from extrapolation.
     pub fn outside(&self, x: &[f64]) -> f64 {
         (self.outside)(x)
     }

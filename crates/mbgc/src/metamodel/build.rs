@@ -598,6 +598,56 @@ fn constants(table: &TrainingTable, settings: &FitSettings) -> Vec<Constant> {
     constants
 }
 
+/// The rows of `table` inside the constraints of `settings.space` (`None`: there are none, or
+/// every row is inside) and how many lie outside. A constraint's names are the table's columns
+/// or the model's constants.
+fn inside_constraints(
+    table: &TrainingTable,
+    settings: &FitSettings,
+    constants: &[Constant],
+) -> Result<(Option<TrainingTable>, usize)> {
+    let Some(space) = settings
+        .space
+        .as_ref()
+        .filter(|s| !s.constraints.is_empty())
+    else {
+        return Ok((None, 0));
+    };
+    let mut keep = vec![true; table.rows()];
+    for c in &space.constraints {
+        let mut g = vec![c.constant; table.rows()];
+        for (n, coef) in &c.terms {
+            if let Ok(col) = table.column(n) {
+                for (g, x) in g.iter_mut().zip(col) {
+                    *g += coef * x;
+                }
+            } else if let Some(k) = constants.iter().find(|k| &k.name == n) {
+                for g in &mut g {
+                    *g += coef * k.value;
+                }
+            } else {
+                return Err(Error::input(
+                    &table.source,
+                    format!("column {n}"),
+                    format!(
+                        "missing: the space's constraint \"{}\" needs {n} (pass it with \
+                         --inputs, or fix it in the space)",
+                        c.text
+                    ),
+                ));
+            }
+        }
+        for (k, g) in keep.iter_mut().zip(&g) {
+            *k &= *g <= 1e-9;
+        }
+    }
+    let outside = keep.iter().filter(|k| !**k).count();
+    if outside == 0 {
+        return Ok((None, 0));
+    }
+    Ok((Some(table.retain_rows(&keep)), outside))
+}
+
 /// Fits one equation per response of `settings` to the rows of `table`.
 /// `progress(response, state)` is called every generation (a progress bar, a log, nothing).
 pub fn fit(
@@ -606,6 +656,27 @@ pub fn fit(
     mut progress: impl FnMut(&str, &gp::Progress),
 ) -> Result<Fit> {
     settings.check()?;
+    // Rows outside the space's constraints (run before the constraint was set, or by hand) are
+    // not data of the model, which holds inside them only.
+    let fixed = constants(table, settings);
+    let texts: Vec<String> = settings
+        .space
+        .iter()
+        .flat_map(|s| s.constraints.iter().map(|c| c.text.clone()))
+        .collect();
+    let (inside_table, outside) = inside_constraints(table, settings, &fixed)?;
+    let table = inside_table.as_ref().unwrap_or(table);
+    let inside_settings = match &settings.validation {
+        Some(v) if !texts.is_empty() => {
+            let (t, _) = inside_constraints(v, settings, &fixed)?;
+            Some(FitSettings {
+                validation: t.or_else(|| Some(v.clone())),
+                ..settings.clone()
+            })
+        }
+        _ => None,
+    };
+    let settings = inside_settings.as_ref().unwrap_or(settings);
     let absorbed = settings.absorbed();
     let cols = columns(table, settings)?;
     let class = data_class(table, settings)?;
@@ -694,14 +765,27 @@ pub fn fit(
             test_fraction: settings.test_fraction,
             skipped_rows: table.skipped_rows,
             no_value_rows: table.no_value_rows,
+            unsettled_rows: table.unsettled_rows,
+            outside_rows: 0,
         },
         groups: scaling.groups,
         experiment: table.campaign.as_ref().map(|m| m.experiment.clone()),
         box_scale: table.campaign.as_ref().and_then(|m| {
             crate::campaign::registry::effective_box_scale(&m.experiment, m.box_scale)
         }),
-        constants: constants(table, settings),
+        constants: fixed,
+        constraints: Vec::new(),
+        constraint_terms: Vec::new(),
     };
+    model.set_constraints(&texts, "the space's [constraints]")?;
+    model.data.outside_rows = outside;
+    if outside > 0 {
+        warnings.push(format!(
+            "{outside} rows of {} lie outside the space's constraints ({}): left out",
+            table.source,
+            texts.join(", ")
+        ));
+    }
     if let Some(v) = &settings.validation {
         model.fit_error_models(v)?;
     }

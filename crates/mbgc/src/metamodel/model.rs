@@ -300,6 +300,16 @@ pub struct DataSource {
     /// Finished runs without a value of some response (NaN), left out.
     #[serde(default)]
     pub no_value_rows: usize,
+    /// Finished runs that did not come to rest (`settled` false), left out.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub unsettled_rows: usize,
+    /// Finished runs outside the space's constraints, left out.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub outside_rows: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// A global metamodel: one readable equation per response of a calibration experiment, valid over
@@ -344,6 +354,15 @@ pub struct Metamodel {
     /// material values): the model describes runs at these values only.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub constants: Vec<Constant>,
+    /// The space's constraints its training runs were kept inside (`ced_pp <= 0.01*E_p`), as
+    /// written: beyond them the experiment did not measure, so the model does not hold there.
+    /// Set with [`Metamodel::set_constraints`].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<String>,
+    /// `constraints` over the inputs: `(input index, coefficient)` terms and the constant (the
+    /// model's constants folded in).
+    #[serde(skip)]
+    pub(super) constraint_terms: Vec<(Vec<(usize, f64)>, f64)>,
 }
 
 /// A parameter held at one value in every training run.
@@ -454,7 +473,96 @@ impl Metamodel {
             }
         }
         m.check_names_and_domains(&file)?;
+        let mut m = m;
+        let texts = std::mem::take(&mut m.constraints);
+        m.set_constraints(&texts, &file)?;
         Ok(m)
+    }
+
+    /// Sets the constraints the model holds inside (linear inequalities between its inputs and
+    /// constants, see [`Constraint`](crate::constraint::Constraint)); errors name `source`.
+    pub fn set_constraints(&mut self, texts: &[String], source: &str) -> Result<()> {
+        let mut parsed = Vec::new();
+        for (i, text) in texts.iter().enumerate() {
+            let field = format!("constraints[{i}]");
+            let c = crate::constraint::Constraint::parse(text, source, &field)?;
+            let mut terms = Vec::new();
+            let mut constant = c.constant;
+            for (n, coef) in &c.terms {
+                if let Some(k) = self.inputs.iter().position(|i| &i.name == n) {
+                    terms.push((k, *coef));
+                } else if let Some(k) = self.constants.iter().find(|k| &k.name == n) {
+                    constant += coef * k.value;
+                } else {
+                    return Err(Error::input(
+                        source,
+                        field,
+                        format!("\"{n}\" is neither an input nor a constant of the model"),
+                    ));
+                }
+            }
+            parsed.push((terms, constant));
+        }
+        self.constraints = texts.to_vec();
+        self.constraint_terms = parsed;
+        Ok(())
+    }
+
+    /// How far inputs `x` (model order) lie outside the model's constraints: the sum over the
+    /// violated ones of the squared violation relative to the size of its terms (0 inside; a
+    /// ratio limit such as `ced_pp <= 0.01*E_p` exceeded by 10 % counts about 0.0023).
+    pub fn constraint_excess(&self, x: &[f64]) -> f64 {
+        self.constraint_terms
+            .iter()
+            .map(|(terms, constant)| {
+                let g = terms.iter().map(|(k, c)| c * x[*k]).sum::<f64>() + constant;
+                let size =
+                    terms.iter().map(|(k, c)| (c * x[*k]).abs()).sum::<f64>() + constant.abs();
+                if g.is_nan() {
+                    f64::INFINITY
+                } else if g > 0.0 {
+                    (g / size.max(f64::MIN_POSITIVE)).powi(2)
+                } else {
+                    0.0
+                }
+            })
+            .sum()
+    }
+
+    /// [`Metamodel::constraint_excess`] and its gradient over the inputs.
+    pub fn constraint_excess_with_gradient(&self, x: &[f64]) -> (f64, Vec<f64>) {
+        let mut grad = vec![0.0; x.len()];
+        let mut total = 0.0;
+        for (terms, constant) in &self.constraint_terms {
+            let g = terms.iter().map(|(k, c)| c * x[*k]).sum::<f64>() + constant;
+            if g.is_nan() {
+                total = f64::INFINITY;
+                continue;
+            }
+            if g <= 0.0 {
+                continue;
+            }
+            let size = (terms.iter().map(|(k, c)| (c * x[*k]).abs()).sum::<f64>() + constant.abs())
+                .max(f64::MIN_POSITIVE);
+            let h = g / size;
+            total += h * h;
+            for (k, c) in terms {
+                let dsize = c * (c * x[*k]).signum();
+                grad[*k] += 2.0 * h * (c / size - g * dsize / (size * size));
+            }
+        }
+        (total, grad)
+    }
+
+    /// The first constraint that inputs `x` violate, as written.
+    pub fn violated_constraint(&self, x: &[f64]) -> Option<&str> {
+        self.constraint_terms
+            .iter()
+            .zip(&self.constraints)
+            .find(|((terms, constant), _)| {
+                terms.iter().map(|(k, c)| c * x[*k]).sum::<f64>() + constant > 1e-9
+            })
+            .map(|(_, t)| t.as_str())
     }
 
     /// A hand-edited or foreign model file must still mean one thing: every input and response

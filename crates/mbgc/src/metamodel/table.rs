@@ -19,6 +19,9 @@ pub struct Columns {
     /// Finished campaign runs left out because a requested column is `NaN`: the experiment
     /// measured nothing there (a shear box whose material ran out flat has no flank).
     pub no_value: usize,
+    /// Finished campaign runs left out because they did not meet the experiment's rest or
+    /// steady-state criterion (`settled` false): what they hold was not measured at rest.
+    pub unsettled: usize,
 }
 
 /// Reads the columns `names` (every value must be a finite number). If the table has a `status`
@@ -72,6 +75,8 @@ fn read(path: &Path, names: &[String], first_response: usize, keep_nan: bool) ->
     let mut records = Vec::new();
     let mut skipped = 0;
     let mut no_value = 0;
+    let mut unsettled = 0;
+    let settled = header.iter().position(|h| h == "settled");
     for rec in rdr.records() {
         let rec = rec.map_err(|e| csv_error(&file, e))?;
         let line = rec.position().map_or(0, |p| p.line());
@@ -92,6 +97,10 @@ fn read(path: &Path, names: &[String], first_response: usize, keep_nan: bool) ->
                 skipped += 1;
                 continue;
             }
+        }
+        if status.is_some() && !keep_nan && settled.and_then(|k| rec.get(k)) == Some("false") {
+            unsettled += 1;
+            continue;
         }
         if status.is_some()
             && !keep_nan
@@ -118,5 +127,6 @@ fn read(path: &Path, names: &[String], first_response: usize, keep_nan: bool) ->
         records,
         skipped,
         no_value,
+        unsettled,
     })
 }

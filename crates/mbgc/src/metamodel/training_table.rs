@@ -24,6 +24,8 @@ pub struct TrainingTable {
     pub skipped_rows: usize,
     /// Finished campaign runs left out because a response was `NaN` (nothing was measured).
     pub no_value_rows: usize,
+    /// Finished campaign runs left out because they did not come to rest (`settled` false).
+    pub unsettled_rows: usize,
     /// The campaign's sidecar (experiment, constants set with `--set`), when there is one.
     pub campaign: Option<Meta>,
 }
@@ -72,6 +74,7 @@ impl TrainingTable {
             model_class: None,
             skipped_rows: 0,
             no_value_rows: 0,
+            unsettled_rows: 0,
             campaign: None,
         })
     }
@@ -100,8 +103,36 @@ impl TrainingTable {
             model_class,
             skipped_rows: cols.skipped,
             no_value_rows: cols.no_value,
+            unsettled_rows: cols.unsettled,
             campaign: Meta::read(path)?,
         })
+    }
+
+    /// The rows where `keep` is true, with the same source, fingerprint and sidecar.
+    pub fn retain_rows(&self, keep: &[bool]) -> TrainingTable {
+        assert_eq!(keep.len(), self.rows(), "one flag per row");
+        let pick = |v: &Vec<f64>| -> Vec<f64> {
+            v.iter()
+                .zip(keep)
+                .filter(|(_, k)| **k)
+                .map(|(x, _)| *x)
+                .collect()
+        };
+        TrainingTable {
+            columns: self
+                .columns
+                .iter()
+                .map(|(n, v)| (n.clone(), pick(v)))
+                .collect(),
+            model_class: self.model_class.as_ref().map(|m| {
+                m.iter()
+                    .zip(keep)
+                    .filter(|(_, k)| **k)
+                    .map(|(x, _)| x.clone())
+                    .collect()
+            }),
+            ..self.clone()
+        }
     }
 
     /// Rows in the table.
@@ -129,5 +160,35 @@ impl TrainingTable {
                     ),
                 )
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_campaign_table_leaves_out_failed_unmeasured_and_unsettled_runs() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        std::fs::write(
+            &path,
+            "run_id,row,status,x,f,settled,error\n\
+             a,0,done,0.1,1.0,true,\n\
+             b,1,done,0.2,2.0,false,\n\
+             c,2,failed,0.3,NaN,false,boom\n\
+             d,3,done,0.4,NaN,true,\n\
+             e,4,done,0.5,5.0,true,\n",
+        )
+        .unwrap();
+        let t = TrainingTable::read_csv(&path, &["x".into()], &["f".into()]).unwrap();
+        assert_eq!(t.column("x").unwrap(), [0.1, 0.5]);
+        assert_eq!(
+            (t.skipped_rows, t.no_value_rows, t.unsettled_rows),
+            (1, 1, 1)
+        );
+        let kept = t.retain_rows(&[false, true]);
+        assert_eq!(kept.column("f").unwrap(), [5.0]);
+        assert_eq!(kept.source, t.source);
     }
 }

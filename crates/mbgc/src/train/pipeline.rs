@@ -364,11 +364,34 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
                 );
             }
         }
+        // Rows outside the space's constraints are not run (nor fitted): the model is valid
+        // inside them only, and a calibration is kept there.
+        let outside = outside_rows(&space, &p);
+        let inside: Option<std::collections::HashSet<String>> = (!outside.is_empty()).then(|| {
+            p.selected()
+                .filter(|r| !outside.contains(&r.run_id))
+                .map(|r| r.run_id.clone())
+                .collect()
+        });
+        if !outside.is_empty() {
+            observer.note(
+                TrainStage::Simulate,
+                &format!(
+                    "{} ({what}): {} of {} design rows lie outside the space's constraints ({}): \
+                     not run",
+                    table.display(),
+                    outside.len(),
+                    p.rows.len(),
+                    constraint_texts(&space)
+                ),
+            );
+        }
         let r = run_campaign(
             experiment.as_ref(),
             &p,
             &CampaignOptions {
                 observer: observer.campaign(table),
+                only: inside,
                 ..CampaignOptions::new((*table).clone(), req.threads)
             },
         )?;
@@ -385,13 +408,13 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             ),
         );
         if req.shard.is_none() {
-            let st = crate::campaign::status(table, Some(design))?;
-            if st.remaining.unwrap_or(0) > 0 {
-                incomplete.push(format!(
-                    "{}: {} rows missing",
-                    table.display(),
-                    st.remaining.unwrap_or(0)
-                ));
+            let present = table_run_ids(table)?;
+            let missing = p
+                .selected()
+                .filter(|r| !outside.contains(&r.run_id) && !present.contains(&r.run_id))
+                .count();
+            if missing > 0 {
+                incomplete.push(format!("{}: {missing} rows missing", table.display()));
             }
         }
     }
@@ -499,6 +522,44 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         figures,
         warnings: fitted.warnings,
     })
+}
+
+/// Run ids of the plan's rows that violate a constraint of the space.
+fn outside_rows(space: &Space, plan: &crate::campaign::Plan) -> std::collections::HashSet<String> {
+    if space.constraints.is_empty() {
+        return Default::default();
+    }
+    plan.rows
+        .iter()
+        .filter(|r| {
+            let x: Vec<f64> = space
+                .names()
+                .iter()
+                .map(|n| r.params.get(n).unwrap_or(f64::NAN))
+                .collect();
+            space.violated(&x).is_some()
+        })
+        .map(|r| r.run_id.clone())
+        .collect()
+}
+
+/// The constraints as written, for messages.
+fn constraint_texts(space: &Space) -> String {
+    space
+        .constraints
+        .iter()
+        .map(|c| c.text.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Run ids of the lines a campaign table holds (done or failed).
+fn table_run_ids(table: &Path) -> Result<std::collections::HashSet<String>> {
+    Ok(crate::campaign::read_table(table)?
+        .records
+        .into_iter()
+        .map(|(_, r)| r[0].to_string())
+        .collect())
 }
 
 /// A train resumed under a name whose designs were made for another space (a widened range, a
