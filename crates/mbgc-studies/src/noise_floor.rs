@@ -19,7 +19,8 @@ pub struct NoiseFloor {
 }
 
 /// Seed-to-seed spread inside the campaign's space: validation rows rerun with another seed
-/// (`training_data/<name>_replicates.csv`, same design rows), sd = rms difference / sqrt 2.
+/// (`training_data/<name>_replicates.csv`: some of the validation design's points, matched by
+/// their inputs), sd = rms difference / sqrt 2.
 /// `None` when the replicate table does not exist or shares no row with the validation table.
 pub fn replicate_noise(validation: &Path, replicates: &Path) -> anyhow::Result<Option<NoiseFloor>> {
     if !replicates.exists() {
@@ -47,8 +48,9 @@ pub fn replicate_noise(validation: &Path, replicates: &Path) -> anyhow::Result<O
     }))
 }
 
-/// `(row, shear_angle, bulk_density)` of every done run of a campaign table; NaN for a response
-/// the run did not measure.
+/// `(inputs, shear_angle, bulk_density)` of every done run of a campaign table, the inputs as
+/// written (the columns between `model_class` and the first response); NaN for a response the
+/// run did not measure.
 fn done_rows(path: &Path) -> anyhow::Result<Vec<(String, f64, f64)>> {
     let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
     let header = r.headers()?.clone();
@@ -58,8 +60,8 @@ fn done_rows(path: &Path) -> anyhow::Result<Vec<(String, f64, f64)>> {
             .position(|c| c == name)
             .with_context(|| format!("{}: no column {name}", path.display()))
     };
-    let (row, st, a, b) = (
-        col("row")?,
+    let (first, st, a, b) = (
+        col("model_class")? + 1,
         col("status")?,
         col("shear_angle")?,
         col("bulk_density")?,
@@ -69,8 +71,30 @@ fn done_rows(path: &Path) -> anyhow::Result<Vec<(String, f64, f64)>> {
     for rec in r.records() {
         let rec = rec.with_context(|| path.display().to_string())?;
         if &rec[st] == "done" {
-            out.push((rec[row].to_string(), num(&rec, a), num(&rec, b)));
+            let inputs: Vec<&str> = (first..a).map(|i| &rec[i]).collect();
+            out.push((inputs.join(","), num(&rec, a), num(&rec, b)));
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped replicates rerun the first 12 validation points; matched by their inputs,
+    /// they give the noise docs/metamodel.md reports.
+    #[test]
+    fn shipped_replicates_match_their_validation_rows_by_inputs() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let n = replicate_noise(
+            &root.join("training_data/shear_box_validation.csv"),
+            &root.join("training_data/shear_box_replicates.csv"),
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!(n.points, 12);
+        assert!((n.angle_sd - 1.06).abs() < 0.005, "{}", n.angle_sd);
+        assert!((n.bulk_rel_sd - 0.0026).abs() < 0.00005, "{}", n.bulk_rel_sd);
+    }
 }
