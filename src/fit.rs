@@ -89,6 +89,11 @@ pub struct FitArgs {
     /// A separate table (same columns) never trained on: its metrics are saved per response.
     #[arg(long, value_name = "CSV")]
     pub validation: Option<PathBuf>,
+    /// Fit only what the data add to this model's equations (for the responses it predicts):
+    /// the saved equation is its equation plus the fitted correction. Its inputs must be among
+    /// --inputs.
+    #[arg(long, value_name = "MODEL.json")]
+    pub correct: Option<PathBuf>,
     /// Standard output holds one JSON object (equations and metrics); text goes to standard
     /// error.
     #[arg(long)]
@@ -154,6 +159,9 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     if let Some(s) = &a.space {
         inputs.push(("--space", s));
     }
+    if let Some(m) = &a.correct {
+        inputs.push(("--correct", m));
+    }
     refuse_overwriting_inputs("--out", &a.out, &inputs)?;
     // Values the engine would silently bend: 0 generations ran one, an infinite parsimony
     // made every tree equal.
@@ -201,7 +209,18 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     settings.model_class = a.model_class;
     settings.similarity = match &a.similarity {
         Some(name) => {
-            let sim = similarity_of(name, a.model_class)?;
+            // The groups depend on the effects (cohesion adds C_pp and C_pw): the class given,
+            // else the space's, else the campaign's that made the table.
+            let class = match a
+                .model_class
+                .or_else(|| settings.space.as_ref().and_then(|s| s.model_class))
+            {
+                Some(c) => Some(c),
+                None => mbgc::campaign::Meta::read(&a.data)?
+                    .map(|m| mbgc::dem::contact::ModelClass::parse(&m.model_class))
+                    .transpose()?,
+            };
+            let sim = similarity_of(name, class)?;
             // A group whose inputs the space all fixes is a constant, not a fitting variable.
             Some(match &settings.space {
                 Some(space) => {
@@ -215,6 +234,12 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
     // Checked before any file is read, as the settings would be checked inside the fit.
     settings.check()?;
     let table = TrainingTable::read_csv(&a.data, &a.inputs, &a.targets)?;
+    settings.extends = a
+        .correct
+        .as_deref()
+        .map(mbgc::metamodel::Metamodel::load)
+        .transpose()?
+        .map(Box::new);
     settings.validation = a
         .validation
         .as_deref()

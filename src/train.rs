@@ -56,6 +56,10 @@ pub struct TrainArgs {
     /// are copied into --out-dir, not rerun; only the new rows are simulated.
     #[arg(long, value_name = "NAME|MODEL.json", conflicts_with = "shard")]
     pub extends: Option<String>,
+    /// With --extends: fit only what the new runs add to the extended model's equations (the
+    /// saved equation is its equation plus the fitted correction) instead of refitting whole.
+    #[arg(long, requires = "extends")]
+    pub correction: bool,
     /// Stop after the simulate stage.
     #[arg(long)]
     pub no_fit: bool,
@@ -124,6 +128,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         responses: a.responses.clone(),
         no_similarity: a.no_similarity,
         extends: a.extends.clone(),
+        correction: a.correction,
         no_fit: a.no_fit,
         partial: a.partial,
         figures: true,

@@ -95,6 +95,10 @@ mod tests {
         .unwrap();
         assert_eq!(n.points, 12);
         assert!((n.angle_sd - 1.06).abs() < 0.005, "{}", n.angle_sd);
-        assert!((n.bulk_rel_sd - 0.0026).abs() < 0.00005, "{}", n.bulk_rel_sd);
+        assert!(
+            (n.bulk_rel_sd - 0.0026).abs() < 0.00005,
+            "{}",
+            n.bulk_rel_sd
+        );
     }
 }

@@ -98,6 +98,32 @@ impl Monomial {
         out
     }
 
+    /// Postfix nodes computing the monomial as a plain product and quotient, then times its
+    /// coefficient: exact where a factor is zero (a cohesion off), which [`Monomial::program`]'s
+    /// logarithm is not. `None` unless every power is +-1.
+    pub fn product_program(&self, var: &impl Fn(&str) -> u16) -> Option<Vec<Node>> {
+        if self.powers.is_empty() || self.powers.iter().any(|(_, p)| p.abs() != 1.0) {
+            return None;
+        }
+        let mut out = Vec::new();
+        match self.powers.iter().position(|(_, p)| *p > 0.0) {
+            Some(k) => out.push(Node::Var(var(&self.powers[k].0))),
+            None => out.push(Node::Const(1.0)),
+        }
+        let first = self.powers.iter().position(|(_, p)| *p > 0.0);
+        for (k, (n, p)) in self.powers.iter().enumerate() {
+            if Some(k) == first {
+                continue;
+            }
+            out.push(Node::Var(var(n)));
+            out.push(if *p > 0.0 { Node::Mul } else { Node::Div });
+        }
+        if self.coefficient != 1.0 {
+            out.extend([Node::Const(self.coefficient), Node::Mul]);
+        }
+        Some(out)
+    }
+
     /// Postfix nodes computing the monomial itself: the plain product for powers of +-1 and a
     /// coefficient of 1, else `exp(ln ...)`.
     pub fn program(&self, var: &impl Fn(&str) -> u16) -> Vec<Node> {

@@ -199,8 +199,64 @@ fn scaling(
     x_phys: &[Vec<f64>],
 ) -> Result<Scaling> {
     let transforms = transforms(settings, absorbed)?;
+    let n = table.rows();
+    // A group is fitted in its logarithm, unless it reaches zero (a cohesion switched off on
+    // the effect-off face): then linearly, over its range.
+    let mut group_transforms = Vec::new();
+    for g in settings.similarity.iter().flat_map(|s| &s.groups) {
+        let col: Vec<f64> = (0..n)
+            .map(|r| {
+                g.monomial
+                    .value(|name| x_phys[var_of(settings, name) as usize][r])
+            })
+            .collect();
+        let transform = if col.iter().any(|v| *v <= 0.0) {
+            let p = g
+                .monomial
+                .product_program(&|name| var_of(settings, name))
+                .ok_or_else(|| {
+                    Error::input(
+                        &table.source,
+                        format!("group {}", g.name),
+                        format!(
+                            "{} = {} reaches 0, so it is fitted linearly, which needs powers \
+                             of +-1",
+                            g.name,
+                            g.monomial.text()
+                        ),
+                    )
+                })?;
+            let [lo, hi] = range(&eval_program(&p, x_phys));
+            Transform::Linear {
+                offset: lo,
+                width: if hi > lo { hi - lo } else { 1.0 },
+            }
+        } else {
+            // The log of the group as the saved equation computes it (a sum of logs): its
+            // smallest value is the offset, so that the scaled group is exactly 0 there, not
+            // -1e-16 (which would make sqrt of it NaN at a training row of the saved model).
+            let [lo, hi] = range(&ln_group(settings, &g.monomial, x_phys));
+            Transform::Log {
+                offset: lo,
+                width: if hi > lo { hi - lo } else { 1.0 },
+            }
+        };
+        group_transforms.push((transform, col));
+    }
+    let in_log_group = |name: &str| {
+        settings
+            .similarity
+            .iter()
+            .flat_map(|s| &s.groups)
+            .zip(&group_transforms)
+            .any(|(g, (t, _))| {
+                matches!(t, Transform::Log { .. })
+                    && g.monomial.powers.iter().any(|(n, _)| n == name)
+            })
+    };
     for (k, t) in transforms.iter().enumerate() {
-        let logged = matches!(t, Transform::Log { .. }) || absorbed.contains(&settings.inputs[k]);
+        let logged = matches!(t, Transform::Log { .. })
+            || (absorbed.contains(&settings.inputs[k]) && in_log_group(&settings.inputs[k]));
         if logged {
             if let Some(v) = x_phys[k].iter().find(|v| **v <= 0.0) {
                 return Err(Error::input(
@@ -232,26 +288,15 @@ fn scaling(
             }
         })
         .collect();
-    let n = table.rows();
     let mut groups: Vec<GroupDomain> = Vec::new();
     let mut group_cols: Vec<Vec<f64>> = Vec::new();
-    for g in settings.similarity.iter().flat_map(|s| &s.groups) {
-        let col: Vec<f64> = (0..n)
-            .map(|r| {
-                g.monomial
-                    .value(|name| x_phys[var_of(settings, name) as usize][r])
-            })
-            .collect();
+    for (g, (transform, col)) in settings
+        .similarity
+        .iter()
+        .flat_map(|s| &s.groups)
+        .zip(group_transforms)
+    {
         let domain = range(&col);
-        // The log of the group as the saved equation computes it (a sum of logs): its smallest
-        // value is the offset, so that the scaled group is exactly 0 there, not -1e-16 (which
-        // would make sqrt of it NaN at a training row of the saved model).
-        let ln = ln_group(settings, &g.monomial, x_phys);
-        let [lo, hi] = range(&ln);
-        let transform = Transform::Log {
-            offset: lo,
-            width: if hi > lo { hi - lo } else { 1.0 },
-        };
         group_cols.push(scaled_group(settings, &g.monomial, &transform, x_phys));
         groups.push(GroupDomain {
             group: g.clone(),
@@ -306,13 +351,29 @@ fn scaled_group(
     t: &Transform,
     x_phys: &[Vec<f64>],
 ) -> Vec<f64> {
-    let Transform::Log { offset, width } = *t else {
-        unreachable!("groups are log-scaled")
-    };
-    ln_group(settings, m, x_phys)
-        .into_iter()
-        .map(|l| (l - offset) / width)
-        .collect()
+    match *t {
+        Transform::Log { offset, width } => ln_group(settings, m, x_phys)
+            .into_iter()
+            .map(|l| (l - offset) / width)
+            .collect(),
+        Transform::Linear { offset, width } => {
+            let p = m
+                .product_program(&|name| var_of(settings, name))
+                .expect("a linear group has powers of +-1 (checked in scaling)");
+            eval_program(&p, x_phys)
+                .into_iter()
+                .map(|v| (v - offset) / width)
+                .collect()
+        }
+        Transform::Identity => unreachable!("groups are scaled"),
+    }
+}
+
+/// A program's value on every row of the physical inputs.
+fn eval_program(p: &[gp::Node], x_phys: &[Vec<f64>]) -> Vec<f64> {
+    let mut out = vec![0.0; x_phys.first().map_or(0, Vec::len)];
+    gp::eval::Evaluator::new().eval(p, x_phys, &mut out);
+    out
 }
 
 impl Scaling {
@@ -333,10 +394,22 @@ impl Scaling {
                 }
                 gp::Node::Var(j) => {
                     let g = &self.groups[j as usize - self.gp_inputs.len()];
-                    let Transform::Log { offset, width } = g.transform else {
-                        unreachable!("groups are log-scaled")
+                    let (offset, width) = match g.transform {
+                        Transform::Log { offset, width } => {
+                            out.extend(g.group.monomial.ln_program(&var_of));
+                            (offset, width)
+                        }
+                        Transform::Linear { offset, width } => {
+                            out.extend(
+                                g.group
+                                    .monomial
+                                    .product_program(&var_of)
+                                    .expect("a linear group has powers of +-1"),
+                            );
+                            (offset, width)
+                        }
+                        Transform::Identity => unreachable!("groups are scaled"),
                     };
-                    out.extend(g.group.monomial.ln_program(&var_of));
                     out.extend([
                         gp::Node::Const(offset),
                         gp::Node::Sub,
@@ -416,12 +489,46 @@ fn fit_response(
     let n_in = settings.inputs.len();
     let scaled = settings.similarity.as_ref().and_then(|s| s.scaled(target));
     let factor = scaled.map(|s| &s.factor);
+    // An extended model's equation for this response, over this fit's inputs: GP fits what the
+    // data add to it.
+    let base = match settings.extends.as_deref() {
+        Some(b) => match b.responses.iter().position(|r| r.name == target) {
+            Some(k) => Some(super::rebase::rebase_program(b, k, &scaling.inputs)?),
+            None => None,
+        },
+        None => None,
+    };
+    let base_pred: Option<Vec<f64>> = base.as_ref().map(|p| {
+        let (_, out) = predict(p, &Dataset::new(scaling.xt.clone(), vec![0.0; n]));
+        out
+    });
+    if let Some(r) = base_pred
+        .as_ref()
+        .and_then(|b| b.iter().position(|v| !v.is_finite()))
+    {
+        return Err(Error::input(
+            &table.source,
+            format!("row {}", r + 1),
+            format!(
+                "a row where the extended model's {target} is finite (it is not: the row lies                  outside where that equation holds)"
+            ),
+        ));
+    }
+    let residual = |r: usize| y[r] - base_pred.as_ref().map_or(0.0, |b| b[r]);
     // The response GP fits: divided by its factor when the similarity has one.
     let y_fit: Vec<f64> = match factor {
         Some(f) => (0..n)
-            .map(|r| y[r] / f.value(|name| x_phys[var_of(settings, name) as usize][r]))
+            .map(|r| residual(r) / f.value(|name| x_phys[var_of(settings, name) as usize][r]))
             .collect(),
-        None => y.to_vec(),
+        None => (0..n).map(residual).collect(),
+    };
+    let compose = |p: &[gp::Node]| {
+        let mut out = scaling.compose(settings, p, factor);
+        if let Some(b) = &base {
+            out.extend(b.iter().copied());
+            out.push(gp::Node::Add);
+        }
+        out
     };
     let train = Dataset::new(
         scaling.xt.iter().map(|c| pick(c, rows.train)).collect(),
@@ -453,7 +560,7 @@ fn fit_response(
         .iter()
         .enumerate()
         .map(|(i, e)| {
-            let program = scaling.compose(settings, &e.program, factor);
+            let program = compose(&e.program);
             let test_r2 = (test.rows() > 0)
                 .then(|| {
                     let (ok, out) = predict(&program, &test);
@@ -471,7 +578,7 @@ fn fit_response(
         })
         .collect();
     let best = res.best();
-    let program = scaling.compose(settings, &best.program, factor);
+    let program = compose(&best.program);
     let (train_ok, train_pred) = predict(&program, &train);
     if !train_ok {
         let bad = train_pred.iter().filter(|v| !v.is_finite()).count();
@@ -527,7 +634,14 @@ fn fit_response(
         }
     });
     let grouped = settings.similarity.as_ref().map(|_| GroupedEquation {
-        fitted: scaled.map_or_else(|| target.to_string(), |s| s.fitted.clone()),
+        fitted: {
+            let fitted = scaled.map_or_else(|| target.to_string(), |s| s.fitted.clone());
+            if base.is_some() {
+                format!("{fitted} beyond the extended model's")
+            } else {
+                fitted
+            }
+        },
         equation: expr::infix(
             &expr::Expr::from_postfix(&best.program),
             &scaling.gp_symbols,
@@ -964,6 +1078,113 @@ mod tests {
     /// A table held at one rho and one d (as the shipped campaign is), whose density is
     /// rho * (0.5 + 0.02 ln K) with K = E / (rho d): the fitted model must be right at other rho
     /// and d too, since it is written in K and rho.
+    #[test]
+    fn an_extension_fits_only_the_correction_and_keeps_the_old_equation() {
+        let dir = tempfile::tempdir().unwrap();
+        let (old, new) = (dir.path().join("old.csv"), dir.path().join("new.csv"));
+        let mut a = String::from("x,y\n");
+        let mut b = String::from("x,z,y\n");
+        for r in 0..40 {
+            let x = 1.0 + 0.05 * r as f64;
+            let z = (r as f64 * 0.618).fract();
+            a.push_str(&format!("{x},{}\n", 3.0 + 2.0 * x));
+            b.push_str(&format!("{x},{z},{}\n", 3.0 + 2.0 * x + 5.0 * z * x));
+        }
+        std::fs::write(&old, a).unwrap();
+        std::fs::write(&new, b).unwrap();
+        let config = gp::Config {
+            population: 300,
+            generations: 10,
+            ..gp::Config::default()
+        };
+        let t = |p: &std::path::Path, inputs: &[&str]| {
+            let inputs: Vec<String> = inputs.iter().map(|s| s.to_string()).collect();
+            TrainingTable::read_csv(p, &inputs, &["y".into()]).unwrap()
+        };
+        let base = fit(
+            &t(&old, &["x"]),
+            &FitSettings::new(vec!["x".into()], vec!["y".into()])
+                .test_fraction(0.0)
+                .config(config.clone()),
+            |_, _| {},
+        )
+        .unwrap()
+        .model;
+        let mut settings = FitSettings::new(vec!["x".into(), "z".into()], vec!["y".into()])
+            .test_fraction(0.0)
+            .config(config);
+        settings.extends = Some(Box::new(base.clone()));
+        let m = fit(&t(&new, &["x", "z"]), &settings, |_, _| {})
+            .unwrap()
+            .model;
+        let y = &m.responses[0];
+        assert!(y.train.r2 > 0.99999, "{:?} {}", y.train, y.equation);
+        for x in [1.1, 2.3] {
+            let got = m.predict_point(y, &[x, 0.7]);
+            assert!((got - (3.0 + 2.0 * x + 3.5 * x)).abs() < 1e-3, "{got}");
+        }
+        // A fit whose inputs lack one the old equation reads is refused.
+        let mut settings = FitSettings::new(vec!["z".into()], vec!["y".into()]).test_fraction(0.0);
+        settings.extends = Some(Box::new(base));
+        let e = fit(&t(&new, &["z"]), &settings, |_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("reads x"), "{e}");
+    }
+
+    #[test]
+    fn a_group_that_reaches_zero_is_fitted_linearly_and_holds_at_other_sizes() {
+        // y = 10 + 0.5 C with C = 0.1 ced / (rho d), ced from 0 (cohesion off) up.
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("t.csv");
+        let mut text = String::from("ced,rho,d,y\n");
+        for r in 0..40 {
+            let ced = 500.0 * r as f64;
+            text.push_str(&format!(
+                "{ced},2000,4,{}\n",
+                10.0 + 0.5 * 0.1 * ced / 8000.0
+            ));
+        }
+        std::fs::write(&data, text).unwrap();
+        let similarity = Similarity {
+            groups: vec![Group {
+                name: "C".into(),
+                what: "cohesion".into(),
+                monomial: Monomial {
+                    coefficient: 0.1,
+                    powers: vec![
+                        ("ced".into(), 1.0),
+                        ("rho".into(), -1.0),
+                        ("d".into(), -1.0),
+                    ],
+                },
+            }],
+            scaled: vec![],
+        };
+        let inputs: Vec<String> = vec!["ced".into(), "rho".into(), "d".into()];
+        let targets: Vec<String> = vec!["y".into()];
+        let settings = FitSettings::new(inputs.clone(), targets.clone())
+            .test_fraction(0.0)
+            .config(gp::Config {
+                population: 300,
+                generations: 5,
+                ..gp::Config::default()
+            })
+            .similarity(similarity);
+        let table = TrainingTable::read_csv(&data, &inputs, &targets).unwrap();
+        let m = fit(&table, &settings, |_, _| {}).unwrap().model;
+        assert!(matches!(m.groups[0].transform, Transform::Linear { .. }));
+        assert_eq!(m.groups[0].domain[0], 0.0);
+        let y = &m.responses[0];
+        assert!(y.train.r2 > 0.999999, "{:?}", y.train);
+        // At another density and size, C decides: the same C, the same y, zero included.
+        for (ced, rho, d) in [(0.0, 1000.0, 1.0), (1e4, 2500.0, 2.0), (3e3, 500.0, 9.0)] {
+            let want = 10.0 + 0.05 * ced / (rho * d);
+            let got = m.predict_point(y, &[ced, rho, d]);
+            assert!((got - want).abs() < 1e-6 * want, "{got} {want}");
+        }
+    }
+
     #[test]
     fn a_fit_in_groups_extends_to_the_absorbed_inputs() {
         let dir = tempfile::tempdir().unwrap();

@@ -32,6 +32,10 @@ pub struct FitSettings {
     pub similarity: Option<Similarity>,
     /// Rows never trained on, scored as each response's `validation` metrics.
     pub validation: Option<TrainingTable>,
+    /// The model this fit extends (`train --extends`): for each response it also predicts, GP
+    /// fits only what the data add to it, and the saved equation is its equation plus the
+    /// fitted correction. Its inputs must be among `inputs`.
+    pub extends: Option<Box<super::Metamodel>>,
 }
 
 impl FitSettings {
@@ -47,6 +51,7 @@ impl FitSettings {
             model_class: None,
             similarity: None,
             validation: None,
+            extends: None,
         }
     }
 

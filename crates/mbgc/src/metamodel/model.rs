@@ -742,6 +742,8 @@ impl Metamodel {
     /// The inputs of `x` scaled to [0, 1] over the model's space (0.5 for an input the model
     /// does not scale, which the error model does not vary).
     fn unit(&self, x: &[f64]) -> Vec<f64> {
+        // The groups too: an input absorbed into them (E_p, ced_pp) acts only through them,
+        // and the error may grow with one (a strong cohesion is noisier).
         self.inputs
             .iter()
             .zip(x)
@@ -749,6 +751,11 @@ impl Metamodel {
                 Transform::Identity => 0.5,
                 t => t.apply(v),
             })
+            .chain(
+                self.groups
+                    .iter()
+                    .map(|g| g.transform.apply(self.group_value(&g.group, x))),
+            )
             .collect()
     }
 

@@ -97,6 +97,8 @@ pub struct TrainRequest {
     /// file (`<root>/models/<name>.json`, its tables and record under `<root>`: the shipped model,
     /// or any train's), with the same seed.
     pub extends: Option<String>,
+    /// With `extends`: fit only what the new runs add to the extended model's equations.
+    pub correction: bool,
     /// Stop after the simulate stage.
     pub no_fit: bool,
     /// Skip the simulate stage and fit the rows the tables hold now (a provisional model).
@@ -126,6 +128,7 @@ impl TrainRequest {
             responses: Vec::new(),
             no_similarity: false,
             extends: None,
+            correction: false,
             no_fit: false,
             partial: false,
             figures: true,
@@ -178,6 +181,11 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     if req.partial && (req.no_fit || req.shard.is_some()) {
         return Err(Error::invalid(
             "--partial fits the rows there are: it cannot be combined with --no-fit or --shard",
+        ));
+    }
+    if req.correction && req.extends.is_none() {
+        return Err(Error::invalid(
+            "--correction corrects the model given with --extends; none was",
         ));
     }
     if req.extends.is_some() && req.shard.is_some() {
@@ -486,6 +494,12 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         .space(space);
     fit_settings.model_class = class;
     fit_settings.similarity = similarity;
+    if req.correction {
+        let (old, _) = extension.as_ref().ok_or_else(|| {
+            Error::invalid("--correction corrects the model given with --extends; none was")
+        })?;
+        fit_settings.extends = Some(Box::new(Metamodel::load(&old.model)?));
+    }
     fit_settings.check()?;
     let table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
     if req.validation > 0 {
