@@ -3,9 +3,9 @@
 use clap::{Args, Subcommand};
 
 use mbgc_studies::{
-    dem_throughput, diagnose_report, gp_vs_gplearn, liggghts_backend, metamodel_benchmark,
-    metamodel_report, restitution, sampling_quality, sensitivity_report, shear_box_check,
-    shear_box_vs_liggghts,
+    cohesive_metamodel_report, dem_throughput, diagnose_report, gp_vs_gplearn, liggghts_backend,
+    metamodel_benchmark, metamodel_report, restitution, sampling_quality, sensitivity_report,
+    shear_box_check, shear_box_vs_liggghts,
 };
 
 #[derive(Debug, Args)]
@@ -34,6 +34,10 @@ pub enum BenchCommand {
     /// The shipped metamodel (docs/metamodel.md): space, campaign cost, validation against seed
     /// 004 and the noise floor, equations, Gravel 8/16 calibrated and validated in DEM.
     Metamodel(metamodel_report::Args),
+    /// docs/metamodel_sjkr.md: the shipped cohesive metamodel: what it extends, its space and
+    /// the limit where the shear box stops measuring, the cost of its new runs, its validation
+    /// on both faces against each one's replicate noise, beside the base model.
+    CohesiveMetamodel(cohesive_metamodel_report::Args),
     /// docs/metamodel_benchmark.md: mbgc's GP at several length limits against PyOperon at the
     /// same limits, a Gaussian process and a quadratic surface, on the shipped campaign's
     /// columns; validation RMSE against the replicate noise, equation length, fit time.
@@ -61,6 +65,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::ShearBoxCheck(b) => shear_box_check::run(b),
         BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
         BenchCommand::Metamodel(m) => metamodel_report::run(m),
+        BenchCommand::CohesiveMetamodel(m) => cohesive_metamodel_report::run(m),
         BenchCommand::Metamodels(m) => metamodel_benchmark::run(m),
         BenchCommand::Restitution(r) => restitution::run(r),
         BenchCommand::Diagnose(d) => diagnose_report::run(d),

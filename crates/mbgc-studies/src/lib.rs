@@ -10,6 +10,8 @@
 //! - [`gp_vs_gplearn`]: symbolic regression against gplearn on Feynman equations.
 //! - [`metamodel_report`]: the shipped metamodel, its cost and validation, the gravel calibrated
 //!   on it (docs/metamodel.md).
+//! - [`cohesive_metamodel_report`]: the shipped cohesive metamodel, its limit, cost and
+//!   validation on both faces (docs/metamodel_sjkr.md).
 //! - [`metamodel_benchmark`]: mbgc's GP against PyOperon, a Gaussian process and a quadratic
 //!   surface on the shipped campaign (docs/metamodel_benchmark.md); [`noise_floor`]: the
 //!   replicate noise both metamodel studies judge errors by.
@@ -23,6 +25,7 @@
 // The options' doc comments are `mbgc bench --help`'s text, written for the terminal (`<dir>`).
 #![allow(rustdoc::invalid_html_tags)]
 
+pub mod cohesive_metamodel_report;
 pub mod dem_scene;
 pub mod dem_throughput;
 pub mod diagnose_report;

@@ -658,7 +658,7 @@ fn partial_dependence_section(
     Ok(())
 }
 
-fn equation_section(w: &mut String, model: &Metamodel) {
+pub(crate) fn equation_section(w: &mut String, model: &Metamodel) {
     let _ = writeln!(
         w,
         "\n## The equations\n\nAs `mbgc export --format latex` writes them (tilde: the input \
