@@ -12,10 +12,10 @@ use anyhow::Context as _;
 
 use mbgc::error::write_atomic;
 use mbgc::metamodel::Metamodel;
-use mbgc::space::{Scale, Space};
+use mbgc::space::Space;
 use mbgc::train::{TrainPaths, TrainRecord};
 
-use crate::metamodel_report::equation_section;
+use crate::metamodel_report::{equation_section, parameter_table};
 use crate::noise_floor::{replicate_noise, NoiseFloor};
 
 /// The issue's budget of new runs, core-hours.
@@ -220,27 +220,11 @@ fn space_section(w: &mut String, space: &Space, record: &TrainRecord, train: &[R
         "\n## The space\n\n`{}` (its comments give the reasons for each range). The fit works \
          in the groups {}: E_p, E_w, rho_p, d50, ced_pp and ced_pw act only through them, so \
          the campaign holds rho_p and d50 at one value. A group that reaches zero (a cohesion \
-         switched off) is fitted linearly, the stiffnesses in their logarithm.\n\n\
-         | parameter | unit | range | scale | campaign | what |\n|---|---|---|---|---|---|",
+         switched off) is fitted linearly, the stiffnesses in their logarithm.\n",
         record.space,
         record.groups.join("; ")
     );
-    for p in &space.parameters {
-        let _ = writeln!(
-            w,
-            "| {} | {} | {} - {} | {} | {} | {} |",
-            p.name,
-            p.unit,
-            p.min,
-            p.max,
-            match p.scale {
-                Scale::Log => "log",
-                _ => "linear",
-            },
-            p.fixed.map_or("varied".into(), |v| format!("fixed at {v}")),
-            p.what
-        );
-    }
+    parameter_table(w, space);
     if space.constraints.is_empty() {
         return;
     }

@@ -200,10 +200,18 @@ fn space_section(w: &mut String, space: &Space, record: &TrainRecord) {
         "\n## The space\n\n`{}`; its comments give the reasons for each range. Without cohesion \
          E_p, E_w, rho_p and d50 act only through K_p = E_p / (rho_p g d50) and K_w (and the \
          bulk density is rho_p times a solid fraction), so the campaign holds rho_p and d50 at \
-         one value and varies E; the fit works in these groups ({}).\n\n\
-         | parameter | unit | range | scale | campaign | what |\n|---|---|---|---|---|---|",
+         one value and varies E; the fit works in these groups ({}).\n",
         record.space,
         record.groups.join("; ")
+    );
+    parameter_table(w, space);
+}
+
+/// The space's parameters as a Markdown table: unit, range, scale, campaign value, meaning.
+pub(crate) fn parameter_table(w: &mut String, space: &Space) {
+    let _ = writeln!(
+        w,
+        "| parameter | unit | range | scale | campaign | what |\n|---|---|---|---|---|---|"
     );
     for p in &space.parameters {
         let _ = writeln!(
