@@ -662,14 +662,40 @@ impl Metamodel {
         }
         for g in &self.groups {
             let [lo, hi] = g.domain;
-            if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
-                return Err(Error::input(
-                    file,
-                    format!("groups.{}.domain", g.group.name),
-                    format!(
-                        "[min, max] with 0 < min <= max (a log-scaled group), found [{lo}, {hi}]"
-                    ),
-                ));
+            let field = format!("groups.{}", g.group.name);
+            match g.transform {
+                Transform::Log { .. } => {
+                    if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+                        return Err(Error::input(
+                            file,
+                            format!("{field}.domain"),
+                            format!(
+                                "[min, max] with 0 < min <= max (a log-scaled group), found \
+                                 [{lo}, {hi}]"
+                            ),
+                        ));
+                    }
+                }
+                // A group that reaches zero (a cohesion off) is scaled linearly.
+                Transform::Linear { .. } => {
+                    if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
+                        return Err(Error::input(
+                            file,
+                            format!("{field}.domain"),
+                            format!(
+                                "[min, max] with 0 <= min <= max (a linearly scaled group), \
+                                 found [{lo}, {hi}]"
+                            ),
+                        ));
+                    }
+                }
+                Transform::Identity => {
+                    return Err(Error::input(
+                        file,
+                        format!("{field}.transform"),
+                        "a log or linear scaling (a group is fitted scaled), found identity",
+                    ))
+                }
             }
         }
         for (k, c) in self.constants.iter().enumerate() {
