@@ -216,9 +216,18 @@ pub fn run(a: &FitArgs) -> anyhow::Result<()> {
                 .or_else(|| settings.space.as_ref().and_then(|s| s.model_class))
             {
                 Some(c) => Some(c),
-                None => mbgc::campaign::Meta::read(&a.data)?
-                    .map(|m| mbgc::dem::contact::ModelClass::parse(&m.model_class))
-                    .transpose()?,
+                None => match mbgc::campaign::Meta::read(&a.data)? {
+                    // "-": an experiment without a contact law.
+                    Some(m) if m.model_class != "-" => Some(
+                        mbgc::dem::contact::ModelClass::parse(&m.model_class).map_err(|e| {
+                            anyhow::anyhow!(
+                                "{}: model_class: {e}",
+                                mbgc::campaign::meta_path(&a.data).display()
+                            )
+                        })?,
+                    ),
+                    _ => None,
+                },
             };
             let sim = similarity_of(name, class)?;
             // A group whose inputs the space all fixes is a constant, not a fitting variable.

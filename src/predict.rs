@@ -64,6 +64,11 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
                 d[0],
                 d[1]
             ));
+        } else if let Some(c) = model.violated_constraint(&x) {
+            outside.push(format!(
+                "line {}: outside the model's limit {c} (its training runs stayed inside)",
+                row + 2
+            ));
         } else if let Some((c, v)) = held
             .iter()
             .zip(held_cols)

@@ -531,3 +531,76 @@ fn constraints_limit_the_runs_the_fit_and_the_calibration() {
         assert!(y <= x + 1e-3 && x > 0.79, "{sol}");
     }
 }
+
+/// `--extends --correction`: the old equation is kept and a correction fitted on top.
+#[test]
+fn a_correction_keeps_the_extended_equation_and_adds_to_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("base.toml"), impact_space("hertz,mindlin", "")).unwrap();
+    std::fs::write(
+        d.join("rolling.toml"),
+        impact_space("hertz,mindlin,epsd2", "mu_r_pw = { min = 0, max = 0.3 }\n"),
+    )
+    .unwrap();
+    let train = |space: &str, name: &str, n: &str, v: &str, extra: &[&str]| {
+        let mut a = vec![
+            "train",
+            "--space",
+            space,
+            "--experiment",
+            "wall-impact",
+            "--name",
+            name,
+            "--n",
+            n,
+            "--validation",
+            v,
+            "--threads",
+            "1",
+            "--population",
+            "300",
+            "--generations",
+            "5",
+            "--select",
+            "best",
+        ];
+        a.extend_from_slice(extra);
+        ok(d, &a)
+    };
+    train("base.toml", "base", "12", "5", &[]);
+    // Refused without --extends.
+    let o = mbgc(
+        d,
+        &[
+            "train",
+            "--space",
+            "rolling.toml",
+            "--experiment",
+            "wall-impact",
+            "--n",
+            "20",
+            "--correction",
+        ],
+    );
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--extends"));
+    train(
+        "rolling.toml",
+        "rolling",
+        "20",
+        "8",
+        &["--extends", "base", "--correction"],
+    );
+    let read = |p: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join(p)).unwrap()).unwrap()
+    };
+    let (old, new) = (read("models/base.json"), read("models/rolling.json"));
+    for k in 0..2 {
+        let (o, n) = (
+            old["responses"][k]["equation"].as_str().unwrap(),
+            new["responses"][k]["equation"].as_str().unwrap(),
+        );
+        assert!(n.contains(o), "{n} does not hold {o}");
+    }
+}

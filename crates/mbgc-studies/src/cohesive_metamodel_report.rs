@@ -148,6 +148,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         Vec::new()
     };
     let base = record.extends.as_ref().map(|e| e.from.clone());
+    let correction = record.extends.as_ref().is_some_and(|e| e.correction);
 
     let mut w = String::new();
     let _ = writeln!(
@@ -162,8 +163,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         record.space,
         record.experiment,
         a.name,
-        base.as_ref()
-            .map_or(String::new(), |b| format!(" --extends {b}")),
+        base.as_ref().map_or(String::new(), |b| format!(
+            " --extends {b}{}",
+            if correction { " --correction" } else { "" }
+        )),
         record.n,
         record.validation,
         record.seed,
@@ -181,7 +184,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let _ = writeln!(
             w,
             "\nIt extends `{b}`: that model's runs are its rows at ced_pp = ced_pw = 0, copied, \
-             not rerun; only the cohesive rows ran."
+             not rerun; only the cohesive rows ran.{}",
+            if correction {
+                " Its equations are that model's plus a fitted correction (the sizes below \
+                 count both)."
+            } else {
+                ""
+            }
         );
     }
     space_section(&mut w, &space, &record, &train);

@@ -71,7 +71,11 @@ fn done_rows(path: &Path) -> anyhow::Result<Vec<(String, f64, f64)>> {
     for rec in r.records() {
         let rec = rec.with_context(|| path.display().to_string())?;
         if &rec[st] == "done" {
-            let inputs: Vec<&str> = (first..a).map(|i| &rec[i]).collect();
+            // The design's columns: a backend's name is not an input.
+            let inputs: Vec<&str> = (first..a)
+                .filter(|&i| &header[i] != "backend")
+                .map(|i| &rec[i])
+                .collect();
             out.push((inputs.join(","), num(&rec, a), num(&rec, b)));
         }
     }

@@ -16,10 +16,16 @@ pub struct Constraint {
 }
 
 impl Constraint {
-    /// Positive by how much the constraint is violated at `value(name)`.
+    /// Positive by how much the constraint is violated at `value(name)` (infinite where a value
+    /// is NaN).
     pub fn violation(&self, value: impl Fn(&str) -> f64) -> f64 {
         let g: f64 = self.terms.iter().map(|(n, c)| c * value(n)).sum::<f64>() + self.constant;
-        g.max(0.0)
+        // A missing value (NaN) cannot be shown to satisfy it.
+        if g.is_nan() {
+            f64::INFINITY
+        } else {
+            g.max(0.0)
+        }
     }
 }
 

@@ -194,6 +194,18 @@ pub fn run(
                 ),
             ));
         }
+        // Then the model's own limits: fixed values may leave no point inside them.
+        if let Some(c) = model.violated_constraint(&problem.full(&best.x)) {
+            return Err(Error::out_of_domain(
+                &material.source,
+                "fixed",
+                format!(
+                    "values that leave room inside the model's limit {c} (where its training \
+                     runs were), but even the best point lies beyond it; change the fixed \
+                     values or use a model trained there"
+                ),
+            ));
+        }
         let list: Vec<&str> = problem
             .constraints
             .iter()

@@ -210,6 +210,17 @@ fn scaling(
                     .value(|name| x_phys[var_of(settings, name) as usize][r])
             })
             .collect();
+        if let Some(v) = col.iter().find(|v| **v < 0.0 || v.is_nan()) {
+            return Err(Error::input(
+                &table.source,
+                format!("group {}", g.name),
+                format!(
+                    "{} = {} >= 0 on every row (a product of physical magnitudes), found {v}",
+                    g.name,
+                    g.monomial.text()
+                ),
+            ));
+        }
         let transform = if col.iter().any(|v| *v <= 0.0) {
             let p = g
                 .monomial
@@ -491,12 +502,25 @@ fn fit_response(
     let factor = scaled.map(|s| &s.factor);
     // An extended model's equation for this response, over this fit's inputs: GP fits what the
     // data add to it.
-    let base = match settings.extends.as_deref() {
+    let (base, base_size) = match settings.extends.as_deref() {
         Some(b) => match b.responses.iter().position(|r| r.name == target) {
-            Some(k) => Some(super::rebase::rebase_program(b, k, &scaling.inputs)?),
-            None => None,
+            Some(k) => (
+                Some(super::rebase::rebase_program(b, k, &scaling.inputs)?),
+                b.responses[k].size,
+            ),
+            None => {
+                return Err(Error::invalid(format!(
+                    "the extended model has no equation for {target} (it has: {}): a \
+                     correction needs one",
+                    b.responses
+                        .iter()
+                        .map(|r| r.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )))
+            }
         },
-        None => None,
+        None => (None, 0),
     };
     let base_pred: Option<Vec<f64>> = base.as_ref().map(|p| {
         let (_, out) = predict(p, &Dataset::new(scaling.xt.clone(), vec![0.0; n]));
@@ -508,9 +532,11 @@ fn fit_response(
     {
         return Err(Error::input(
             &table.source,
-            format!("row {}", r + 1),
+            format!("column {target}"),
             format!(
-                "a row where the extended model's {target} is finite (it is not: the row lies                  outside where that equation holds)"
+                "the extended model's {target} finite on every usable row (it is not on \
+                 usable row {}: the row lies outside where that equation holds)",
+                r + 1
             ),
         ));
     }
@@ -568,8 +594,14 @@ fn fit_response(
                 })
                 .flatten();
             FrontMember {
-                size: e.size,
-                train_r2: 1.0 - e.train_nmse,
+                size: e.size + base_size,
+                // Of the response, not of the correction GP saw.
+                train_r2: if base.is_some() {
+                    let (_, out) = predict(&program, &train);
+                    Metrics::of(&train.y, &out).r2
+                } else {
+                    1.0 - e.train_nmse
+                },
                 test_r2,
                 cv_r2: res.cv_nmse.as_ref().map(|cv| 1.0 - cv[i]),
                 equation: scaling.text(&program),
@@ -652,7 +684,7 @@ fn fit_response(
     let model = ResponseModel {
         name: target.to_string(),
         equation: scaling.text(&program),
-        size: best.size,
+        size: best.size + base_size,
         uses: gp::program::used_variables(&program)
             .into_iter()
             .map(|k| settings.inputs[k].clone())
@@ -891,7 +923,11 @@ pub fn fit(
         constraints: Vec::new(),
         constraint_terms: Vec::new(),
     };
-    model.set_constraints(&texts, "the space's [constraints]")?;
+    if let Some(space) = &settings.space {
+        model
+            .set_constraints(&texts, &space.source)
+            .map_err(|e| Error::invalid(format!("{e} (constraints.expr)")))?;
+    }
     model.data.outside_rows = outside;
     if outside > 0 {
         warnings.push(format!(

@@ -12,6 +12,11 @@ use mbgc_sr::Node;
 
 /// Nodes computing `old`'s variable from the new model's variable `k` with transform `new`.
 fn variable(k: u16, new: &Transform, old: &Transform) -> Vec<Node> {
+    // The same scaling (the same range in both spaces): the variable itself, so the old
+    // equation reads as it did.
+    if new == old {
+        return vec![Node::Var(k)];
+    }
     // The physical value x from the new variable v.
     let mut out = vec![Node::Var(k)];
     let log_of_x_ready = match *new {

@@ -98,7 +98,10 @@ fn read(path: &Path, names: &[String], first_response: usize, keep_nan: bool) ->
                 continue;
             }
         }
-        if status.is_some() && !keep_nan && settled.and_then(|k| rec.get(k)) == Some("false") {
+        if status.is_some()
+            && !keep_nan
+            && matches!(settled.and_then(|k| rec.get(k)), Some("false" | "0"))
+        {
             unsettled += 1;
             continue;
         }

@@ -336,10 +336,16 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
                     table.display()
                 )));
             }
-            // Over the whole design: a table written by shards records its own shard only.
-            let st = crate::campaign::status(table, None)?;
-            let rows = crate::sampling::design::Design::read(design, Some(&space))?.len();
-            let missing = rows.saturating_sub(st.done + st.failed);
+            // Over the whole design (a table written by shards records its own shard only),
+            // the rows outside the space's constraints excepted: they are never run.
+            let p = plan(experiment.as_ref(), design, *s, &settings, None)?;
+            let outside = outside_rows(&space, &p);
+            let present = table_run_ids(table)?;
+            let missing = p
+                .rows
+                .iter()
+                .filter(|r| !outside.contains(&r.run_id) && !present.contains(&r.run_id))
+                .count();
             observer.note(
                 TrainStage::Simulate,
                 &format!(
@@ -457,6 +463,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             from: req.extends.clone().unwrap_or_default(),
             added: e.added.clone(),
             off_face: e.off_face.clone(),
+            correction: req.correction,
         }),
         space_parameters: Some(space_parameters(&space)),
     };

@@ -187,6 +187,9 @@ pub struct ExtendsRecord {
     pub added: Vec<String>,
     /// Each added parameter at the value where the old runs lie.
     pub off_face: Vec<(String, f64)>,
+    /// Whether the fit was a correction of the extended model's equations (`--correction`).
+    #[serde(default)]
+    pub correction: bool,
 }
 
 #[cfg(test)]
