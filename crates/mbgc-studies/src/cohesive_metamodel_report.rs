@@ -97,7 +97,7 @@ fn read_runs(path: &Path) -> anyhow::Result<Vec<Run>> {
     for rec in r.records() {
         let rec = rec.with_context(|| path.display().to_string())?;
         out.push(Run {
-            copied: rec[warnings].starts_with("copied from"),
+            copied: rec[warnings].contains("copied from ") && rec[warnings].contains(", run by "),
             done: &rec[status] == "done",
             settled: &rec[settled] == "true",
             wall_s: num(&rec, wall),
