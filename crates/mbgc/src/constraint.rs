@@ -126,7 +126,7 @@ fn linear(side: &str, file: &str, field: &str) -> Result<(Vec<(String, f64)>, f6
             _ => return Err(bad("expected a number or a parameter name".into())),
         };
         match term {
-            (Some(n), coef) if crate::space::is_identifier(&n) => terms.push((n, sign * coef)),
+            (Some(n), coef) if is_identifier(&n) => terms.push((n, sign * coef)),
             (Some(n), _) => return Err(bad(format!("\"{n}\" is not a parameter name"))),
             (None, v) => constant += sign * v,
         }
@@ -190,4 +190,11 @@ impl Constraint {
             constant,
         })
     }
+}
+
+/// Parameter and response names become CSV headers and equation variables.
+pub fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }

@@ -19,6 +19,7 @@ use std::path::Path;
 use serde::de::IgnoredAny;
 use serde::Deserialize;
 
+pub use crate::constraint::is_identifier;
 use crate::constraint::Constraint;
 use crate::error::{from_toml, read_to_string, Entries, Error, Result};
 use crate::model_table::{refuse_inactive_parameters, ModelTable};
@@ -455,13 +456,6 @@ impl ParameterFile {
             what: self.what.unwrap_or_default(),
         })
     }
-}
-
-/// Parameter and response names become CSV headers and equation variables.
-pub fn is_identifier(s: &str) -> bool {
-    let mut chars = s.chars();
-    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic())
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 #[cfg(test)]

@@ -35,7 +35,7 @@ pub struct FitSettings {
     /// The model this fit extends (`train --extends`): for each response it also predicts, GP
     /// fits only what the data add to it, and the saved equation is its equation plus the
     /// fitted correction. Its inputs must be among `inputs`.
-    pub extends: Option<Box<super::Metamodel>>,
+    pub extends: Option<Box<super::model::Metamodel>>,
 }
 
 impl FitSettings {
