@@ -348,10 +348,7 @@ fn scaling(
 /// `ln(group)` per row, computed by the program the saved equation uses
 /// ([`Monomial::ln_program`]), so that a fit and its saved model see bit-identical values.
 fn ln_group(settings: &FitSettings, m: &Monomial, x_phys: &[Vec<f64>]) -> Vec<f64> {
-    let p = m.ln_program(&|name| var_of(settings, name));
-    let mut out = vec![0.0; x_phys.first().map_or(0, Vec::len)];
-    gp::eval::Evaluator::new().eval(&p, x_phys, &mut out);
-    out
+    eval_program(&m.ln_program(&|name| var_of(settings, name)), x_phys)
 }
 
 /// The scaled group GP sees, `(ln(group) - offset) / width`, with the same operations as the
