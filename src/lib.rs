@@ -20,6 +20,7 @@ pub mod effects;
 pub mod export;
 pub mod fit;
 pub mod metrics;
+pub mod noise;
 pub mod predict;
 pub mod psd;
 pub mod sample;
@@ -63,6 +64,8 @@ pub enum Command {
     Train(train::TrainArgs),
     /// Evaluate a saved metamodel on the rows of a table.
     Predict(predict::PredictArgs),
+    /// Record a model's DEM noise, measured by replicate runs of its validation design.
+    Noise(noise::NoiseArgs),
     /// Write a saved metamodel's equations as Rust, LaTeX or sympy.
     Export(export::ExportArgs),
     /// Calibrate a material: invert a saved metamodel for its measurements.
@@ -90,6 +93,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Fit(a) => fit::run(&a),
         Command::Train(a) => train::run(&a),
         Command::Predict(a) => predict::run(&a),
+        Command::Noise(a) => noise::run(&a),
         Command::Export(a) => export::run(&a),
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Validate(a) => validate::run(&a),

@@ -365,3 +365,96 @@ fn the_model_error_is_taken_at_the_best_fit_where_the_model_knows_it() {
         assert!((r.sigma - r.sd.hypot(2.0)).abs() < 1e-9, "{r:?}");
     }
 }
+
+/// A model that misses the material by 2 of its own errors at every size (the usual way a
+/// metamodel is wrong: systematically, where the material lies), and measurements four times
+/// more precise than the model. Taken as independent, the miss would be averaged over the five
+/// samples and the intervals would exclude the truth; shared between the samples (the default
+/// correlation), it is one miss of the model and the truth stays inside.
+#[test]
+fn a_systematic_model_miss_is_shared_between_samples_and_the_truth_stays_inside() {
+    let error = [("shear_angle", 1.0), ("bulk_density", 4.0)];
+    let biased = Surrogate::from_fn(
+        "biased.json",
+        ModelClass::parse("hertz,mindlin,epsd2").unwrap(),
+        Some("shear-box"),
+        &[
+            ("mu_pp", [0.05, 1.0]),
+            ("mu_r_pp", [0.0, 1.0]),
+            ("d50", [1.0, 30.0]),
+        ],
+        &[("mu_r_pw", 0.0)],
+        &error,
+        |r, x| truth(x[0], x[1], 0.0, x[2])[r] + [2.0, -8.0][r],
+    )
+    // Its validation error is all the equations' (no DEM noise in it): all of it is shared.
+    .with_noise(&[0.0, 0.0]);
+    let (mu, mu_r) = (0.5, 0.3);
+    let text = |rho: &str| {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut t = format!(
+            "name = \"biased model\"\n{rho}\n[model]\nclass = \"hertz,mindlin,epsd2\"\n\
+             [fixed]\nmu_r_pw = 0\n"
+        );
+        for d in [1.5, 3.0, 6.0, 12.0, 24.0] {
+            let y = truth(mu, mu_r, 0.0, d);
+            let sd = [0.25, 1.0];
+            let n: Vec<f64> = sd
+                .iter()
+                .map(|s| Normal::new(0.0, *s).unwrap().sample(&mut rng))
+                .collect();
+            t += &format!(
+                "[[sample]]\nname = \"{d} mm\"\nexperiment = \"shear-box\"\n\
+                 psd = {{ d50_mm = {d}, sigma_ln = 0.1 }}\n\
+                 measured.shear_angle = {{ value = {}, sd = {} }}\n\
+                 measured.bulk_density = {{ value = {}, sd = {} }}\n",
+                y[0] + n[0],
+                sd[0],
+                y[1] + n[1],
+                sd[1]
+            );
+        }
+        MeasurementSet::from_toml_str(&t, "biased.toml").unwrap()
+    };
+    let opts = Options {
+        samples: 1000,
+        ..Options::default()
+    };
+    let covers = |d: &Diagnosis| {
+        let p = &d.base.parameters;
+        let inside = |n: &str, v: f64| {
+            let q = p.iter().find(|q| q.name == n).unwrap();
+            q.q05 <= v && v <= q.q95
+        };
+        inside("mu_pp", mu) && inside("mu_r_pp", mu_r)
+    };
+    let shared = text("");
+    assert_eq!(shared.model_error_correlation, 0.8);
+    let d = diagnose(&shared, std::slice::from_ref(&biased), &opts).unwrap();
+    assert!(covers(&d), "{:?}", d.base.parameters);
+    assert!(d.p_value > 0.01, "{}", d.verdict);
+    let independent = text("model_error_correlation = 0");
+    let d = diagnose(&independent, std::slice::from_ref(&biased), &opts).unwrap();
+    assert!(!covers(&d), "{:?}", d.base.parameters);
+    // A model that does not know its noise cannot say how much of its error is its equations':
+    // it shares none, and says so.
+    let mut unknown = biased;
+    unknown.noise = vec![None, None];
+    let d = diagnose(&shared, std::slice::from_ref(&unknown), &opts).unwrap();
+    assert!(!covers(&d), "{:?}", d.base.parameters);
+    assert!(
+        d.base
+            .notes
+            .iter()
+            .any(|n| n.contains("records no replicate noise")),
+        "{:?}",
+        d.base.notes
+    );
+    let e = error_of(&format!(
+        "model_error_correlation = 1\n[model]\nclass = \"hertz,mindlin,epsd2\"\n{SAMPLE}"
+    ));
+    assert!(
+        e.contains("set.toml") && e.contains("model_error_correlation") && e.contains("[0, 1)"),
+        "{e}"
+    );
+}

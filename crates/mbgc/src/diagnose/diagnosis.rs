@@ -108,7 +108,7 @@ pub struct ClassFit {
     pub models: Vec<String>,
     /// The searched parameters of the joint fit, in the joint problem's order.
     pub parameters: Vec<Parameter>,
-    /// Sum of squared standardised residuals z at the best fit.
+    /// chi^2 at the best fit: `r^T C^-1 r`, C the covariance of measured minus predicted.
     pub chi2: f64,
     /// Degrees of freedom: measurements minus searched parameters (may be <= 0).
     pub dof: isize,
@@ -344,12 +344,13 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
             z: r.z,
         })
         .collect();
-    let tests = structure::tests(&points);
+    let tests = structure::tests(&points, j.z_correlation());
     let structured = structure::significant(&tests, opts.alpha)
         .into_iter()
         .cloned()
         .collect();
-    let chi2: f64 = residuals.iter().map(|r| r.z * r.z).sum();
+    // With the model error shared between samples, chi^2 is r^T C^-1 r, not the sum of z^2.
+    let chi2 = j.chi2_of(&pred);
     let dof = j.dof();
     Ok(ClassFit {
         class: j.class.to_string(),

@@ -8,6 +8,7 @@
 
 use rayon::prelude::*;
 
+use super::covariance::{Covariance, Entry};
 use super::measurements::{owns, CandidateSettings, MeasurementSet};
 use super::surrogate::Surrogate;
 use crate::calibrate::problem::same_value;
@@ -32,12 +33,25 @@ pub struct Target {
     pub model_error: f64,
     /// Whether the set gives the model error (`[model_error]`), which then stays as given.
     error_given: bool,
+    /// The DEM noise in `model_error` (the model's replicate sd), when known.
+    noise: Option<f64>,
 }
 
 impl Target {
     /// Standard deviation of measured minus predicted: measurement and model error together.
     pub fn sigma(&self) -> f64 {
         self.sd.hypot(self.model_error)
+    }
+
+    /// The part of the model error that is the equations' own miss (shared between samples):
+    /// what exceeds the replicate noise; all of it when the set gives the error, none when the
+    /// model does not know its noise.
+    pub fn shared_error(&self) -> f64 {
+        if self.error_given {
+            return self.model_error;
+        }
+        self.noise
+            .map_or(0.0, |n| (self.model_error.powi(2) - n * n).max(0.0).sqrt())
     }
 }
 
@@ -69,6 +83,10 @@ pub struct Joint<'s> {
     pub targets: Vec<Target>,
     /// Which model each sample uses, and what was decided on the user's behalf.
     pub notes: Vec<String>,
+    /// Correlation of one model's error for one response between samples.
+    pub correlation: f64,
+    /// The residuals' covariance, refactored when the model errors change.
+    cov: Covariance,
 }
 
 impl Joint<'_> {
@@ -411,6 +429,7 @@ impl<'s> Joint<'s> {
                     sd: r.sd,
                     model_error,
                     error_given: given.is_some(),
+                    noise: m.noise[model_response],
                 });
             }
             rows.push(row);
@@ -423,6 +442,21 @@ impl<'s> Joint<'s> {
                 return Err(format!(
                     "fixed.{n}: no model used for {class} reads it (a value that would do nothing)"
                 ));
+            }
+        }
+        if set.model_error_correlation > 0.0 {
+            let mut seen: Vec<usize> = Vec::new();
+            for t in &targets {
+                let mi = rows[t.sample].model;
+                let shared_by = rows.iter().filter(|r| r.model == mi).count();
+                if t.noise.is_none() && !t.error_given && shared_by > 1 && !seen.contains(&mi) {
+                    seen.push(mi);
+                    notes.push(format!(
+                        "{} records no replicate noise (`mbgc noise`): its error is taken as \
+                         independent between the samples",
+                        surrogates[mi].label
+                    ));
+                }
             }
         }
         // Shared first, per-sample next, the candidate's parameters last: the same order in every
@@ -453,6 +487,8 @@ impl<'s> Joint<'s> {
         let effect_params = (0..names.len())
             .filter(|&j| effect.is_some_and(|e| owns(e, &names[j])))
             .collect();
+        let correlation = set.model_error_correlation;
+        let cov = covariance(&rows, &targets, correlation);
         Ok(Joint {
             class,
             effect,
@@ -464,6 +500,8 @@ impl<'s> Joint<'s> {
             rows,
             targets,
             notes,
+            correlation,
+            cov,
         })
     }
 
@@ -510,33 +548,41 @@ impl<'s> Joint<'s> {
             .collect()
     }
 
+    fn misses(&self, predicted: &[f64]) -> Vec<f64> {
+        self.targets
+            .iter()
+            .zip(predicted)
+            .map(|(t, p)| t.value - p)
+            .collect()
+    }
+
+    /// `r^T C^-1 r` of the predictions, with `C` the residuals' covariance (measurement sd and
+    /// the model error shared between samples); NaN where a prediction is not finite.
+    pub fn chi2_of(&self, predicted: &[f64]) -> f64 {
+        if predicted.iter().any(|p| !p.is_finite()) {
+            return f64::NAN;
+        }
+        self.cov.chi2(&self.misses(predicted))
+    }
+
     /// chi^2 plus the penalty of groups outside their range; NaN where a prediction is not finite.
     pub fn chi2(&self, theta: &[f64]) -> f64 {
         let (p, outside) = self.predictions(theta);
-        let c: f64 = self
-            .targets
-            .iter()
-            .zip(p)
-            .map(|(t, p)| ((t.value - p) / t.sigma()).powi(2))
-            .sum();
-        c + PENALTY * outside
+        self.chi2_of(&p) + PENALTY * outside
     }
 
     /// Gaussian log-likelihood of the measurements at `theta` (-inf outside a group's range).
     pub fn ln_likelihood(&self, theta: &[f64]) -> f64 {
         let (p, outside) = self.predictions(theta);
-        if outside > 0.0 {
+        if outside > 0.0 || p.iter().any(|p| !p.is_finite()) {
             return f64::NEG_INFINITY;
         }
-        let mut l = 0.0;
-        for (t, p) in self.targets.iter().zip(p) {
-            if !p.is_finite() {
-                return f64::NEG_INFINITY;
-            }
-            let s = t.sigma();
-            l -= 0.5 * (((t.value - p) / s).powi(2) + (2.0 * std::f64::consts::PI * s * s).ln());
-        }
-        l
+        self.cov.ln_likelihood(&self.misses(&p))
+    }
+
+    /// Correlation of the z-scores `(measured - predicted) / sigma` between targets.
+    pub fn z_correlation(&self) -> &[Vec<f64>] {
+        self.cov.z_correlation()
     }
 
     /// Sets each model error (unless the set gives it) to the model's own error at `theta`, for
@@ -558,6 +604,9 @@ impl<'s> Joint<'s> {
                     changed = true;
                 }
             }
+        }
+        if changed {
+            self.cov = covariance(&self.rows, &self.targets, self.correlation);
         }
         changed
     }
@@ -619,6 +668,19 @@ impl<'s> Joint<'s> {
             draws: r.samples,
         })
     }
+}
+
+fn covariance(rows: &[Row], targets: &[Target], rho: f64) -> Covariance {
+    let entries: Vec<Entry> = targets
+        .iter()
+        .map(|t| Entry {
+            sd: t.sd,
+            model_error: t.model_error,
+            shared: t.shared_error(),
+            group: (rows[t.sample].model, t.model_response),
+        })
+        .collect();
+    Covariance::new(&entries, rho)
 }
 
 /// The best joint fit found by the L-BFGS starts.

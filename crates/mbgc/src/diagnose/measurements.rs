@@ -4,6 +4,7 @@
 //!
 //! ```toml
 //! name = "Limestone, four sieve fractions"
+//! model_error_correlation = 0.8      # optional: share of a model's error common to the samples
 //! [model]
 //! class = "hertz,mindlin,epsd2"      # the model class the measurements are compared with
 //! [fixed]                            # known for every sample
@@ -80,6 +81,9 @@ pub struct MeasurementSet {
     /// Per response, the metamodel's own standard error in the response's unit (default: its
     /// validation RMSE).
     pub model_error: Vec<(String, f64)>,
+    /// Correlation, in [0, 1), of one model's error for one response between the samples
+    /// (default [`super::covariance::DEFAULT_CORRELATION`]).
+    pub model_error_correlation: f64,
     /// Settings of candidate effects given in the file.
     pub candidates: Vec<CandidateSettings>,
     /// The samples, in file order.
@@ -99,6 +103,7 @@ struct SetFile {
     per_sample: Vec<String>,
     #[serde(default)]
     model_error: Entries<f64>,
+    model_error_correlation: Option<f64>,
     #[serde(default)]
     candidates: Entries<CandidateFile>,
     #[serde(default)]
@@ -244,6 +249,22 @@ impl SetFile {
             }
             model_error.push((r, v));
         }
+        let model_error_correlation = match self.model_error_correlation {
+            None => super::covariance::DEFAULT_CORRELATION,
+            Some(v) => {
+                let v = finite(v, file, "model_error_correlation")?;
+                if !(0.0..1.0).contains(&v) {
+                    return Err(Error::input(
+                        file,
+                        "model_error_correlation",
+                        format!(
+                            "a correlation in [0, 1) of the model's error between samples, got {v}"
+                        ),
+                    ));
+                }
+                v
+            }
+        };
         let mut candidates = Vec::new();
         for (effect, c) in self.candidates.0 {
             let field = format!("candidates.{effect}");
@@ -383,6 +404,7 @@ impl SetFile {
             bounds,
             per_sample: self.per_sample,
             model_error,
+            model_error_correlation,
             candidates,
             samples,
         })

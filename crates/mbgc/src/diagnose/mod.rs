@@ -2,11 +2,13 @@
 //!
 //! [`measurements`] reads a measurement set (several samples of one material); [`surrogate`]
 //! wraps each model file; [`joint`] builds the joint problem of the set under a model class
-//! (the set's own, or with one candidate effect switched on) and fits it; [`structure`] tests the
+//! (the set's own, or with one candidate effect switched on) and fits it, with [`covariance`]
+//! sharing each model's error between the samples; [`structure`] tests the
 //! residuals for offsets and trends; [`diagnosis`] runs it all and ranks the candidates;
 //! [`build`] trains the local models it lacks around the material.
 
 pub mod build;
+pub mod covariance;
 pub mod diagnosis;
 pub mod joint;
 pub mod measurements;

@@ -2,10 +2,13 @@
 //! amount everywhere) and a trend against what varies between samples (ln d50, sigma_ln), with
 //! their significance, and an offset per experiment when there are several.
 //!
-//! Under a correct model the standardised residuals are independent with unit variance, so a
-//! weighted mean has standard error `1 / sqrt(n)` and a least-squares slope against `u` has
-//! `1 / sqrt(sum (u - mean u)^2)`; the tests are z-tests on these (two-sided). The searched
-//! parameters take up part of the scatter, so the tests are conservative.
+//! Under a correct model the standardised residuals have unit variance and the correlation `R`
+//! the model error shared between samples gives them (`covariance.rs`); an estimate `w^T z`
+//! (a mean, or a least-squares slope against `u`) then has standard error `sqrt(w^T R w)`:
+//! `1 / sqrt(n)` for a mean and `1 / sqrt(sum (u - mean u)^2)` for a slope when the residuals are
+//! independent. A shared model error makes an offset cheap (the model may have made it) and
+//! leaves a trend's standard error nearly as it was. The tests are z-tests on these
+//! (two-sided); the searched parameters take up part of the scatter, so they are conservative.
 
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -36,8 +39,8 @@ pub struct Test {
     pub against: Option<String>,
     /// Mean residual, or the slope per unit of `against`, in standardised units.
     pub estimate: f64,
-    /// Standard error of the estimate under a correct model: 1 / sqrt(n) for an offset,
-    /// 1 / sqrt(sum (u - mean u)^2) for a trend.
+    /// Standard error of the estimate under a correct model: `sqrt(w^T R w)`, 1 / sqrt(n) for
+    /// an offset and 1 / sqrt(sum (u - mean u)^2) for a trend of independent residuals.
     pub se: f64,
     /// Two-sided p-value under the hypothesis of no structure.
     pub p: f64,
@@ -51,10 +54,21 @@ pub fn two_sided(z: f64) -> f64 {
     2.0 * (1.0 - n.cdf(z.abs()))
 }
 
-fn offset(of: String, z: &[f64]) -> Test {
-    let n = z.len() as f64;
-    let mean = z.iter().sum::<f64>() / n;
-    let se = 1.0 / n.sqrt();
+/// `sqrt(w^T R w)` over the points `idx` with weights `w`.
+fn standard_error(idx: &[usize], w: &[f64], corr: &[Vec<f64>]) -> f64 {
+    let mut v = 0.0;
+    for (a, &i) in idx.iter().enumerate() {
+        for (b, &j) in idx.iter().enumerate() {
+            v += w[a] * w[b] * corr[i][j];
+        }
+    }
+    v.max(0.0).sqrt()
+}
+
+fn offset(of: String, idx: &[usize], points: &[Point], corr: &[Vec<f64>]) -> Test {
+    let n = idx.len() as f64;
+    let mean = idx.iter().map(|&i| points[i].z).sum::<f64>() / n;
+    let se = standard_error(idx, &vec![1.0 / n; idx.len()], corr);
     Test {
         kind: "offset".into(),
         of,
@@ -62,12 +76,20 @@ fn offset(of: String, z: &[f64]) -> Test {
         estimate: mean,
         se,
         p: two_sided(mean / se),
-        points: z.len(),
+        points: idx.len(),
     }
 }
 
-/// Least-squares slope of `z` against `u`; `None` when `u` takes fewer than 3 distinct values.
-fn trend(of: &str, against: &str, u: &[f64], z: &[f64]) -> Option<Test> {
+/// Least-squares slope of `z` against `u` over the points `idx`; `None` when `u` takes fewer
+/// than 3 distinct values.
+fn trend(
+    of: &str,
+    against: &str,
+    idx: &[usize],
+    u: &[f64],
+    points: &[Point],
+    corr: &[Vec<f64>],
+) -> Option<Test> {
     let mut distinct: Vec<f64> = u.to_vec();
     distinct.sort_by(f64::total_cmp);
     distinct.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * a.abs().max(b.abs()));
@@ -76,11 +98,12 @@ fn trend(of: &str, against: &str, u: &[f64], z: &[f64]) -> Option<Test> {
     }
     let n = u.len() as f64;
     let mu = u.iter().sum::<f64>() / n;
-    let mz = z.iter().sum::<f64>() / n;
     let sxx: f64 = u.iter().map(|v| (v - mu).powi(2)).sum();
-    let sxz: f64 = u.iter().zip(z).map(|(v, z)| (v - mu) * (z - mz)).sum();
-    let slope = sxz / sxx;
-    let se = 1.0 / sxx.sqrt();
+    // The slope is w^T z with w = (u - mean u) / sxx (the weights sum to 0, so the mean of z
+    // drops out).
+    let w: Vec<f64> = u.iter().map(|v| (v - mu) / sxx).collect();
+    let slope: f64 = w.iter().zip(idx).map(|(w, &i)| w * points[i].z).sum();
+    let se = standard_error(idx, &w, corr);
     Some(Test {
         kind: "trend".into(),
         of: of.to_string(),
@@ -94,7 +117,8 @@ fn trend(of: &str, against: &str, u: &[f64], z: &[f64]) -> Option<Test> {
 
 /// Every test the points allow: per response an offset and trends against ln d50 and sigma_ln
 /// (where they take 3 or more values); per experiment an offset when there are several.
-pub fn tests(points: &[Point]) -> Vec<Test> {
+/// `corr` is the correlation of the points' z (unit diagonal), in point order.
+pub fn tests(points: &[Point], corr: &[Vec<f64>]) -> Vec<Test> {
     let mut responses: Vec<&str> = Vec::new();
     let mut experiments: Vec<&str> = Vec::new();
     for p in points {
@@ -107,9 +131,10 @@ pub fn tests(points: &[Point]) -> Vec<Test> {
     }
     let mut out = Vec::new();
     for r in responses {
-        let mine: Vec<&Point> = points.iter().filter(|p| p.response == r).collect();
-        let z: Vec<f64> = mine.iter().map(|p| p.z).collect();
-        out.push(offset(r.to_string(), &z));
+        let mine: Vec<usize> = (0..points.len())
+            .filter(|&i| points[i].response == r)
+            .collect();
+        out.push(offset(r.to_string(), &mine, points, corr));
         for (against, get) in [
             (
                 "ln d50",
@@ -117,28 +142,33 @@ pub fn tests(points: &[Point]) -> Vec<Test> {
             ),
             ("sigma_ln", |p: &Point| p.sigma_ln),
         ] {
-            let pairs: Vec<(f64, f64)> = mine
+            let pairs: Vec<(usize, f64)> = mine
                 .iter()
-                .filter_map(|p| get(p).map(|u| (u, p.z)))
+                .filter_map(|&i| get(&points[i]).map(|u| (i, u)))
                 .collect();
-            let u: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-            let zz: Vec<f64> = pairs.iter().map(|p| p.1).collect();
-            if let Some(t) = trend(r, against, &u, &zz) {
+            let idx: Vec<usize> = pairs.iter().map(|p| p.0).collect();
+            let u: Vec<f64> = pairs.iter().map(|p| p.1).collect();
+            if let Some(t) = trend(r, against, &idx, &u, points, corr) {
                 out.push(t);
             }
         }
     }
     if experiments.len() > 1 {
         for e in experiments {
-            let z: Vec<f64> = points
-                .iter()
-                .filter(|p| p.experiment == e)
-                .map(|p| p.z)
+            let idx: Vec<usize> = (0..points.len())
+                .filter(|&i| points[i].experiment == e)
                 .collect();
-            out.push(offset(format!("experiment {e}"), &z));
+            out.push(offset(format!("experiment {e}"), &idx, points, corr));
         }
     }
     out
+}
+
+/// The identity: the correlation of independent residuals.
+pub fn independent(n: usize) -> Vec<Vec<f64>> {
+    (0..n)
+        .map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect())
+        .collect()
 }
 
 /// The tests significant at family-wise level `alpha` (Bonferroni over all tests).
@@ -177,7 +207,7 @@ mod tests {
                 0.1
             }
         });
-        let t = tests(&pts);
+        let t = tests(&pts, &independent(pts.len()));
         let trend = t
             .iter()
             .find(|t| t.kind == "trend" && t.of == "shear_angle")
@@ -201,7 +231,7 @@ mod tests {
     #[test]
     fn the_same_miss_everywhere_is_an_offset_with_the_textbook_standard_error() {
         let pts = points(|_, i| if i < 4 { 3.0 } else { 0.0 });
-        let t = tests(&pts);
+        let t = tests(&pts, &independent(pts.len()));
         let off = t
             .iter()
             .find(|t| t.kind == "offset" && t.of == "shear_angle")
@@ -226,7 +256,7 @@ mod tests {
         let n = 2000;
         for _ in 0..n {
             let zs: Vec<f64> = (0..8).map(|_| StandardNormal.sample(&mut rng)).collect();
-            let t = tests(&points(|_, i| zs[i]));
+            let t = tests(&points(|_, i| zs[i]), &independent(8));
             let off = t
                 .iter()
                 .find(|t| t.kind == "offset" && t.of == "shear_angle")
@@ -242,5 +272,61 @@ mod tests {
             let rate = h as f64 / n as f64;
             assert!((0.035..0.065).contains(&rate), "false-alarm rate {rate}");
         }
+    }
+
+    /// Residuals sharing a model error (correlation 0.8 within a response): the offset test
+    /// keeps its nominal 5 % false-alarm rate only with the shared part in its standard error;
+    /// treated as independent it cries wolf six times as often.
+    #[test]
+    fn a_shared_model_error_is_not_taken_for_an_offset() {
+        let rho: f64 = 0.8;
+        let corr: Vec<Vec<f64>> = (0..8)
+            .map(|i| {
+                (0..8)
+                    .map(|j| {
+                        if i == j {
+                            1.0
+                        } else if (i < 4) == (j < 4) {
+                            rho
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let (mut with, mut without, mut trends) = (0usize, 0usize, 0usize);
+        let n = 2000;
+        for _ in 0..n {
+            let shared: [f64; 2] = [
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+            ];
+            let zs: Vec<f64> = (0..8)
+                .map(|i| {
+                    let e: f64 = StandardNormal.sample(&mut rng);
+                    rho.sqrt() * shared[i / 4] + (1.0 - rho).sqrt() * e
+                })
+                .collect();
+            let pts = points(|_, i| zs[i]);
+            let find = |t: &[Test], kind: &str| {
+                t.iter()
+                    .find(|t| t.kind == kind && t.of == "shear_angle")
+                    .unwrap()
+                    .p
+            };
+            let t = tests(&pts, &corr);
+            with += usize::from(find(&t, "offset") < 0.05);
+            trends += usize::from(find(&t, "trend") < 0.05);
+            let t = tests(&pts, &independent(8));
+            without += usize::from(find(&t, "offset") < 0.05);
+        }
+        let rate = |h: usize| h as f64 / n as f64;
+        assert!((0.035..0.065).contains(&rate(with)), "{}", rate(with));
+        assert!((0.035..0.065).contains(&rate(trends)), "{}", rate(trends));
+        // var(mean z) is (1 + 3 rho) / 4 = 0.85, not 1/4: |z| > 1.96 / sqrt(3.4) about 29 % of
+        // the time.
+        assert!((0.22..0.36).contains(&rate(without)), "{}", rate(without));
     }
 }

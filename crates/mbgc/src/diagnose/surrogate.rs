@@ -35,6 +35,9 @@ pub struct Surrogate {
     pub responses: Vec<String>,
     /// The model's own error per response, in the response's unit (its validation RMSE).
     pub error: Vec<f64>,
+    /// The sd of one DEM run per response, where replicate runs measured it: the part of
+    /// `error` that is the validation data's noise, not the equations' miss.
+    pub noise: Vec<Option<f64>>,
     predict: Box<Predict>,
     /// The model's own error at a point, where it has an error model.
     error_at: Box<ErrorAt>,
@@ -81,6 +84,7 @@ impl Surrogate {
                 .map(|c| (c.name.clone(), c.value))
                 .collect(),
             responses: m.responses.iter().map(|r| r.name.clone()).collect(),
+            noise: m.responses.iter().map(|r| r.replicate_sd).collect(),
             error,
             predict: Box::new(move |r, x| mp.predict_point(&mp.responses[r], x)),
             error_at: Box::new(move |r, x| me.error_at(&me.responses[r], x)),
@@ -141,6 +145,7 @@ impl Surrogate {
             constants: constants.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
             responses: responses.iter().map(|(n, _)| n.to_string()).collect(),
             error: responses.iter().map(|(_, e)| *e).collect(),
+            noise: vec![None; responses.len()],
             predict: Box::new(f),
             error_at: Box::new(|_, _| None),
             outside: Box::new(|_| 0.0),
@@ -166,6 +171,12 @@ impl Surrogate {
         e: impl Fn(usize, &[f64]) -> Option<f64> + Send + Sync + 'static,
     ) -> Surrogate {
         self.error_at = Box::new(e);
+        self
+    }
+
+    /// The model with each response's replicate noise known (see [`Surrogate::noise`]).
+    pub fn with_noise(mut self, noise: &[f64]) -> Surrogate {
+        self.noise = noise.iter().map(|&n| Some(n)).collect();
         self
     }
 

@@ -701,6 +701,7 @@ fn fit_response(
             .as_ref()
             .map(|v| Metrics::of(&v.observed, &v.predicted)),
         error_model: None,
+        replicate_sd: None,
     };
     let splits = ResponseSplits {
         response: target.to_string(),

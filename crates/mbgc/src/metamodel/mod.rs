@@ -8,6 +8,7 @@ mod build;
 pub mod error_model;
 mod fit_settings;
 pub mod model;
+pub mod noise;
 mod rebase;
 pub mod table;
 mod training_table;

@@ -252,6 +252,10 @@ pub struct ResponseModel {
     /// residuals ([`Metamodel::error_at`]); `None` without enough validation rows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error_model: Option<ErrorModel>,
+    /// The sd of one DEM run of this response at fixed inputs, from replicate runs (`mbgc
+    /// noise`): the part of the validation error that is the data's, not the equation's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replicate_sd: Option<f64>,
 }
 
 /// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
@@ -442,6 +446,15 @@ impl Metamodel {
             ));
         }
         for r in &m.responses {
+            if let Some(v) = r.replicate_sd {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(Error::input(
+                        &file,
+                        format!("responses.{}.replicate_sd", r.name),
+                        format!("a standard deviation >= 0 in the response's unit, got {v}"),
+                    ));
+                }
+            }
             let programs = std::iter::once(("program".to_string(), &r.program)).chain(
                 r.pareto_front
                     .iter()

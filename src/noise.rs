@@ -1,0 +1,73 @@
+//! `mbgc noise`: measure a model's DEM noise from replicate runs of its validation design and
+//! record it in a copy of the model, so that a diagnosis can tell the equations' miss (shared
+//! between the samples of a material) from the noise its validation error holds.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use mbgc::metamodel::noise::replicate_noise;
+use mbgc::metamodel::Metamodel;
+use mbgc::outputs::refuse_overwriting_inputs;
+use mbgc_output::{say, Output};
+
+#[derive(Debug, Args)]
+pub struct NoiseArgs {
+    /// Model file.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The model's validation table (a campaign table).
+    #[arg(long)]
+    pub validation: PathBuf,
+    /// Runs at inputs of validation runs, with another seed (a campaign table).
+    #[arg(long)]
+    pub replicates: PathBuf,
+    /// The model with each response's replicate sd recorded (JSON); never the model file itself.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Standard output holds one JSON object; text goes to standard error.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: &NoiseArgs) -> anyhow::Result<()> {
+    let out = Output::new(a.json);
+    refuse_overwriting_inputs(
+        "--out",
+        &a.out,
+        &[
+            ("--model", &a.model),
+            ("--validation", &a.validation),
+            ("--replicates", &a.replicates),
+        ],
+    )?;
+    let mut model = Metamodel::load(&a.model)?;
+    let responses: Vec<String> = model.responses.iter().map(|r| r.name.clone()).collect();
+    let noise = replicate_noise(
+        &a.validation,
+        &a.replicates,
+        &model.input_names(),
+        &responses,
+    )?;
+    say!(out, "| response | replicate sd | pairs | validation RMSE |");
+    say!(out, "|---|---|---|---|");
+    for (r, n) in model.responses.iter_mut().zip(&noise) {
+        r.replicate_sd = Some(n.sd);
+        say!(
+            out,
+            "| {} | {:.4} | {} | {} |",
+            n.response,
+            n.sd,
+            n.pairs,
+            r.validation
+                .map_or("-".to_string(), |v| format!("{:.4}", v.rmse))
+        );
+    }
+    model.save(&a.out)?;
+    say!(out, "wrote {}", a.out.display());
+    out.object(&serde_json::json!({
+        "out": a.out,
+        "noise": noise.iter().map(|n| serde_json::json!({
+            "response": n.response, "sd": n.sd, "pairs": n.pairs
+        })).collect::<Vec<_>>(),
+    }))
+}
