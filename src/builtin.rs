@@ -1,6 +1,7 @@
 //! What the `mbgc` binary carries with it, so that a newcomer's first command works from any
-//! directory: the shipped shear-box metamodel (the default of `--model`) and seed 004's Gravel
-//! 8/16 example with its sieve analysis. An explicit `--model` always wins; the example is used
+//! directory: the shipped shear-box metamodels (the default of `--model`: the base one for a
+//! calibration, with the cohesive one for a diagnosis) and seed 004's Gravel 8/16 example with
+//! its sieve analysis. An explicit `--model` always wins; the example is used
 //! only when its path, `examples/gravel.toml`, does not exist where the command runs, and the
 //! command says so.
 
@@ -13,6 +14,9 @@ use mbgc::psd::SieveData;
 /// Where the shipped model lives in the repository; the name it is reported under.
 pub const SHEAR_BOX_MODEL: &str = "models/shear_box.json";
 const SHEAR_BOX_JSON: &str = include_str!("../models/shear_box.json");
+/// The shipped cohesive shear-box model (class hertz,mindlin,epsd2,sjkr).
+pub const SHEAR_BOX_SJKR_MODEL: &str = "models/shear_box_sjkr.json";
+const SHEAR_BOX_SJKR_JSON: &str = include_str!("../models/shear_box_sjkr.json");
 
 /// The example material's path in the repository.
 pub const GRAVEL: &str = "examples/gravel.toml";
@@ -25,11 +29,32 @@ pub fn shear_box_model() -> mbgc::Result<Metamodel> {
     Metamodel::from_json_str(SHEAR_BOX_JSON, SHEAR_BOX_MODEL)
 }
 
+/// The shipped cohesive shear-box metamodel, as built into this binary.
+pub fn shear_box_sjkr_model() -> mbgc::Result<Metamodel> {
+    Metamodel::from_json_str(SHEAR_BOX_SJKR_JSON, SHEAR_BOX_SJKR_MODEL)
+}
+
 /// The models of `--model`: the files given, or the built-in shear-box model when none is.
 pub fn models(paths: &[std::path::PathBuf]) -> mbgc::Result<Vec<(Metamodel, String)>> {
     if paths.is_empty() {
         return Ok(vec![(shear_box_model()?, SHEAR_BOX_MODEL.to_string())]);
     }
+    load(paths)
+}
+
+/// The models of a diagnosis: the files given, or both built-in shear-box models (the base
+/// class and its cohesive extension, the candidate sjkr's model) when none is.
+pub fn diagnosis_models(paths: &[std::path::PathBuf]) -> mbgc::Result<Vec<(Metamodel, String)>> {
+    if paths.is_empty() {
+        return Ok(vec![
+            (shear_box_model()?, SHEAR_BOX_MODEL.to_string()),
+            (shear_box_sjkr_model()?, SHEAR_BOX_SJKR_MODEL.to_string()),
+        ]);
+    }
+    load(paths)
+}
+
+fn load(paths: &[std::path::PathBuf]) -> mbgc::Result<Vec<(Metamodel, String)>> {
     paths
         .iter()
         .map(|p| Ok((Metamodel::load(p)?, p.display().to_string())))
@@ -86,12 +111,18 @@ mod tests {
     }
 
     #[test]
-    fn the_built_in_model_is_the_shipped_file() {
+    fn the_built_in_models_are_the_shipped_files() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        let file = Metamodel::load(&root.join(SHEAR_BOX_MODEL)).unwrap();
-        assert_eq!(
-            serde_json::to_value(shear_box_model().unwrap()).unwrap(),
-            serde_json::to_value(file).unwrap()
-        );
+        for (path, built_in) in [
+            (SHEAR_BOX_MODEL, shear_box_model().unwrap()),
+            (SHEAR_BOX_SJKR_MODEL, shear_box_sjkr_model().unwrap()),
+        ] {
+            let file = Metamodel::load(&root.join(path)).unwrap();
+            assert_eq!(
+                serde_json::to_value(built_in).unwrap(),
+                serde_json::to_value(file).unwrap(),
+                "{path}"
+            );
+        }
     }
 }

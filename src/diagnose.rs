@@ -18,7 +18,8 @@ pub struct DiagnoseArgs {
     pub measurements: PathBuf,
     /// Metamodels: one of the set's class, and models of classes with a candidate effect (a
     /// model of a richer class also serves the poorer one, with the extra effect off)
-    /// [default: the shipped models/shear_box.json, built into mbgc].
+    /// [default: the shipped models/shear_box.json and its cohesive extension
+    /// models/shear_box_sjkr.json, built into mbgc].
     #[arg(long)]
     pub model: Vec<PathBuf>,
     /// L-BFGS starts of each joint fit.
@@ -94,7 +95,7 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     };
     let out = Output::new(a.json);
     let set = MeasurementSet::from_file(&a.measurements)?;
-    let mut models = crate::builtin::models(&a.model)?
+    let mut models = crate::builtin::diagnosis_models(&a.model)?
         .into_iter()
         .map(|(m, label)| Surrogate::from_model(m, &label))
         .collect::<mbgc::error::Result<Vec<_>>>()?;

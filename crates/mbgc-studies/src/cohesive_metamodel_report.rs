@@ -390,6 +390,11 @@ fn validation_section(
     let rows: Vec<&Run> = valid.iter().filter(inside).collect();
     let face: Vec<&Run> = rows.iter().copied().filter(|r| !r.cohesive()).collect();
     let cohesive: Vec<&Run> = rows.iter().copied().filter(|r| r.cohesive()).collect();
+    let gripping: Vec<&Run> = cohesive
+        .iter()
+        .copied()
+        .filter(|r| r.get("mu_pw") >= SLIDING_MU_PW)
+        .collect();
     let base_noise = match base {
         Some(b) => {
             let root = Path::new(b)
@@ -451,6 +456,7 @@ fn validation_section(
             base_noise.as_ref().map(|(n, _)| n.clone()),
         ),
         ("cohesive", &cohesive, own_noise.clone()),
+        (GRIPPING, &gripping, own_noise.clone()),
     ] {
         if runs.is_empty() {
             continue;
@@ -486,8 +492,46 @@ fn validation_section(
         valid.len() - rows.len(),
         valid.len()
     );
+    let sliding: Vec<&Run> = cohesive
+        .iter()
+        .copied()
+        .filter(|r| r.get("mu_pw") < SLIDING_MU_PW)
+        .collect();
+    if let (false, Some(k)) = (
+        sliding.is_empty(),
+        model.responses.iter().position(|r| r.name == "shear_angle"),
+    ) {
+        let _ = writeln!(
+            w,
+            "\nWhere the angle error comes from: the cohesive rows with a wall friction below \
+             {SLIDING_MU_PW}. On a nearly frictionless floor a cohesive bed can slide out of the \
+             box as a block, leaving a low flank, or be held by the walls' cohesion; which one \
+             happens turns on the balance of the particle and wall cohesions, a switch the \
+             equations smooth over:\n\n\
+             | mu_pw | ced_pp / E_p | ced_pw / ced_pp | angle measured | predicted |\n\
+             |---|---|---|---|---|"
+        );
+        for r in &sliding {
+            let x: Vec<f64> = model.input_names().iter().map(|n| r.get(n)).collect();
+            let _ = writeln!(
+                w,
+                "| {:.3} | {:.4} | {:.2} | {:.1} | {:.1} |",
+                r.get("mu_pw"),
+                r.get("ced_pp") / r.get("E_p"),
+                r.get("ced_pw") / r.get("ced_pp"),
+                r.angle,
+                model.predict_point(&model.responses[k], &x)
+            );
+        }
+    }
     Ok(())
 }
+
+/// Wall friction below which a cohesive bed may slide out of the shear box as a block.
+const SLIDING_MU_PW: f64 = 0.05;
+
+/// The rows judged without the sliding regime.
+const GRIPPING: &str = "cohesive, mu_pw >= 0.05";
 
 /// The model's name from its paths (`training_data/<name>_validation.csv`).
 fn paths_name(paths: &TrainPaths) -> String {

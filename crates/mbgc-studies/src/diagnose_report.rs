@@ -1,8 +1,10 @@
-//! `mbgc bench diagnose`: `docs/diagnose.md`, the diagnosis of five synthetic measurement sets
+//! `mbgc bench diagnose`: `docs/diagnose.md`, the diagnosis of nine synthetic measurement sets
 //! made with mbgc's own DEM (a hidden cohesion, a hidden rolling resistance, a control with no
-//! hidden effect, a weaker cohesion, and that with the rolling friction unknown), each from the
-//! measurement file to the error ladder across model versions, with figures and a check of the
-//! recovered strength against the truth the data were made with.
+//! hidden effect, a weaker cohesion, and that with the rolling friction unknown; then issue 35's
+//! control and three cohesions with both frictions unknown, on the shipped global models alone),
+//! each from the measurement file to the error ladder across model versions, with figures and a
+//! check of the recovered strength and the searched frictions against the truth the data were
+//! made with.
 
 use std::path::PathBuf;
 
@@ -37,6 +39,9 @@ struct Case {
     models: &'static [&'static str],
 }
 
+/// The frictions every set's material was made with (searched where the set does not fix them).
+const FRICTIONS: [(&str, f64); 2] = [("mu_pp", 0.5), ("mu_r_pp", 0.3)];
+
 /// The local models of the cohesion walk-through: version 1 (no cohesion) and version 2, made
 /// from it by `mbgc train --extends diagnose_local` (the guide's diagnosis chapter, docs/guide/src/diagnosis.md).
 const LOCAL: &[&str] = &[
@@ -48,7 +53,11 @@ const GLOBAL: &[&str] = &[
     "models/shear_box_cohesion_local.json",
 ];
 
-const CASES: [Case; 5] = [
+/// The shipped global models: the base class and its cohesive extension (`mbgc diagnose`'s
+/// default).
+const SHIPPED: &[&str] = &["models/shear_box.json", "models/shear_box_sjkr.json"];
+
+const CASES: [Case; 9] = [
     Case {
         file: "examples/measurements/hidden_cohesion_strong.toml",
         title: "Hidden cohesion in four sieve fractions",
@@ -79,6 +88,30 @@ const CASES: [Case; 5] = [
         truth: Some(("sjkr", "ced_pp", 1.5e4)),
         models: GLOBAL,
     },
+    Case {
+        file: "examples/measurements/issue35_control.toml",
+        title: "Shipped models, both frictions unknown: control",
+        truth: None,
+        models: SHIPPED,
+    },
+    Case {
+        file: "examples/measurements/issue35_ced1e4.toml",
+        title: "Shipped models, both frictions unknown: cohesion 1e4 J/m3",
+        truth: Some(("sjkr", "ced_pp", 1e4)),
+        models: SHIPPED,
+    },
+    Case {
+        file: "examples/measurements/issue35_ced2.5e4.toml",
+        title: "Shipped models, both frictions unknown: cohesion 2.5e4 J/m3",
+        truth: Some(("sjkr", "ced_pp", 2.5e4)),
+        models: SHIPPED,
+    },
+    Case {
+        file: "examples/measurements/issue35_ced4e4.toml",
+        title: "Shipped models, both frictions unknown: cohesion 4e4 J/m3",
+        truth: Some(("sjkr", "ced_pp", 4e4)),
+        models: SHIPPED,
+    },
 ];
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -88,7 +121,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         ..Options::default()
     };
     let mut summary = String::from(
-        "| case | class | chi^2/dof | p | structure | best candidate | chi^2/dof with it | fall | ln Bayes factor | truth | 90 % interval | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| case | class | chi^2/dof | p | structure | best candidate | chi^2/dof with it | fall | ln Bayes factor | truth | 90 % interval | searched frictions (truth: 90 % interval) | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut body = String::new();
     let base_dir = a.report.parent().unwrap_or(std::path::Path::new("."));
@@ -115,9 +148,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                     format!("{effect}: {name} = {v}"),
                     p.map_or("not evaluated".into(), |p| {
                         format!(
-                            "[{:.4}, {:.4}]: {}",
+                            "[{:.4}, {:.4}] (x{:.2}): {}",
                             p.q05,
                             p.q95,
+                            p.q95 / p.q05,
                             if p.q05 <= v && v <= p.q95 {
                                 "contains it"
                             } else {
@@ -129,8 +163,41 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             }
             (None, _) => ("none".into(), "-".into()),
         };
+        // The searched frictions in the fit of the class the data were made with: with the
+        // hidden effect, or the set's own for a control.
+        let made_with = match c.truth {
+            Some((effect, _, _)) => d
+                .extended
+                .iter()
+                .find(|f| f.effect.as_deref() == Some(effect)),
+            None => Some(&d.base),
+        };
+        let frictions = made_with.map_or("not evaluated".to_string(), |f| {
+            let t: Vec<String> = FRICTIONS
+                .iter()
+                .filter_map(|(n, v)| {
+                    f.parameters.iter().find(|p| p.name == *n).map(|p| {
+                        format!(
+                            "{n} {v}: [{:.3}, {:.3}] {}",
+                            p.q05,
+                            p.q95,
+                            if p.q05 <= *v && *v <= p.q95 {
+                                "contains it"
+                            } else {
+                                "misses it"
+                            }
+                        )
+                    })
+                })
+                .collect();
+            if t.is_empty() {
+                "none searched".into()
+            } else {
+                t.join("; ")
+            }
+        });
         summary += &format!(
-            "| {} | {} | {:.2} | {:.2e} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {:.2} | {:.2e} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             c.title,
             d.class,
             d.chi2_dof,
@@ -160,6 +227,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             best.map_or("-".into(), |b| format!("{:.1}", b.log_bayes_factor)),
             truth,
             interval,
+            frictions,
             d.verdict.split(':').next().unwrap_or("")
         );
         body += &format!(
@@ -185,7 +253,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     let text = format!(
-        "# Diagnosing a missing effect: five synthetic cases\n\n\
+        "# Diagnosing a missing effect: nine synthetic cases\n\n\
          Regenerate with\n\n```\ncargo run --release -- bench diagnose --report {}\n```\n\n\
          (seconds: no DEM; {} TMCMC samples per stage, seed {}).\n\n{}\n\n\
          ## Summary\n\n{summary}\n{body}",
@@ -211,9 +279,19 @@ runs but not in the class the file compares with. Cases 1 and 3-5 give each frac
 of three runs with sd = the pooled replicate sd / sqrt(3) (the replicate sd of one run is \
 1.8-1.9 deg and 2.8-5.3 kg/m3 here); case 2 gives one run per fraction with sd 1.06 deg and \
 3.8 kg/m3 (the replicate noise of docs/metamodel.md). The model error is each model's \
-validation RMSE; it holds one run's noise as well, so the chi^2 is conservative. A model of a \
-class with an extra effect serves the class without it where that effect is off (rolling \
-friction or cohesion 0).\n\n\
+validation RMSE (or its error model's value at the fit); it holds one run's noise as well, so \
+the chi^2 is conservative. Where a model records its replicate noise (the shipped ones do), the \
+part of its error beyond that noise is shared between the samples with correlation 0.8 (the \
+model misses one material alike at each size); the local models record none and share \
+nothing. A model of a class with an extra effect serves the class without it where that effect \
+is off (rolling friction or cohesion 0). The column `(xN)` is the ratio of the interval's ends.\n\n\
+Cases 6-9 (issue 35) are another material, E = 4.5 MPa, in five fractions of 1-16 mm (the \
+4e4 J/m3 set in four, 2-16 mm: at 1 mm nothing flows out of the box), with mu_pp and mu_r_pp \
+both unknown, made by `docs/data/diagnose/issue35/make_sets.sh` (seed 35, three runs per \
+fraction), and compared with the shipped global models alone (`mbgc diagnose`'s default: \
+`models/shear_box.json` and its cohesive extension `models/shear_box_sjkr.json`, \
+docs/metamodel_sjkr.md). Their truth is mu_pp 0.5 and mu_r_pp 0.3, checked in the fit of the \
+class the data were made with.\n\n\
 The models. Cases 1, 3 and 4 (rolling friction known, 0.3) use two versions of a local model \
 around the material, its known values fixed (recorded in the model files as constants). Version \
 1, `models/diagnose_local.json`, is the class without cohesion (`mbgc train --space \
