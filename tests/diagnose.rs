@@ -458,3 +458,31 @@ fn a_systematic_model_miss_is_shared_between_samples_and_the_truth_stays_inside(
         "{e}"
     );
 }
+
+/// A cohesion stronger than the cohesion model covers (5e4 against its 4e4): the fit stops at
+/// the model's edge, and the verdict says the interval is cut there instead of presenting it as
+/// a measurement.
+#[test]
+fn a_strength_beyond_the_models_is_reported_as_cut_at_their_edge() {
+    let d = run(&set("hertz,mindlin,epsd2", "", 0.5, 0.3, 5e4, 6));
+    let best = &d.ranking[0];
+    assert_eq!(best.effect, "sjkr");
+    let s = best.strength.iter().find(|p| p.name == "ced_pp").unwrap();
+    assert_eq!(s.at_edge.as_deref(), Some("upper"), "{s:?}");
+    assert!(s.q95 < 5e4, "{s:?}");
+    assert!(
+        d.verdict
+            .contains("lies at the upper end of what the models cover"),
+        "{}",
+        d.verdict
+    );
+    // Inside the models' range the same strength is not flagged.
+    let d = run(&set("hertz,mindlin,epsd2", "", 0.5, 0.3, 2e4, 6));
+    let s = d.ranking[0]
+        .strength
+        .iter()
+        .find(|p| p.name == "ced_pp")
+        .unwrap();
+    assert_eq!(s.at_edge, None, "{s:?}");
+    assert!(!d.verdict.contains("upper end"), "{}", d.verdict);
+}

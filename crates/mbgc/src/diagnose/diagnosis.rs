@@ -52,6 +52,11 @@ pub struct Parameter {
     pub q05: f64,
     /// 95 % quantile of the posterior draws (upper end of the 90 % interval).
     pub q95: f64,
+    /// `"upper"` or `"lower"` when the best fit lies where the models' data end (a group's
+    /// training range, a model's limit or the search range): the posterior is cut there and the
+    /// truth may lie beyond.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at_edge: Option<String>,
 }
 
 /// One measurement against the model's prediction at the best fit.
@@ -208,6 +213,23 @@ fn p_value(chi2: f64, dof: isize) -> f64 {
     ChiSquared::new(dof as f64).map_or(f64::NAN, |d| 1.0 - d.cdf(chi2))
 }
 
+/// Whether a small step of parameter `k` from the best fit `theta` leaves the search range or
+/// the models' data (a group beyond its training range, a model's limit): `"upper"`,
+/// `"lower"` or `None`.
+fn edge(j: &Joint, theta: &[f64], k: usize) -> Option<String> {
+    let (_, inside) = j.predictions(theta);
+    let step = 1e-3 * (j.upper[k] - j.lower[k]);
+    for (dir, name) in [(1.0, "upper"), (-1.0, "lower")] {
+        let mut t = theta.to_vec();
+        t[k] += dir * step;
+        let beyond = t[k] > j.upper[k] || t[k] < j.lower[k] || j.predictions(&t).1 > inside;
+        if beyond {
+            return Some(name.to_string());
+        }
+    }
+    None
+}
+
 fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<ClassFit> {
     let mut fit = j.fit(opts.starts, opts.seed);
     // The models' error where the material lies, then the fit again with it.
@@ -261,6 +283,7 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
                 posterior_mean: v.iter().sum::<f64>() / v.len().max(1) as f64,
                 q05: q(0.05),
                 q95: q(0.95),
+                at_edge: edge(j, &fit.theta, k),
             }
         })
         .collect();
@@ -550,6 +573,28 @@ fn verdict(
             "; not evaluated: {} (every parameter of it fixed)",
             names(&other)
         ));
+    }
+    // A strength at the end of what the models cover is cut there, not measured: say so.
+    if let Some(b) = best.filter(|b| b.log_bayes_factor > 0.0) {
+        let cut: Vec<String> = b
+            .strength
+            .iter()
+            .filter(|p| p.at_edge.as_deref() == Some("upper"))
+            .map(|p| format!("{} = {:.4e}", p.name, p.best))
+            .collect();
+        if !cut.is_empty() {
+            v.push_str(&format!(
+                "; {}'s best fit {} lies at the upper end of what the models cover, so its \
+                 interval is cut there and the truth may lie beyond (a model over a wider range \
+                 would tell: with `[candidates.{}] bounds` reaching beyond it, `mbgc diagnose \
+                 --model {} --build {}` builds one around this material)",
+                b.effect,
+                cut.join(", "),
+                b.effect,
+                base.models.join(" --model "),
+                b.effect
+            ));
+        }
     }
     v
 }
