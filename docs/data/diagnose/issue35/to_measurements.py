@@ -73,6 +73,14 @@ def main():
                 "# Walls are not cohesive: the cohesion candidate fits the particle-particle energy\n"
                 "# density only.\n[candidates.sjkr]\nfixed = { ced_pw = 0 }\n"
             )
+            if name == "outside":
+                # No shipped model covers it: the local model --build makes varies ced_pp over
+                # this range (the shipped one's, 0-2.5e5, would spend the runs where the box
+                # stops measuring).
+                f.write(
+                    "# The range a local model built by --build varies the cohesion over.\n"
+                    "bounds = { ced_pp = [0, 5e4] }\n"
+                )
             for d in sorted(by_d):
                 f.write(
                     f'\n[[sample]]\nname = "{d:g} mm"\nexperiment = "shear-box"\n'
