@@ -841,8 +841,12 @@ pub fn fit(
             &table.source,
             "rows",
             format!(
-                "at least 5 training rows, got {} ({n} usable rows)",
-                n - n_test
+                "at least 5 training rows, got {} ({n} usable rows; left out: {} unfinished, {} \
+                 without a value, {} not at rest)",
+                n - n_test,
+                table.skipped_rows,
+                table.no_value_rows,
+                table.unsettled_rows
             ),
         ));
     }

@@ -16,18 +16,18 @@ import statistics
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "../../../.."))
 SETS = [
-    ("control", 0.0, "no cohesion (control)", 0.5),
-    ("ced1e4", 1e4, "cohesion ced_pp = 1e4 J/m3 hidden", 0.5),
-    ("ced2.5e4", 2.5e4, "cohesion ced_pp = 2.5e4 J/m3 hidden", 0.5),
-    ("ced4e4", 4e4, "cohesion ced_pp = 4e4 J/m3 hidden", 0.5),
-    # Outside the shipped models: their restitution starts at 0.3.
-    ("outside", 2.5e4, "restitution 0.2, cohesion ced_pp = 2.5e4 J/m3 hidden", 0.2),
+    ("control", 0.0, "no cohesion (control)", "4.5e6"),
+    ("ced1e4", 1e4, "cohesion ced_pp = 1e4 J/m3 hidden", "4.5e6"),
+    ("ced2.5e4", 2.5e4, "cohesion ced_pp = 2.5e4 J/m3 hidden", "4.5e6"),
+    ("ced4e4", 4e4, "cohesion ced_pp = 4e4 J/m3 hidden", "4.5e6"),
+    # Outside the shipped models: K_p above their 1.96e5.
+    ("outside", 5e4, "stiffer (E 20 MPa), cohesion ced_pp = 5e4 J/m3 hidden", "2e7"),
 ]
 RESPONSES = ["shear_angle", "bulk_density"]
 
 
 def main():
-    for name, ced, what, e in SETS:
+    for name, ced, what, e_p in SETS:
         table = os.path.join(HERE, f"{name}.csv")
         if not os.path.exists(table):
             print(f"{table}: not made yet; run make_sets.sh")
@@ -57,7 +57,7 @@ def main():
         with open(out, "w") as f:
             f.write(
                 f"# Synthetic (issue 35): three mbgc DEM shear-box runs per sieve fraction, {what};\n"
-                f"# spheres E 4.5 MPa, nu 0.3, e {e}, mu_pp 0.5, mu_pw 0.3, mu_r_pp 0.3, mu_r_pw 0,\n"
+                f"# spheres E {float(e_p) / 1e6:g} MPa, nu 0.3, e 0.5, mu_pp 0.5, mu_pw 0.3, mu_r_pp 0.3, mu_r_pw 0,\n"
                 "# rho_p 2600, walls not cohesive. mu_pp and mu_r_pp are searched (unknown).\n"
                 "# Each value is the mean of 3 runs (campaign seed 35); sd = the pooled replicate sd\n"
                 f"# ({pooled['shear_angle'][0]:.2f} deg, {pooled['bulk_density'][0]:.2f} kg/m3, "
@@ -65,7 +65,7 @@ def main():
                 f"# DEM table: docs/data/diagnose/issue35/{name}.csv (make_sets.sh).\n"
                 f'name = "Spheres in {len(by_d)} sieve fractions, {what}"\n\n'
                 '[model]\nclass = "hertz,mindlin,epsd2"\n\n'
-                f"[fixed]\nE_p = 4.5e6\nE_w = 4.5e6\nnu_p = 0.3\ne_pp = {e}\ne_pw = {e}\n"
+                f"[fixed]\nE_p = {e_p}\nE_w = {e_p}\nnu_p = 0.3\ne_pp = 0.5\ne_pw = 0.5\n"
                 "mu_pw = 0.3\nrho_p = 2600\n"
                 "# The runs had mu_r_pw = 0; the shipped model's data start at 0.00047, so the\n"
                 "# file gives its domain edge (no rolling resistance either way).\n"
@@ -79,7 +79,7 @@ def main():
                 # stops measuring).
                 f.write(
                     "# The range a local model built by --build varies the cohesion over.\n"
-                    "bounds = { ced_pp = [0, 5e4] }\n"
+                    "bounds = { ced_pp = [0, 1e5] }\n"
                 )
             for d in sorted(by_d):
                 f.write(
