@@ -67,11 +67,18 @@ fn set(class: &str, extra: &str, mu: f64, mu_r: f64, ced: f64, seed: u64) -> Mea
         t = t.replace("mu_r_pw = 0\n", "");
         t += "[candidates.epsd2]\nfixed = { mu_r_pw = 0 }\n";
     }
+    t += &samples(mu, mu_r, ced, SD, &mut rng);
+    MeasurementSet::from_toml_str(&t, "synthetic.toml").unwrap()
+}
+
+/// Five sieve fractions of the material, each response measured with noise of sd `sd`.
+fn samples(mu: f64, mu_r: f64, ced: f64, sd: [f64; 2], rng: &mut impl rand::Rng) -> String {
+    let mut t = String::new();
     for d in [1.5, 3.0, 6.0, 12.0, 24.0] {
         let y = truth(mu, mu_r, ced, d);
-        let n: Vec<f64> = SD
+        let n: Vec<f64> = sd
             .iter()
-            .map(|s| Normal::new(0.0, *s).unwrap().sample(&mut rng))
+            .map(|s| Normal::new(0.0, *s).unwrap().sample(rng))
             .collect();
         t += &format!(
             "[[sample]]\nname = \"{d} mm\"\nexperiment = \"shear-box\"\n\
@@ -79,12 +86,12 @@ fn set(class: &str, extra: &str, mu: f64, mu_r: f64, ced: f64, seed: u64) -> Mea
              measured.shear_angle = {{ value = {}, sd = {} }}\n\
              measured.bulk_density = {{ value = {}, sd = {} }}\n",
             y[0] + n[0],
-            SD[0],
+            sd[0],
             y[1] + n[1],
-            SD[1]
+            sd[1]
         );
     }
-    MeasurementSet::from_toml_str(&t, "synthetic.toml").unwrap()
+    t
 }
 
 fn run(s: &MeasurementSet) -> Diagnosis {
@@ -396,24 +403,7 @@ fn a_systematic_model_miss_is_shared_between_samples_and_the_truth_stays_inside(
             "name = \"biased model\"\n{rho}\n[model]\nclass = \"hertz,mindlin,epsd2\"\n\
              [fixed]\nmu_r_pw = 0\n"
         );
-        for d in [1.5, 3.0, 6.0, 12.0, 24.0] {
-            let y = truth(mu, mu_r, 0.0, d);
-            let sd = [0.25, 1.0];
-            let n: Vec<f64> = sd
-                .iter()
-                .map(|s| Normal::new(0.0, *s).unwrap().sample(&mut rng))
-                .collect();
-            t += &format!(
-                "[[sample]]\nname = \"{d} mm\"\nexperiment = \"shear-box\"\n\
-                 psd = {{ d50_mm = {d}, sigma_ln = 0.1 }}\n\
-                 measured.shear_angle = {{ value = {}, sd = {} }}\n\
-                 measured.bulk_density = {{ value = {}, sd = {} }}\n",
-                y[0] + n[0],
-                sd[0],
-                y[1] + n[1],
-                sd[1]
-            );
-        }
+        t += &samples(mu, mu_r, 0.0, [0.25, 1.0], &mut rng);
         MeasurementSet::from_toml_str(&t, "biased.toml").unwrap()
     };
     let opts = Options {
