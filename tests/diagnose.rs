@@ -19,11 +19,11 @@ fn truth(mu: f64, mu_r: f64, ced: f64, d50: f64) -> [f64; 2] {
 
 const MODEL_ERROR: [(&str, f64); 2] = [("shear_angle", 0.3), ("bulk_density", 1.5)];
 
-/// A model of hertz,mindlin,epsd2 (as the shipped one) and a local one with cohesion that holds
-/// the wall values fixed.
-fn models() -> Vec<Surrogate> {
-    let base = Surrogate::from_fn(
-        "rolling.json",
+/// A model of hertz,mindlin,epsd2 over mu_pp, mu_r_pp and d50 that misses the truth by `miss`
+/// (per response) everywhere.
+fn base_model(label: &str, error: &[(&str, f64)], miss: [f64; 2]) -> Surrogate {
+    Surrogate::from_fn(
+        label,
         ModelClass::parse("hertz,mindlin,epsd2").unwrap(),
         Some("shear-box"),
         &[
@@ -32,9 +32,15 @@ fn models() -> Vec<Surrogate> {
             ("d50", [1.0, 30.0]),
         ],
         &[("mu_r_pw", 0.0)],
-        &MODEL_ERROR,
-        |r, x| truth(x[0], x[1], 0.0, x[2])[r],
-    );
+        error,
+        move |r, x| truth(x[0], x[1], 0.0, x[2])[r] + miss[r],
+    )
+}
+
+/// A model of hertz,mindlin,epsd2 (as the shipped one) and a local one with cohesion that holds
+/// the wall values fixed.
+fn models() -> Vec<Surrogate> {
+    let base = base_model("rolling.json", &MODEL_ERROR, [0.0, 0.0]);
     let cohesion = Surrogate::from_fn(
         "cohesion.json",
         ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap(),
@@ -381,21 +387,9 @@ fn the_model_error_is_taken_at_the_best_fit_where_the_model_knows_it() {
 #[test]
 fn a_systematic_model_miss_is_shared_between_samples_and_the_truth_stays_inside() {
     let error = [("shear_angle", 1.0), ("bulk_density", 4.0)];
-    let biased = Surrogate::from_fn(
-        "biased.json",
-        ModelClass::parse("hertz,mindlin,epsd2").unwrap(),
-        Some("shear-box"),
-        &[
-            ("mu_pp", [0.05, 1.0]),
-            ("mu_r_pp", [0.0, 1.0]),
-            ("d50", [1.0, 30.0]),
-        ],
-        &[("mu_r_pw", 0.0)],
-        &error,
-        |r, x| truth(x[0], x[1], 0.0, x[2])[r] + [2.0, -8.0][r],
-    )
-    // Its validation error is all the equations' (no DEM noise in it): all of it is shared.
-    .with_noise(&[0.0, 0.0]);
+    let biased = base_model("biased.json", &error, [2.0, -8.0])
+        // Its validation error is all the equations' (no DEM noise in it): all of it is shared.
+        .with_noise(&[0.0, 0.0]);
     let (mu, mu_r) = (0.5, 0.3);
     let text = |rho: &str| {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);

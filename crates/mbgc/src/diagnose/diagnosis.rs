@@ -213,11 +213,10 @@ fn p_value(chi2: f64, dof: isize) -> f64 {
     ChiSquared::new(dof as f64).map_or(f64::NAN, |d| 1.0 - d.cdf(chi2))
 }
 
-/// Whether a small step of parameter `k` from the best fit `theta` leaves the search range or
-/// the models' data (a group beyond its training range, a model's limit): `"upper"`,
-/// `"lower"` or `None`.
-fn edge(j: &Joint, theta: &[f64], k: usize) -> Option<String> {
-    let (_, inside) = j.predictions(theta);
+/// Whether a small step of parameter `k` from the best fit `theta` (where the models' penalty
+/// for leaving their data is `inside`) leaves the search range or the models' data (a group
+/// beyond its training range, a model's limit): `"upper"`, `"lower"` or `None`.
+fn edge(j: &Joint, theta: &[f64], inside: f64, k: usize) -> Option<String> {
     let step = 1e-3 * (j.upper[k] - j.lower[k]);
     for (dir, name) in [(1.0, "upper"), (-1.0, "lower")] {
         let mut t = theta.to_vec();
@@ -269,6 +268,7 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
     let ev = j
         .evidence(opts.samples, opts.seed)
         .map_err(|e| Error::invalid(format!("TMCMC of {}: {e}", j.class)))?;
+    let (pred, inside) = j.predictions(&fit.theta);
     let parameters = j
         .names
         .iter()
@@ -283,11 +283,10 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
                 posterior_mean: v.iter().sum::<f64>() / v.len().max(1) as f64,
                 q05: q(0.05),
                 q95: q(0.95),
-                at_edge: edge(j, &fit.theta, k),
+                at_edge: edge(j, &fit.theta, inside, k),
             }
         })
         .collect();
-    let (pred, _) = j.predictions(&fit.theta);
     let residuals: Vec<Residual> = j
         .targets
         .iter()
