@@ -94,7 +94,7 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let out = Output::new(a.json);
-    let set = MeasurementSet::from_file(&a.measurements)?;
+    let mut set = MeasurementSet::from_file(&a.measurements)?;
     let mut models = crate::builtin::diagnosis_models(&a.model)?
         .into_iter()
         .map(|(m, label)| Surrogate::from_model(m, &label))
@@ -122,14 +122,43 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
         for p in &plans {
             say!(out, "{}", plan_text(p, &build_opts));
             let printer = crate::train_progress::Printer::new(build_opts.config.generations);
-            let built = build::build(p, &build_opts, &printer);
+            let built = build::build(&set, p, &build_opts, &printer);
             printer.bar.finish_and_clear();
             let built = built?;
+            if let Some(first) = &built.first {
+                say!(
+                    out,
+                    "local model {} (first round, the whole search range): {} training runs; {}",
+                    first.path.display(),
+                    first.training_runs,
+                    build::precision_text(first)
+                );
+            }
             say!(
                 out,
-                "local model {}: {} training runs; {}",
+                "local model {}: {} training runs ({} finished rows fitted{}){}; {}",
                 built.path.display(),
                 built.training_runs,
+                built.model.data.train_rows,
+                if built.first.is_some() {
+                    ", the first round's inside its box among them"
+                } else {
+                    ""
+                },
+                if built.first.is_some() {
+                    format!(
+                        " over {}",
+                        built
+                            .plan
+                            .varied
+                            .iter()
+                            .map(|(n, [lo, hi])| format!("{n} [{lo:.4}, {hi:.4}]"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                } else {
+                    String::new()
+                },
                 build::precision_text(&built)
             );
             if !built.precise_enough() {
@@ -140,6 +169,19 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
                      --budget-runs extends its design (its runs are kept)"
                 );
             }
+            if !built.focus.is_empty() {
+                say!(
+                    out,
+                    "the search ranges are those the second round's model was built for: {}",
+                    built
+                        .focus
+                        .iter()
+                        .map(|(n, [lo, hi])| format!("{n} [{lo:.4}, {hi:.4}]"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+                set = build::narrow(&set, &built);
+            }
             models.push(build::surrogate(&built)?);
             built_models.push(serde_json::json!({
                 "name": built.plan.name,
@@ -149,9 +191,14 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
                 "effect": built.plan.effect.map(|e| e.name),
                 "varied": built.plan.varied,
                 "training_runs": built.training_runs,
-                "precision": built.precision.iter().map(|(r, e, sd)| serde_json::json!({
-                    "response": r, "validation_rmse": e, "measurement_sd": sd,
-                })).collect::<Vec<_>>(),
+                "precision": precision_json(&built),
+                "focus": built.focus,
+                "first_round": built.first.as_ref().map(|f| serde_json::json!({
+                    "model": f.path,
+                    "varied": f.plan.varied,
+                    "training_runs": f.training_runs,
+                    "precision": precision_json(f),
+                })),
             }));
         }
     }
@@ -215,10 +262,27 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn precision_json(b: &build::Built) -> Vec<serde_json::Value> {
+    b.precision
+        .iter()
+        .map(|p| {
+            serde_json::json!({
+                "response": p.response,
+                "validation_rmse": p.validation_rmse,
+                "replicate_sd": p.replicate_sd,
+                "model_error": p.model_error(),
+                "measurement_sd": p.measurement_sd,
+            })
+        })
+        .collect()
+}
+
 /// What a local model will be: class, experiment, what it varies and its budget.
 fn plan_text(p: &build::LocalPlan, o: &BuildOptions) -> String {
     format!(
-        "local model {} ({}, {}; {}) over {}, {} DEM runs ({} of them validation) into {}",
+        "local model {} ({}, {}; {}) over {}, {} DEM runs at most ({} of them validation in a \
+         first round over this range, the rest in a second round near the material if the first \
+         model is less precise than the measurements) into {}",
         p.name,
         p.class,
         p.experiment,

@@ -77,6 +77,9 @@ fn a_diagnosis_builds_the_local_model_it_lacks_and_names_the_hidden_effect() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     measurement_set(d);
+    if let Ok(keep) = std::env::var("KEEP_BUILD_TEST") {
+        std::fs::copy(d.join("set.toml"), keep).unwrap();
+    }
     let quick = ["--samples", "500", "--starts", "4"];
     // Without --build: no model describes the wall impact; the error offers the build.
     let o = mbgc(
@@ -119,9 +122,11 @@ fn a_diagnosis_builds_the_local_model_it_lacks_and_names_the_hidden_effect() {
     .concat();
     let (out, err) = ok(d, &args);
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
-    // 60 runs: 12 validation, 48 training, of which 12 (and 3 validation) without cohesion.
-    assert!(err.contains("ran 12 (12 done"), "{err}");
-    assert!(err.contains("copied 12 runs"), "{err}");
+    // 60 runs, 30 a round: 6 validation, 2 replicates and 22 training runs, of which 5 (and 1
+    // validation) without cohesion.
+    assert!(err.contains("ran 5 (5 done"), "{err}");
+    assert!(err.contains("copied 5 runs"), "{err}");
+    assert!(err.contains("ran 2 (2 done"), "{err}");
     let built = &j["built"][0];
     assert_eq!(built["class"], "hertz,mindlin,sjkr", "{built}");
     let model = d.join(built["model"].as_str().unwrap());

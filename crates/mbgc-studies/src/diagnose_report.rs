@@ -279,11 +279,12 @@ runs but not in the class the file compares with. Cases 1 and 3-5 give each frac
 of three runs with sd = the pooled replicate sd / sqrt(3) (the replicate sd of one run is \
 1.8-1.9 deg and 2.8-5.3 kg/m3 here); case 2 gives one run per fraction with sd 1.06 deg and \
 3.8 kg/m3 (the replicate noise of docs/metamodel.md). The model error is each model's \
-validation RMSE (or its error model's value at the fit); it holds one run's noise as well, so \
-the chi^2 is conservative. Where a model records its replicate noise (the shipped ones do), the \
-part of its error beyond that noise is shared between the samples with correlation 0.8 (the \
-model misses one material alike at each size); the local models record none and share \
-nothing. A model of a class with an extra effect serves the class without it where that effect \
+validation RMSE (or its error model's value at the fit). That RMSE holds one run's DEM noise \
+as well, which a measured value's sd already holds; where a model records its replicate noise \
+(the shipped ones do), only its miss beyond that noise counts, and it is shared between the \
+samples with correlation 0.8 (the model misses one material alike at each size). The local \
+models record none: their whole error counts, independent between the samples, so their chi^2 \
+is conservative. A model of a class with an extra effect serves the class without it where that effect \
 is off (rolling friction or cohesion 0). The column `(xN)` is the ratio of the interval's ends.\n\n\
 Cases 6-9 (issue 35) are another material, E = 4.5 MPa, in five fractions of 1-16 mm (the \
 4e4 J/m3 set in four, 2-16 mm: at 1 mm nothing flows out of the box), with mu_pp and mu_r_pp \

@@ -6,17 +6,19 @@
 //! (or any other value known per sample) over the samples' span. It is trained with
 //! [`crate::train::train`] into a directory of its own, so a second call resumes it and a larger
 //! budget extends its design instead of starting again. Its own error is compared with the
-//! measurement sd: a first half of the budget is fitted, and the second half is run only if the
-//! model is still less precise than the measurements (more runs near the material, not a longer
-//! equation).
+//! measurement sd: a first half of the budget builds a model over the whole search range, and
+//! the second half is run only if that model is less precise than the measurements, in the box
+//! where the set's fits with it lie (more runs near the material, not a longer equation).
 
 use std::path::PathBuf;
 
+use super::diagnosis::Parameter;
 use super::joint::{with_effect, Joint};
 use super::measurements::{owns, switchable_effects, MeasurementSet};
 use super::surrogate::Surrogate;
 use crate::campaign::{experiment_by_name, ExperimentSettings};
 use crate::error::{write_atomic, Error, Result};
+use crate::metamodel::noise::replicate_noise;
 use crate::metamodel::Metamodel;
 use crate::train::{train, TrainObserver, TrainOutcome, TrainPaths, TrainRequest, TrainStage};
 use mbgc_dem::contact::{EffectSpec, ModelClass, Pair};
@@ -63,9 +65,9 @@ pub struct BuildOptions {
     pub config: gp::Config,
 }
 
-/// Fewest runs per local model: a validation set of 3 and ten training runs, the least the
-/// five-fold cross-validation that picks the equation accepts.
-pub const MIN_BUDGET: usize = 13;
+/// Fewest runs per local model: a validation set of 3, 2 replicates and ten training runs, the
+/// least the five-fold cross-validation that picks the equation accepts.
+pub const MIN_BUDGET: usize = 15;
 
 impl BuildOptions {
     /// `budget_runs` runs per model into `dir`; one thread, seed 1, and GP settings for a few
@@ -87,9 +89,9 @@ impl BuildOptions {
         }
     }
 
-    /// Validation runs of a model: a fifth of the budget, at least 3.
+    /// Validation runs of the first round's model: a fifth of its budget, at least 3.
     pub fn validation(&self) -> usize {
-        split(self.budget_runs, false).4
+        split(rounds(self.budget_runs).0, false).3
     }
 }
 
@@ -99,7 +101,8 @@ pub fn check_budget(budget: usize) -> Result<()> {
     if budget < MIN_BUDGET {
         return Err(Error::invalid(format!(
             "--budget-runs {budget}: expected at least {MIN_BUDGET} runs per local model (3 to \
-             validate it, 10 for the cross-validation that picks its equation)"
+             validate it, 2 replicates of those for the DEM noise, 10 for the cross-validation \
+             that picks its equation)"
         )));
     }
     if budget > crate::train::MAX_RUNS {
@@ -122,14 +125,46 @@ pub struct Built {
     pub model: Metamodel,
     /// Training runs it was fitted on.
     pub training_runs: usize,
-    /// Per response: its validation RMSE and the measurement sd it was compared with.
-    pub precision: Vec<(String, f64, f64)>,
+    /// Per response: its own error against the measurement sd.
+    pub precision: Vec<Precision>,
+    /// After a second round: the first round's model over the whole search range, which this
+    /// one (over a narrower box) replaces.
+    pub first: Option<Box<Built>>,
+    /// After a second round: the search ranges it was built for, which the diagnosis with it
+    /// keeps to ([`narrow`]).
+    pub focus: Vec<(String, [f64; 2])>,
 }
 
 impl Built {
     /// Whether its own error stays below the measurement sd for every response.
     pub fn precise_enough(&self) -> bool {
-        self.precision.iter().all(|(_, e, sd)| e <= sd)
+        self.precision
+            .iter()
+            .all(|p| p.model_error() <= p.measurement_sd)
+    }
+}
+
+/// A local model's error in one response, and the precision it is compared with.
+#[derive(Clone, Debug)]
+pub struct Precision {
+    /// Response name.
+    pub response: String,
+    /// Validation RMSE: the model's own error and one run's DEM noise together.
+    pub validation_rmse: f64,
+    /// One run's DEM noise, from the replicate pairs (`None`: no pair measured the response).
+    pub replicate_sd: Option<f64>,
+    /// Median measurement sd of the set's samples.
+    pub measurement_sd: f64,
+}
+
+impl Precision {
+    /// The model's own error: the validation RMSE less the replicate noise it holds (the whole
+    /// RMSE when the noise is unknown).
+    pub fn model_error(&self) -> f64 {
+        match self.replicate_sd {
+            Some(n) => (self.validation_rmse.powi(2) - n * n).max(0.0).sqrt(),
+            None => self.validation_rmse,
+        }
     }
 }
 
@@ -514,26 +549,49 @@ fn write_space(dir: &std::path::Path, name: &str, text: &str) -> Result<PathBuf>
     Ok(path)
 }
 
-/// How a budget is spent: `(base training, base validation, first round, all training,
-/// validation)` runs, the effect model's counts including the base runs it copies.
+/// How a round's budget is spent: `(base training, base validation, all training, validation,
+/// replicates)` runs, the effect model's counts including the base runs it copies. The
+/// replicates run the first validation inputs again with another seed: a validation run holds one
+/// run's DEM noise besides the model's own error, and only the pairs tell the two apart.
 pub fn split(budget: usize, with_base: bool) -> (usize, usize, usize, usize, usize) {
     let validation = (budget / 5).max(3);
-    let total = budget - validation;
+    let replicates = (validation / 4).max(2);
+    let total = budget - validation - replicates;
     let (base, base_validation) = if with_base {
         ((total / 4).max(5), (validation / 4).max(1))
     } else {
         (0, 0)
     };
-    let first = (base + (total - base) / 2).max(10).min(total);
-    (base, base_validation, first, total, validation)
+    (base, base_validation, total, validation, replicates)
 }
 
-/// Builds (or resumes) one local model: writes its space under `opts.dir/spaces/`; for an
-/// effect, first runs a quarter of the budget as the model of the set's class (the effect off)
-/// and extends it; runs half the remaining training budget and the validation set, fits, and
-/// runs the rest and fits again only if the model's validation error exceeds the measurement sd
-/// of a response.
-pub fn build(plan: &LocalPlan, opts: &BuildOptions, observer: &dyn TrainObserver) -> Result<Built> {
+/// The budgets of the two rounds: the whole search range, then the box where the first model's
+/// posteriors lie (`0`: no second round, the budget is too small to split).
+pub fn rounds(budget: usize) -> (usize, usize) {
+    if budget >= 2 * MIN_BUDGET {
+        (budget / 2, budget - budget / 2)
+    } else {
+        (budget, 0)
+    }
+}
+
+/// Builds (or resumes) one local model in up to two rounds of `opts.budget_runs` together.
+///
+/// The first round spends half the budget over the whole search range: for an effect, a quarter
+/// of it as the model of the set's class (the effect off), which the effect model extends. If
+/// that model's validation error exceeds the measurement sd of a response, the second half is
+/// spent where it matters (more runs near the material, not a longer equation): the set is
+/// fitted with the first model, with and without the effect, and a second model of the same
+/// kind is built over a box around both fits ([`focus_box`]), fitted on its new runs and the
+/// first round's runs inside the box. It replaces the first, and it is validated in that box.
+/// When the box is not at least twice smaller than the first range, the first model's designs
+/// are extended to the whole budget instead.
+pub fn build(
+    set: &MeasurementSet,
+    plan: &LocalPlan,
+    opts: &BuildOptions,
+    observer: &dyn TrainObserver,
+) -> Result<Built> {
     check_budget(opts.budget_runs)?;
     if opts.dir.exists() && !opts.dir.is_dir() {
         return Err(Error::input(
@@ -542,9 +600,222 @@ pub fn build(plan: &LocalPlan, opts: &BuildOptions, observer: &dyn TrainObserver
             "a directory for the local models (this is a file)",
         ));
     }
+    let (first, second) = rounds(opts.budget_runs);
+    let with_base = plan.base.is_some();
+    let counts = split(first, with_base);
+    // The whole budget over the first range: its designs extended, the base runs as they were
+    // (the effect design starts with them).
+    let (_, _, total, validation, replicates) = split(opts.budget_runs, with_base);
+    let extended = (counts.0, counts.1, total, validation, replicates);
+    // An earlier call that extended the first model to the whole budget decided so: resume
+    // that decision.
+    let made = std::fs::read_to_string(TrainPaths::new(&opts.dir, &plan.name).design)
+        .map_or(0, |t| t.lines().count().saturating_sub(1));
+    if second > 0 && made >= total {
+        return round(plan, extended, Vec::new(), opts, observer);
+    }
+    let built = round(plan, counts, Vec::new(), opts, observer)?;
+    if built.precise_enough() || second == 0 {
+        return Ok(built);
+    }
+    let sub = only_experiment(set, &plan.experiment);
+    let model = surrogate(&built)?;
+    // The box an earlier call chose is kept: its runs were made there (a later version's fits
+    // may differ slightly and would otherwise start the round again).
+    let box_file = opts
+        .dir
+        .join("spaces")
+        .join(format!("{}_focus.box.json", plan.name));
+    let saved: Option<Vec<(String, [f64; 2])>> = match std::fs::read_to_string(&box_file) {
+        Ok(text) => Some(serde_json::from_str(&text).map_err(|e| {
+            Error::input(
+                box_file.display().to_string(),
+                "box",
+                format!("a list of [name, [min, max]] as `mbgc diagnose --build` writes it: {e}"),
+            )
+        })?),
+        Err(_) => None,
+    };
+    let focus = match saved {
+        Some(f) => f,
+        None => {
+            let diag_opts = super::diagnosis::Options {
+                starts: 8,
+                samples: 1000,
+                seed: opts.seed,
+                ..Default::default()
+            };
+            let d = match super::diagnosis::diagnose(&sub, std::slice::from_ref(&model), &diag_opts)
+            {
+                Ok(d) => d,
+                Err(e) => {
+                    observer.note(
+                        TrainStage::Fit,
+                        &format!(
+                            "local model {}: the set could not be fitted with it ({e}); no \
+                             second round",
+                            plan.name
+                        ),
+                    );
+                    return Ok(built);
+                }
+            };
+            let fitted: Vec<&Parameter> = std::iter::once(&d.base)
+                .chain(
+                    d.extended
+                        .iter()
+                        .filter(|f| f.effect.as_deref() == plan.effect.map(|e| e.name)),
+                )
+                .flat_map(|f| &f.parameters)
+                .collect();
+            focus_box(plan, &fitted)
+        }
+    };
+    let narrowed = narrowed_set(&sub, plan.effect, &focus);
+    let mut focused = local_plan(
+        &narrowed,
+        std::slice::from_ref(&model),
+        &plan.experiment,
+        plan.effect,
+        plan.reason.clone(),
+    )?;
+    focused.name = format!("{}_focus", plan.name);
+    if let Some((b, _)) = focused.base.as_mut() {
+        *b = format!("{b}_focus");
+    }
+    let shrink: f64 = focused
+        .varied
+        .iter()
+        .filter_map(|(n, [a, b])| {
+            let (_, [a0, b0]) = plan.varied.iter().find(|(m, _)| m == n)?;
+            Some((b - a) / (b0 - a0))
+        })
+        .product();
+    if shrink > 0.5 {
+        observer.note(
+            TrainStage::Sample,
+            &format!(
+                "local model {}: the set's fits with it span {:.0} % of its range, so the rest \
+                 of the budget extends it there",
+                plan.name,
+                100.0 * shrink
+            ),
+        );
+        return round(plan, extended, Vec::new(), opts, observer);
+    }
+    observer.note(
+        TrainStage::Sample,
+        &format!(
+            "local model {}: {}; second round over {}",
+            plan.name,
+            precision_text(&built),
+            focused
+                .varied
+                .iter()
+                .map(|(n, [a, b])| format!("{n} [{a:.4}, {b:.4}]"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let text = serde_json::to_string_pretty(&focus)
+        .map_err(|e| Error::invalid(format!("{}: {e}", box_file.display())))?;
+    if std::fs::read_to_string(&box_file).ok().as_deref() != Some(text.as_str()) {
+        write_atomic(&box_file, text.as_bytes())?;
+    }
+    let wide = TrainPaths::new(&opts.dir, &plan.name);
+    let also = vec![(wide.table, wide.validation_table)];
+    let mut second_built = round(&focused, split(second, with_base), also, opts, observer)?;
+    second_built.first = Some(Box::new(built));
+    second_built.focus = focus;
+    Ok(second_built)
+}
+
+/// The box a second round searches, a trust region around the first model's fits: per searched
+/// parameter of the plan, the span of the fits' best values, widened on each side by half the
+/// span of their 90 % intervals, but by at least 5 % and at most 20 % of the first range (an
+/// imprecise first model gives wide intervals, and a box as wide as the first range would gain
+/// nothing), within the first range. A later fit at the box's edge is flagged as cut there.
+fn focus_box(plan: &LocalPlan, fitted: &[&Parameter]) -> Vec<(String, [f64; 2])> {
+    let mut out = Vec::new();
+    for (name, [lo0, hi0]) in &plan.varied {
+        let ps: Vec<&Parameter> = fitted.iter().copied().filter(|p| p.name == *name).collect();
+        if ps.is_empty() {
+            // Not searched (a span of the samples' known values): kept as it was.
+            continue;
+        }
+        let min = |f: fn(&Parameter) -> f64| ps.iter().map(|p| f(p)).fold(f64::INFINITY, f64::min);
+        let max =
+            |f: fn(&Parameter) -> f64| ps.iter().map(|p| f(p)).fold(f64::NEG_INFINITY, f64::max);
+        let range = hi0 - lo0;
+        let pad = (0.5 * (max(|p| p.q95) - min(|p| p.q05))).clamp(0.05 * range, 0.2 * range);
+        let mut lo = (min(|p| p.best) - pad).max(*lo0);
+        // The effect's strength keeps the value that switches it off: the model describes the
+        // set's class there.
+        if let Some(off) = plan
+            .effect
+            .filter(|e| owns(e, name))
+            .and_then(|e| {
+                e.params
+                    .iter()
+                    .find(|p| Pair::BOTH.iter().any(|&q| p.name(q) == name))
+            })
+            .and_then(|p| p.off)
+        {
+            lo = lo.min(off);
+        }
+        out.push((name.clone(), [lo, (max(|p| p.best) + pad).min(*hi0)]));
+    }
+    out
+}
+
+/// The set with the search ranges a second round's model was built for: the diagnosis with that
+/// model searches there (its fits are flagged where they reach the box's edge).
+pub fn narrow(set: &MeasurementSet, built: &Built) -> MeasurementSet {
+    narrowed_set(set, built.plan.effect, &built.focus)
+}
+
+/// The set with the focus box as its search ranges (the effect's own in its candidate's).
+fn narrowed_set(
+    set: &MeasurementSet,
+    effect: Option<&'static EffectSpec>,
+    focus: &[(String, [f64; 2])],
+) -> MeasurementSet {
+    let mut s = set.clone();
+    // Within the set's own range, where it gives one (the first range is a little wider).
+    let within = |given: &mut Vec<(String, [f64; 2])>, name: &str, b: [f64; 2]| {
+        let b = match given.iter().find(|(n, _)| n == name) {
+            Some((_, [lo, hi])) if b[0].max(*lo) < b[1].min(*hi) => [b[0].max(*lo), b[1].min(*hi)],
+            _ => b,
+        };
+        given.retain(|(n, _)| n != name);
+        given.push((name.to_string(), b));
+    };
+    for (name, b) in focus {
+        match effect.filter(|e| owns(e, name)) {
+            Some(e) => {
+                let mut c = s.candidate(e);
+                within(&mut c.bounds, name, *b);
+                s.candidates.retain(|c| c.effect.name != e.name);
+                s.candidates.push(c);
+            }
+            None => within(&mut s.bounds, name, *b),
+        }
+    }
+    s
+}
+
+/// One round: for an effect, the model of the set's class without it first (its runs only),
+/// then the effect model extending it, fitted once (with the rows of `also_fit` inside its
+/// space), and the replicates that measure its DEM noise.
+fn round(
+    plan: &LocalPlan,
+    counts: (usize, usize, usize, usize, usize),
+    also_fit: Vec<(PathBuf, PathBuf)>,
+    opts: &BuildOptions,
+    observer: &dyn TrainObserver,
+) -> Result<Built> {
     let space_path = write_space(&opts.dir, &plan.name, &plan.space)?;
-    let (base_n, base_validation, first, total, validation) =
-        split(opts.budget_runs, plan.base.is_some());
+    let (base_n, base_validation, total, validation, replicates) = counts;
     let request = |space: PathBuf, name: &str, n: usize, validation: usize| TrainRequest {
         validation,
         out_dir: opts.dir.clone(),
@@ -556,73 +827,175 @@ pub fn build(plan: &LocalPlan, opts: &BuildOptions, observer: &dyn TrainObserver
         config: opts.config.clone(),
         ..TrainRequest::new(space, &plan.experiment, n)
     };
+    // A design an earlier call made larger is resumed at its size (a train never drops rows).
+    let rows = |p: &std::path::Path| {
+        std::fs::read_to_string(p).map_or(0, |t| t.lines().count().saturating_sub(1))
+    };
     if let Some((base_name, base_space)) = &plan.base {
         let path = write_space(&opts.dir, base_name, base_space)?;
+        let bp = TrainPaths::new(&opts.dir, base_name);
         let req = TrainRequest {
             no_fit: true,
-            ..request(path, base_name, base_n, base_validation)
+            ..request(
+                path,
+                base_name,
+                base_n.max(rows(&bp.design)),
+                base_validation.max(rows(&bp.validation_design)),
+            )
         };
         train(&req, observer)?;
     }
-    // A design an earlier call extended is resumed at its size (a train never drops rows).
-    let existing = std::fs::read_to_string(TrainPaths::new(&opts.dir, &plan.name).design)
-        .map_or(0, |t| t.lines().count().saturating_sub(1));
-    let total = total.max(existing);
-    let mut result = None;
-    for n in [first.max(existing), total] {
-        if result
-            .as_ref()
-            .is_some_and(|b: &Built| b.precise_enough() || b.training_runs >= total)
-        {
-            break;
-        }
-        let req = TrainRequest {
-            extends: plan.base.as_ref().map(|(b, _)| b.clone()),
-            ..request(space_path.clone(), &plan.name, n, validation)
-        };
-        let TrainOutcome::Fitted { model, paths, .. } = train(&req, observer)? else {
-            return Err(Error::invalid(
-                "the local model's train stopped before its fit",
-            ));
-        };
-        let precision = plan
-            .responses
-            .iter()
-            .map(|(r, sd)| {
-                let e = model
+    let paths = TrainPaths::new(&opts.dir, &plan.name);
+    let n = total.max(rows(&paths.design));
+    let validation = validation.max(rows(&paths.validation_design));
+    let req = TrainRequest {
+        extends: plan.base.as_ref().map(|(b, _)| b.clone()),
+        also_fit,
+        ..request(space_path, &plan.name, n, validation)
+    };
+    let TrainOutcome::Fitted { model, paths, .. } = train(&req, observer)? else {
+        return Err(Error::invalid(
+            "the local model's train stopped before its fit",
+        ));
+    };
+    let mut model = *model;
+    let noise = replicate_runs(plan, &paths, replicates, opts, observer)
+        .and_then(|table| {
+            replicate_noise(
+                &paths.validation_table,
+                &table,
+                &model.input_names(),
+                &plan
                     .responses
                     .iter()
-                    .find(|m| m.name == *r)
-                    .and_then(|m| m.validation.or(m.test))
-                    .map_or(f64::INFINITY, |v| v.rmse);
-                (r.clone(), e, *sd)
-            })
-            .collect();
-        let built = Built {
-            plan: plan.clone(),
-            path: paths.model.clone(),
-            model: *model,
-            training_runs: n,
-            precision,
-        };
-        observer.note(
-            TrainStage::Fit,
-            &format!(
-                "local model {} at {n} runs: {}",
-                plan.name,
-                precision_text(&built)
-            ),
-        );
-        result = Some(built);
+                    .map(|(r, _)| r.clone())
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .map_err(|e| {
+            observer.note(
+                TrainStage::Fit,
+                &format!(
+                    "local model {}: no replicate noise ({e}); its validation RMSE is taken as \
+                     its own error",
+                    plan.name
+                ),
+            )
+        })
+        .ok();
+    if let Some(noise) = &noise {
+        for r in model.responses.iter_mut() {
+            r.replicate_sd = noise.iter().find(|n| n.response == r.name).map(|n| n.sd);
+        }
+        model.save(&paths.model)?;
     }
-    result.ok_or_else(|| Error::invalid("no local model was fitted"))
+    let precision = plan
+        .responses
+        .iter()
+        .map(|(r, sd)| {
+            let m = model.responses.iter().find(|m| m.name == *r);
+            Precision {
+                response: r.clone(),
+                validation_rmse: m
+                    .and_then(|m| m.validation.or(m.test))
+                    .map_or(f64::INFINITY, |v| v.rmse),
+                replicate_sd: m.and_then(|m| m.replicate_sd),
+                measurement_sd: *sd,
+            }
+        })
+        .collect();
+    let built = Built {
+        plan: plan.clone(),
+        path: paths.model.clone(),
+        model,
+        training_runs: n,
+        precision,
+        first: None,
+        focus: Vec::new(),
+    };
+    observer.note(
+        TrainStage::Fit,
+        &format!(
+            "local model {} at {n} runs: {}",
+            plan.name,
+            precision_text(&built)
+        ),
+    );
+    Ok(built)
 }
 
-/// `shear_angle 0.8 (sd 1.1), ...`: each response's validation RMSE beside the measurement sd.
+/// Runs the first `k` rows of the validation design again with another campaign seed (into
+/// `training_data/<name>_replicates.csv`, resumed like every table) and returns the table.
+fn replicate_runs(
+    plan: &LocalPlan,
+    paths: &TrainPaths,
+    k: usize,
+    opts: &BuildOptions,
+    observer: &dyn TrainObserver,
+) -> Result<PathBuf> {
+    let design_text = std::fs::read_to_string(&paths.validation_design)
+        .map_err(|e| Error::io(&paths.validation_design, e))?;
+    let design = paths
+        .validation_design
+        .with_file_name(format!("{}_replicates.csv", plan.name));
+    let old = std::fs::read_to_string(&design).map_or(0, |t| t.lines().count());
+    let lines: Vec<&str> = design_text.lines().collect();
+    let keep = (k + 1).max(old).min(lines.len());
+    let text = lines[..keep].join("\n") + "\n";
+    if std::fs::read_to_string(&design).ok().as_deref() != Some(text.as_str()) {
+        write_atomic(&design, text.as_bytes())?;
+    }
+    let settings = ExperimentSettings {
+        model_class: Some(plan.class),
+        ..Default::default()
+    };
+    let exp = experiment_by_name(&plan.experiment, &settings)?;
+    // Another stream than the training (seed) and validation (seed + 1) runs.
+    let seed = opts.seed.wrapping_add(2);
+    let p = crate::campaign::Plan::new(exp.as_ref(), &design, &[], seed, &settings, None)?;
+    let table = paths
+        .validation_table
+        .with_file_name(format!("{}_replicates.csv", plan.name));
+    let r = crate::campaign::run_campaign(
+        exp.as_ref(),
+        &p,
+        &crate::campaign::CampaignOptions {
+            observer: observer.campaign(&table),
+            ..crate::campaign::CampaignOptions::new(table.clone(), opts.threads)
+        },
+    )?;
+    observer.note(
+        TrainStage::Simulate,
+        &format!(
+            "{} (replicates of the first {} validation inputs, seed {seed}): {} already done, \
+             ran {} ({} done, {} failed)",
+            table.display(),
+            keep - 1,
+            r.skipped,
+            r.done + r.failed,
+            r.done,
+            r.failed
+        ),
+    );
+    Ok(table)
+}
+
+/// Each response's validation RMSE, the replicate noise it holds, the model's own error and the
+/// measurement sd it is compared with.
 pub fn precision_text(b: &Built) -> String {
     b.precision
         .iter()
-        .map(|(r, e, sd)| format!("{r} validation RMSE {e:.4} (measurement sd {sd:.4})"))
+        .map(|p| {
+            format!(
+                "{} validation RMSE {:.4} (replicate sd {}, own error {:.4}; measurement sd {:.4})",
+                p.response,
+                p.validation_rmse,
+                p.replicate_sd
+                    .map_or("unknown".to_string(), |n| format!("{n:.4}")),
+                p.model_error(),
+                p.measurement_sd
+            )
+        })
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -643,6 +1016,63 @@ mod tests {
             "spheres_in_5_sieve_fractions_ced_2_5e4"
         );
         assert_eq!(slug("***"), "set");
+    }
+
+    fn fitted(name: &str, best: f64, q05: f64, q95: f64) -> Parameter {
+        Parameter {
+            name: name.into(),
+            best,
+            posterior_mean: best,
+            q05,
+            q95,
+            at_edge: None,
+        }
+    }
+
+    #[test]
+    fn the_second_round_searches_near_the_fits_and_keeps_the_effect_off_face() {
+        let sjkr = mbgc_dem::contact::all_effects()
+            .iter()
+            .find(|e| e.name == "sjkr")
+            .copied()
+            .unwrap();
+        let plan = LocalPlan {
+            effect: Some(sjkr),
+            class: "hertz,mindlin,sjkr".parse().unwrap(),
+            experiment: "shear-box".into(),
+            name: "t".into(),
+            space: String::new(),
+            varied: vec![
+                ("d50".into(), [1.0, 3.0]),
+                ("mu_pp".into(), [0.0, 1.0]),
+                ("ced_pp".into(), [0.0, 1e5]),
+            ],
+            responses: Vec::new(),
+            reason: String::new(),
+            base: None,
+        };
+        // A wide posterior: the box is the fits' best values +- 20 % of the first range.
+        let a = fitted("mu_pp", 0.5, 0.1, 0.95);
+        let b = fitted("mu_pp", 0.4, 0.2, 0.7);
+        let c = fitted("ced_pp", 5e4, 1e4, 9e4);
+        let focus = focus_box(&plan, &[&a, &b, &c]);
+        assert_eq!(
+            focus.len(),
+            2,
+            "{focus:?}: d50 is the samples' span, not searched"
+        );
+        let [lo, hi] = focus[0].1;
+        assert!(
+            (lo - 0.2).abs() < 1e-12 && (hi - 0.7).abs() < 1e-12,
+            "{focus:?}"
+        );
+        // The cohesion's box reaches down to 0, where the set's own class lies.
+        let [lo, hi] = focus[1].1;
+        assert!(lo == 0.0 && (hi - 7e4).abs() < 1e-6, "{focus:?}");
+        // A narrow posterior: half its span each side, but at least 5 % of the range.
+        let d = fitted("mu_pp", 0.5, 0.49, 0.51);
+        let [lo, hi] = focus_box(&plan, &[&d])[0].1;
+        assert!((lo - 0.45).abs() < 1e-12 && (hi - 0.55).abs() < 1e-12);
     }
 
     #[test]

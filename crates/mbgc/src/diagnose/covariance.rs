@@ -7,10 +7,11 @@
 //! over the samples and give intervals that exclude the truth (measured on the issue-35 sets:
 //! the base model missed the control by +3.9, +3.6, +5.1, +1.4 and +3.8 deg at its five sizes).
 //! The equations' own errors of one response predicted by one model therefore correlate with
-//! coefficient `rho` between samples. The measurement errors stay independent, and so does the
-//! part of a model's error that is the DEM noise of its validation runs (a validation RMSE holds
-//! one run's noise besides the equations' miss): only the miss beyond the replicate noise,
-//! `sqrt(error^2 - noise^2)`, is shared. A model that does not know its noise shares nothing.
+//! coefficient `rho` between samples. The measurement errors stay independent. A validation
+//! RMSE holds one run's DEM noise besides the equations' miss; a measured value already scatters
+//! about the DEM mean by that noise (its sd says so), so where a model knows its replicate noise
+//! only the miss beyond it, `sqrt(error^2 - noise^2)`, is the model's error, and it is shared. A
+//! model that does not know its noise keeps its whole error, independent between the samples.
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
@@ -24,7 +25,8 @@ pub const DEFAULT_CORRELATION: f64 = 0.8;
 pub struct Entry {
     /// Measurement standard deviation.
     pub sd: f64,
-    /// The metamodel's own error for this value (its validation error: equations and noise).
+    /// The metamodel's own error for this value (its miss beyond the DEM noise where it knows
+    /// that noise, else its whole validation error).
     pub model_error: f64,
     /// The part of `model_error` that is the equations' miss, shared between samples.
     pub shared: f64,

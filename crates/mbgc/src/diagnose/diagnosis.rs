@@ -233,6 +233,7 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
     let mut fit = j.fit(opts.starts, opts.seed);
     // The models' error where the material lies, then the fit again with it.
     let global: Vec<f64> = j.targets.iter().map(|t| t.model_error).collect();
+    let own = |t: &super::joint::Target| t.own_error();
     if j.localise_errors(&fit.theta) {
         fit = j.fit(opts.starts, opts.seed);
         let mut seen: Vec<&str> = Vec::new();
@@ -245,7 +246,7 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
             let (mut local, mut avg) = (Vec::new(), Vec::new());
             for (u, g) in j.targets.iter().zip(&global) {
                 if u.response == t.response {
-                    local.push(u.model_error);
+                    local.push(own(u));
                     avg.push(*g);
                 }
             }

@@ -40,18 +40,29 @@ pub struct Target {
 impl Target {
     /// Standard deviation of measured minus predicted: measurement and model error together.
     pub fn sigma(&self) -> f64 {
-        self.sd.hypot(self.model_error)
+        self.sd.hypot(self.own_error())
     }
 
-    /// The part of the model error that is the equations' own miss (shared between samples):
-    /// what exceeds the replicate noise; all of it when the set gives the error, none when the
-    /// model does not know its noise.
-    pub fn shared_error(&self) -> f64 {
-        if self.error_given {
-            return self.model_error;
+    /// The model's own miss: its error less the DEM noise of its validation runs, which the
+    /// measurement sd already holds (a measured value scatters about the DEM mean by that noise,
+    /// and the model predicts the mean, missing it by the rest); the whole error when the set
+    /// gives it or the model does not know its noise.
+    pub fn own_error(&self) -> f64 {
+        match self.noise {
+            Some(n) if !self.error_given => (self.model_error.powi(2) - n * n).max(0.0).sqrt(),
+            _ => self.model_error,
         }
-        self.noise
-            .map_or(0.0, |n| (self.model_error.powi(2) - n * n).max(0.0).sqrt())
+    }
+
+    /// The part of the model error shared between samples: the own miss, all of it when the set
+    /// gives the error, none when the model does not know its noise (its error is then taken as
+    /// independent between the samples).
+    pub fn shared_error(&self) -> f64 {
+        if self.error_given || self.noise.is_some() {
+            self.own_error()
+        } else {
+            0.0
+        }
     }
 }
 
@@ -675,7 +686,7 @@ fn covariance(rows: &[Row], targets: &[Target], rho: f64) -> Covariance {
         .iter()
         .map(|t| Entry {
             sd: t.sd,
-            model_error: t.model_error,
+            model_error: t.own_error(),
             shared: t.shared_error(),
             group: (rows[t.sample].model, t.model_response),
         })

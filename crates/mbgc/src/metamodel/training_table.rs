@@ -79,6 +79,67 @@ impl TrainingTable {
         })
     }
 
+    /// This table with the rows of `other` appended for which `keep` holds (given each row's
+    /// values in this table's column order). `other` must have the same columns; the model class
+    /// labels are kept where both tables have them. The source names both tables.
+    pub fn with_rows_of(
+        mut self,
+        other: &TrainingTable,
+        keep: impl Fn(&[(String, f64)]) -> bool,
+    ) -> Result<TrainingTable> {
+        let mut idx = Vec::with_capacity(self.columns.len());
+        for (name, _) in &self.columns {
+            let k = other
+                .columns
+                .iter()
+                .position(|(n, _)| n == name)
+                .ok_or_else(|| {
+                    Error::input(
+                        &other.source,
+                        format!("column {name}"),
+                        format!("no such column; {} has it", self.source),
+                    )
+                })?;
+            idx.push(k);
+        }
+        let rows = other.columns.first().map_or(0, |c| c.1.len());
+        let mut classes = match (&mut self.model_class, &other.model_class) {
+            (Some(a), Some(b)) => Some((a, b)),
+            _ => None,
+        };
+        let mut added = 0;
+        for r in 0..rows {
+            let row: Vec<(String, f64)> = self
+                .columns
+                .iter()
+                .zip(&idx)
+                .map(|((n, _), &k)| (n.clone(), other.columns[k].1[r]))
+                .collect();
+            if !keep(&row) {
+                continue;
+            }
+            for ((_, col), (_, v)) in self.columns.iter_mut().zip(&row) {
+                col.push(*v);
+            }
+            if let Some((a, b)) = classes.as_mut() {
+                a.push(b[r].clone());
+            }
+            added += 1;
+        }
+        if classes.is_none() {
+            self.model_class = None;
+        }
+        if added > 0 {
+            let mut hash = Fnv1a::default();
+            hash.str(&self.fingerprint);
+            hash.str(&other.fingerprint);
+            hash.u64(added as u64);
+            self.fingerprint = format!("{:016x}", hash.0);
+            self.source = format!("{} + {added} rows of {}", self.source, other.source);
+        }
+        Ok(self)
+    }
+
     /// Reads the columns `inputs` and `responses` of a CSV table (any other columns may hold
     /// anything). In a campaign table, rows whose run did not finish are left out, as are done
     /// rows with a `NaN` response; the sidecar next to the table is read when present.

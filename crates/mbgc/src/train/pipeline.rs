@@ -99,6 +99,10 @@ pub struct TrainRequest {
     pub extends: Option<String>,
     /// With `extends`: fit only what the new runs add to the extended model's equations.
     pub correction: bool,
+    /// Tables of an earlier train over a wider space, as (training, validation): their runs
+    /// that lie inside this space's ranges are fitted (and validated) with this train's own, so
+    /// that a train near a material reuses the runs a wider one made there.
+    pub also_fit: Vec<(PathBuf, PathBuf)>,
     /// Stop after the simulate stage.
     pub no_fit: bool,
     /// Skip the simulate stage and fit the rows the tables hold now (a provisional model).
@@ -129,6 +133,7 @@ impl TrainRequest {
             no_similarity: false,
             extends: None,
             correction: false,
+            also_fit: Vec::new(),
             no_fit: false,
             partial: false,
             figures: true,
@@ -492,6 +497,13 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     }
 
     // Stage 3: the fit, checked on the validation table.
+    let inside = {
+        let space = space.clone();
+        move |row: &[(String, f64)]| {
+            row.iter()
+                .all(|(n, v)| space.get(n).is_none_or(|p| p.contains(*v)))
+        }
+    };
     let mut fit_settings = FitSettings::new(record.inputs.clone(), responses.clone())
         .test_fraction(0.0)
         .config(gp::Config {
@@ -508,14 +520,34 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         fit_settings.extends = Some(Box::new(Metamodel::load(&old.model)?));
     }
     fit_settings.check()?;
-    let table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
-    if req.validation > 0 {
-        fit_settings.validation = Some(TrainingTable::read_csv(
-            &paths.validation_table,
-            &record.inputs,
-            &responses,
-        )?);
+    let mut table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
+    let mut validation = (req.validation > 0)
+        .then(|| TrainingTable::read_csv(&paths.validation_table, &record.inputs, &responses))
+        .transpose()?;
+    for (t, v) in &req.also_fit {
+        let other = TrainingTable::read_csv(t, &record.inputs, &responses)?;
+        table = table.with_rows_of(&other, &inside)?;
+        if let Some(val) = validation.take() {
+            let other = TrainingTable::read_csv(v, &record.inputs, &responses)?;
+            validation = Some(val.with_rows_of(&other, &inside)?);
+        }
     }
+    if !req.also_fit.is_empty() {
+        observer.note(
+            TrainStage::Fit,
+            &format!(
+                "fitting {} rows ({}){}",
+                table.columns.first().map_or(0, |c| c.1.len()),
+                table.source,
+                validation.as_ref().map_or(String::new(), |v| format!(
+                    "; validating on {} rows ({})",
+                    v.columns.first().map_or(0, |c| c.1.len()),
+                    v.source
+                ))
+            ),
+        );
+    }
+    fit_settings.validation = validation;
     let fitted = fit(&table, &fit_settings, |target, p| {
         observer.fit_progress(target, p)
     })?;
