@@ -45,9 +45,11 @@ pub struct DiagnoseArgs {
     /// varied), trained into --build-dir and resumed by the next call.
     #[arg(long, value_name = "EFFECTS", num_args = 0.., value_delimiter = ',')]
     pub build: Option<Vec<String>>,
-    /// DEM runs per local model: a fifth validate it; of the rest, a quarter are of the set's
-    /// own class (the effect off) and half of the remainder is run and fitted first, the last
-    /// half only if the model is still less precise than the measurements [default: 60].
+    /// DEM runs per local model, in two rounds: half over the whole search range (a fifth
+    /// validating it, a quarter of that repeating validation runs for the DEM noise, a quarter of
+    /// the training runs of the set's own class), and what is left only if that model is less
+    /// precise than the measurements: near the material, or extending the first round [default:
+    /// 60].
     #[arg(long, value_name = "N")]
     pub budget_runs: Option<usize>,
     /// Directory of the local models (spaces/, sampling/, training_data/, models/) [default:
@@ -113,6 +115,9 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     let mut built_models = Vec::new();
     if let Some(wanted) = &a.build {
         let plans = build::plan(&set, &models, wanted)?;
+        // Each build sees the set as given; the diagnosis then searches where the built models
+        // are valid (a second round's box narrows it).
+        let original = set.clone();
         if plans.is_empty() {
             say!(
                 out,
@@ -122,7 +127,7 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
         for p in &plans {
             say!(out, "{}", plan_text(p, &build_opts));
             let printer = crate::train_progress::Printer::new(build_opts.config.generations);
-            let built = build::build(&set, p, &build_opts, &printer);
+            let built = build::build(&original, p, &build_opts, &printer);
             printer.bar.finish_and_clear();
             let built = built?;
             if let Some(first) = &built.first {

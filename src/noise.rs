@@ -52,6 +52,7 @@ pub fn run(a: &NoiseArgs) -> anyhow::Result<()> {
     say!(out, "|---|---|---|---|");
     for (r, n) in model.responses.iter_mut().zip(&noise) {
         r.replicate_sd = Some(n.sd);
+        r.replicate_pairs = Some(n.pairs);
         say!(
             out,
             "| {} | {:.4} | {} | {} |",

@@ -160,3 +160,69 @@ fn a_diagnosis_builds_the_local_model_it_lacks_and_names_the_hidden_effect() {
     let j2: serde_json::Value = serde_json::from_str(&out2).unwrap();
     assert_eq!(j2["verdict"], j["verdict"]);
 }
+
+/// A budget large enough for a second round near the material: the first model (over the
+/// whole search range) is less precise than the measurements, so the rest of the budget is run
+/// in a box around its fits, with the first round's runs inside the box fitted again, and the
+/// diagnosis then searches that box.
+#[test]
+fn a_second_round_is_built_near_the_material_with_the_first_rounds_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    measurement_set(d);
+    let args = [
+        "diagnose",
+        "--measurements",
+        "set.toml",
+        "--build",
+        "sjkr",
+        "--budget-runs",
+        "150",
+        "--threads",
+        "1",
+        "--json",
+        "--samples",
+        "500",
+        "--starts",
+        "4",
+    ];
+    let (out, err) = ok(d, &args);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let built = &j["built"][0];
+    let first = &built["first_round"];
+    assert!(first.is_object(), "{built}");
+    // The first model misses by more than the sd, the second by less in cnr.
+    let rmse = |p: &serde_json::Value, k: usize| p["precision"][k]["model_error"].as_f64().unwrap();
+    assert!(rmse(first, 0) > 0.01 && rmse(built, 0) < 0.01, "{built}");
+    // The box is narrower than the first range in e_pw and keeps ced_pw = 0.
+    let focus = built["focus"].as_array().unwrap();
+    let e = focus.iter().find(|f| f[0] == "e_pw").unwrap();
+    let (lo, hi) = (e[1][0].as_f64().unwrap(), e[1][1].as_f64().unwrap());
+    assert!(lo > 0.4 && hi < 0.9 && hi - lo < 0.4, "{focus:?}");
+    let c = focus.iter().find(|f| f[0] == "ced_pw").unwrap();
+    assert_eq!(c[1][0].as_f64().unwrap(), 0.0, "{focus:?}");
+    assert!(
+        err.contains("rows of"),
+        "the first round's runs are fitted again: {err}"
+    );
+    assert!(
+        err.contains("the search ranges are those the second round"),
+        "{err}"
+    );
+    let v = j["verdict"].as_str().unwrap();
+    assert!(v.starts_with("sjkr explains it"), "{v}");
+    let s = &j["ranking"][0]["strength"][0];
+    let (lo, hi) = (s["q05"].as_f64().unwrap(), s["q95"].as_f64().unwrap());
+    assert!(lo < HIDDEN_CED && HIDDEN_CED < hi, "[{lo}, {hi}]");
+    // A second call runs nothing new and keeps the box.
+    let (out2, err2) = ok(d, &args);
+    assert!(
+        !err2
+            .lines()
+            .any(|l| l.contains(" ran ") && !l.contains(" ran 0 ")),
+        "{err2}"
+    );
+    let j2: serde_json::Value = serde_json::from_str(&out2).unwrap();
+    assert_eq!(j2["built"][0]["focus"], built["focus"]);
+    assert_eq!(j2["verdict"], j["verdict"]);
+}

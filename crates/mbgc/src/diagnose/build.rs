@@ -151,7 +151,8 @@ pub struct Precision {
     pub response: String,
     /// Validation RMSE: the model's own error and one run's DEM noise together.
     pub validation_rmse: f64,
-    /// One run's DEM noise, from the replicate pairs (`None`: no pair measured the response).
+    /// One run's DEM noise, from the replicate pairs, at its 95 % lower confidence bound
+    /// ([`crate::metamodel::noise::lower_bound`]; `None`: no pair measured the response).
     pub replicate_sd: Option<f64>,
     /// Median measurement sd of the set's samples.
     pub measurement_sd: f64,
@@ -607,25 +608,43 @@ pub fn build(
     // (the effect design starts with them).
     let (_, _, total, validation, replicates) = split(opts.budget_runs, with_base);
     let extended = (counts.0, counts.1, total, validation, replicates);
-    // An earlier call that extended the first model to the whole budget decided so: resume
-    // that decision.
-    let made = std::fs::read_to_string(TrainPaths::new(&opts.dir, &plan.name).design)
-        .map_or(0, |t| t.lines().count().saturating_sub(1));
-    if second > 0 && made >= total {
-        return round(plan, extended, Vec::new(), opts, observer);
-    }
-    let built = round(plan, counts, Vec::new(), opts, observer)?;
-    if built.precise_enough() || second == 0 {
-        return Ok(built);
-    }
-    let sub = only_experiment(set, &plan.experiment);
-    let model = surrogate(&built)?;
-    // The box an earlier call chose is kept: its runs were made there (a later version's fits
-    // may differ slightly and would otherwise start the round again).
+    // The box an earlier call chose for a second round is kept: its runs were made there (a
+    // later version's fits may differ slightly and would otherwise start the round again).
     let box_file = opts
         .dir
         .join("spaces")
         .join(format!("{}_focus.box.json", plan.name));
+    // An earlier call that extended the first model to the whole budget decided so: resume
+    // that decision.
+    let paths = TrainPaths::new(&opts.dir, &plan.name);
+    if second > 0 && !box_file.exists() && rows(&paths.design) >= total {
+        return round(plan, extended, Vec::new(), opts, observer);
+    }
+    let built = round(plan, counts, Vec::new(), opts, observer)?;
+    // The second round gets what the first left of the budget (a first round resumed from a
+    // larger earlier design may have used more than half).
+    let used =
+        rows(&paths.design) + rows(&paths.validation_design) + rows(&replicates_design(&paths));
+    let second = if second > 0 {
+        opts.budget_runs.saturating_sub(used)
+    } else {
+        0
+    };
+    if built.precise_enough() || second < MIN_BUDGET {
+        if !built.precise_enough() && second > 0 {
+            observer.note(
+                TrainStage::Fit,
+                &format!(
+                    "local model {}: {second} runs of the budget left, fewer than the {MIN_BUDGET} \
+                     a second round needs",
+                    plan.name
+                ),
+            );
+        }
+        return Ok(built);
+    }
+    let sub = only_experiment(set, &plan.experiment);
+    let model = surrogate(&built)?;
     let saved: Option<Vec<(String, [f64; 2])>> = match std::fs::read_to_string(&box_file) {
         Ok(text) => Some(serde_json::from_str(&text).map_err(|e| {
             Error::input(
@@ -680,8 +699,9 @@ pub fn build(
         plan.reason.clone(),
     )?;
     focused.name = format!("{}_focus", plan.name);
+    // One base per effect's box: two effects' second rounds have different boxes.
     if let Some((b, _)) = focused.base.as_mut() {
-        *b = format!("{b}_focus");
+        *b = format!("{}_base", focused.name);
     }
     let shrink: f64 = focused
         .varied
@@ -828,9 +848,6 @@ fn round(
         ..TrainRequest::new(space, &plan.experiment, n)
     };
     // A design an earlier call made larger is resumed at its size (a train never drops rows).
-    let rows = |p: &std::path::Path| {
-        std::fs::read_to_string(p).map_or(0, |t| t.lines().count().saturating_sub(1))
-    };
     if let Some((base_name, base_space)) = &plan.base {
         let path = write_space(&opts.dir, base_name, base_space)?;
         let bp = TrainPaths::new(&opts.dir, base_name);
@@ -885,7 +902,9 @@ fn round(
         .ok();
     if let Some(noise) = &noise {
         for r in model.responses.iter_mut() {
-            r.replicate_sd = noise.iter().find(|n| n.response == r.name).map(|n| n.sd);
+            let n = noise.iter().find(|n| n.response == r.name);
+            r.replicate_sd = n.map(|n| n.sd);
+            r.replicate_pairs = n.map(|n| n.pairs);
         }
         model.save(&paths.model)?;
     }
@@ -899,7 +918,10 @@ fn round(
                 validation_rmse: m
                     .and_then(|m| m.validation.or(m.test))
                     .map_or(f64::INFINITY, |v| v.rmse),
-                replicate_sd: m.and_then(|m| m.replicate_sd),
+                replicate_sd: m.and_then(|m| {
+                    m.replicate_sd
+                        .map(|sd| crate::metamodel::noise::lower_bound(sd, m.replicate_pairs))
+                }),
                 measurement_sd: *sd,
             }
         })
@@ -924,6 +946,23 @@ fn round(
     Ok(built)
 }
 
+/// Rows of a design file (0 when there is none yet).
+fn rows(path: &std::path::Path) -> usize {
+    std::fs::read_to_string(path).map_or(0, |t| t.lines().count().saturating_sub(1))
+}
+
+/// The design of a model's replicate runs, beside its validation design.
+fn replicates_design(paths: &TrainPaths) -> PathBuf {
+    let name = paths
+        .validation_design
+        .file_name()
+        .and_then(|n| n.to_str())
+        .map_or(String::new(), |n| {
+            n.replace("_validation.csv", "_replicates.csv")
+        });
+    paths.validation_design.with_file_name(name)
+}
+
 /// Runs the first `k` rows of the validation design again with another campaign seed (into
 /// `training_data/<name>_replicates.csv`, resumed like every table) and returns the table.
 fn replicate_runs(
@@ -935,9 +974,7 @@ fn replicate_runs(
 ) -> Result<PathBuf> {
     let design_text = std::fs::read_to_string(&paths.validation_design)
         .map_err(|e| Error::io(&paths.validation_design, e))?;
-    let design = paths
-        .validation_design
-        .with_file_name(format!("{}_replicates.csv", plan.name));
+    let design = replicates_design(paths);
     let old = std::fs::read_to_string(&design).map_or(0, |t| t.lines().count());
     let lines: Vec<&str> = design_text.lines().collect();
     let keep = (k + 1).max(old).min(lines.len());
@@ -987,7 +1024,7 @@ pub fn precision_text(b: &Built) -> String {
         .iter()
         .map(|p| {
             format!(
-                "{} validation RMSE {:.4} (replicate sd {}, own error {:.4}; measurement sd {:.4})",
+                "{} validation RMSE {:.4} (noise >= {}, own error <= {:.4}; measurement sd {:.4})",
                 p.response,
                 p.validation_rmse,
                 p.replicate_sd

@@ -33,6 +33,9 @@ pub struct Target {
     pub model_error: f64,
     /// Whether the set gives the model error (`[model_error]`), which then stays as given.
     error_given: bool,
+    /// The model's validation RMSE (or the set's given error), before `model_error` is
+    /// localised.
+    global_error: f64,
     /// The DEM noise in `model_error` (the model's replicate sd), when known.
     noise: Option<f64>,
 }
@@ -47,9 +50,16 @@ impl Target {
     /// measurement sd already holds (a measured value scatters about the DEM mean by that noise,
     /// and the model predicts the mean, missing it by the rest); the whole error when the set
     /// gives it or the model does not know its noise.
+    ///
+    /// The noise is taken off the validation RMSE, where both are measured over the same runs;
+    /// a localised error keeps the same share of it (subtracting the noise from a local
+    /// estimate, itself scattered, could leave nothing of an error that is there).
     pub fn own_error(&self) -> f64 {
         match self.noise {
-            Some(n) if !self.error_given => (self.model_error.powi(2) - n * n).max(0.0).sqrt(),
+            Some(n) if !self.error_given && self.global_error > 0.0 => {
+                let own = (self.global_error.powi(2) - n * n).max(0.0).sqrt();
+                own * self.model_error / self.global_error
+            }
             _ => self.model_error,
         }
     }
@@ -439,6 +449,7 @@ impl<'s> Joint<'s> {
                     value: r.value,
                     sd: r.sd,
                     model_error,
+                    global_error: model_error,
                     error_given: given.is_some(),
                     noise: m.noise[model_response],
                 });

@@ -84,7 +84,16 @@ impl Surrogate {
                 .map(|c| (c.name.clone(), c.value))
                 .collect(),
             responses: m.responses.iter().map(|r| r.name.clone()).collect(),
-            noise: m.responses.iter().map(|r| r.replicate_sd).collect(),
+            // The noise at its lower confidence bound: only what surely is noise is taken off
+            // the model's error.
+            noise: m
+                .responses
+                .iter()
+                .map(|r| {
+                    r.replicate_sd
+                        .map(|sd| crate::metamodel::noise::lower_bound(sd, r.replicate_pairs))
+                })
+                .collect(),
             error,
             predict: Box::new(move |r, x| mp.predict_point(&mp.responses[r], x)),
             error_at: Box::new(move |r, x| me.error_at(&me.responses[r], x)),

@@ -702,6 +702,7 @@ fn fit_response(
             .map(|v| Metrics::of(&v.observed, &v.predicted)),
         error_model: None,
         replicate_sd: None,
+        replicate_pairs: None,
     };
     let splits = ResponseSplits {
         response: target.to_string(),

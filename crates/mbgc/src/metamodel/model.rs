@@ -256,6 +256,10 @@ pub struct ResponseModel {
     /// noise`): the part of the validation error that is the data's, not the equation's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replicate_sd: Option<f64>,
+    /// How many replicate pairs measured `replicate_sd` (`None`: not recorded). Few pairs give a
+    /// loose estimate, which [`super::noise::lower_bound`] allows for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replicate_pairs: Option<usize>,
 }
 
 /// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.

@@ -7,6 +7,22 @@ use std::path::Path;
 use super::table::read_columns_skipping_nan;
 use crate::error::{Error, Result};
 
+/// The noise that a replicate sd `sd` from `pairs` pairs is at least, with 95 % confidence
+/// (`sd` itself when the pairs are not known): `sd sqrt(pairs / chi2_0.95(pairs))`, each pair
+/// difference being one degree of freedom. A model's own error is its validation RMSE less the
+/// noise; subtracting the point estimate of a loose noise can leave nothing of an error that is
+/// there (12 pairs: the true sd may be 25 % lower).
+pub fn lower_bound(sd: f64, pairs: Option<usize>) -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    match pairs.filter(|&n| n > 0) {
+        Some(n) => match ChiSquared::new(n as f64) {
+            Ok(c) => sd * (n as f64 / c.inverse_cdf(0.95)).sqrt(),
+            Err(_) => sd,
+        },
+        None => sd,
+    }
+}
+
 /// The replicate noise of one response.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReplicateNoise {
@@ -78,6 +94,22 @@ pub fn replicate_noise(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_noise_from_few_pairs_is_lowered_more_than_one_from_many() {
+        assert_eq!(lower_bound(2.0, None), 2.0);
+        let few = lower_bound(2.0, Some(12));
+        let many = lower_bound(2.0, Some(200));
+        // chi2_0.95(12) = 21.03, chi2_0.95(200) = 234.0
+        assert!(
+            (few - 2.0 * (12.0f64 / 21.026).sqrt()).abs() < 1e-3,
+            "{few}"
+        );
+        assert!(
+            (many - 2.0 * (200.0f64 / 233.994).sqrt()).abs() < 1e-3,
+            "{many}"
+        );
+    }
 
     #[test]
     fn pairs_are_matched_by_their_inputs_and_pooled() {

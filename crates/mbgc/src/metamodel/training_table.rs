@@ -126,7 +126,7 @@ impl TrainingTable {
             }
             added += 1;
         }
-        if classes.is_none() {
+        if classes.is_none() && added > 0 {
             self.model_class = None;
         }
         if added > 0 {
