@@ -23,6 +23,26 @@ fn ok(dir: &Path, args: &[&str]) -> (String, String) {
 }
 
 const HIDDEN_CED: f64 = 3e4;
+
+/// `diagnose --build sjkr` on the set at `budget` runs, one thread, JSON, a quick TMCMC.
+fn build_args(budget: &str) -> Vec<&str> {
+    vec![
+        "diagnose",
+        "--measurements",
+        "set.toml",
+        "--build",
+        "sjkr",
+        "--budget-runs",
+        budget,
+        "--threads",
+        "1",
+        "--json",
+        "--samples",
+        "500",
+        "--starts",
+        "4",
+    ]
+}
 const SPEEDS: [f64; 5] = [0.05, 0.1, 0.2, 0.4, 0.6];
 
 /// The measurement set, made by DEM runs with the hidden cohesion (sd 0.01 on both
@@ -104,22 +124,7 @@ fn a_diagnosis_builds_the_local_model_it_lacks_and_names_the_hidden_effect() {
     );
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("--budget-runs"), "{e}");
-    let args = [
-        &[
-            "diagnose",
-            "--measurements",
-            "set.toml",
-            "--build",
-            "sjkr",
-            "--budget-runs",
-            "60",
-            "--threads",
-            "1",
-            "--json",
-        ][..],
-        &quick,
-    ]
-    .concat();
+    let args = build_args("60");
     let (out, err) = ok(d, &args);
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     // 60 runs, 30 a round: 6 validation, 2 replicates and 22 training runs, of which 5 (and 1
@@ -170,22 +175,7 @@ fn a_second_round_is_built_near_the_material_with_the_first_rounds_runs() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     measurement_set(d);
-    let args = [
-        "diagnose",
-        "--measurements",
-        "set.toml",
-        "--build",
-        "sjkr",
-        "--budget-runs",
-        "150",
-        "--threads",
-        "1",
-        "--json",
-        "--samples",
-        "500",
-        "--starts",
-        "4",
-    ];
+    let args = build_args("150");
     let (out, err) = ok(d, &args);
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     let built = &j["built"][0];
