@@ -5,7 +5,7 @@ use clap::{Args, Subcommand};
 use mbgc_studies::{
     cohesive_metamodel_report, dem_throughput, diagnose_report, gp_vs_gplearn, liggghts_backend,
     metamodel_benchmark, metamodel_report, restitution, sampling_quality, sensitivity_report,
-    shear_box_check, shear_box_vs_liggghts,
+    shear_box_check, shear_box_vs_liggghts, shear_cell_report,
 };
 
 #[derive(Debug, Args)]
@@ -28,6 +28,10 @@ pub enum BenchCommand {
     /// Shear box checked independently: against a LIGGGHTS deck that fills itself (3 frictions x
     /// 2 PSDs), seed 004's Gravel 8/16 point, box scale, replicate noise, whole-run cost.
     ShearBoxCheck(shear_box_check::Args),
+    /// docs/shear_cell.md: the shear cell's noise at two cell sizes, its cohesionless yield
+    /// locus against the origin, its cohesion intercept against the SJKR energy density and an
+    /// order-of-magnitude estimate, and its cost, from the tables under docs/data/shear_cell.
+    ShearCell(shear_cell_report::Args),
     /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
     /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
     Gp(gp_vs_gplearn::Args),
@@ -63,6 +67,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Dem(d) => dem_throughput::run(d),
         BenchCommand::ShearBox(b) => shear_box_vs_liggghts::run(b),
         BenchCommand::ShearBoxCheck(b) => shear_box_check::run(b),
+        BenchCommand::ShearCell(c) => shear_cell_report::run(c),
         BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
         BenchCommand::Metamodel(m) => metamodel_report::run(m),
         BenchCommand::CohesiveMetamodel(m) => cohesive_metamodel_report::run(m),

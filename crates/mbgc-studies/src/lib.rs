@@ -20,6 +20,8 @@
 //!   (docs/sensitivity.md).
 //! - [`liggghts_backend`]: the shear box as a campaign on mbgc, LIGGGHTS and LIGGGHTS under MPI
 //!   (docs/liggghts_backend.md).
+//! - [`shear_cell_report`]: the shear cell's noise, cohesionless locus, cohesion and cost from
+//!   its campaign tables (docs/shear_cell.md).
 //! - [`reference`](mod@reference): the reference codes (`--vs`).
 
 // The options' doc comments are `mbgc bench --help`'s text, written for the terminal (`<dir>`).
@@ -41,6 +43,7 @@ pub mod sensitivity_report;
 pub mod shear_box_check;
 pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;
+pub mod shear_cell_report;
 
 /// Tells where a study's report went: a line on standard error, and with `--json` one JSON
 /// object on standard output (`report`, then the study's own fields), as every command does.
