@@ -151,16 +151,7 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
                     ""
                 },
                 if built.first.is_some() {
-                    format!(
-                        " over {}",
-                        built
-                            .plan
-                            .varied
-                            .iter()
-                            .map(|(n, [lo, hi])| format!("{n} [{lo:.4}, {hi:.4}]"))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
+                    format!(" over {}", build::ranges_text(&built.plan.varied))
                 } else {
                     String::new()
                 },
@@ -178,12 +169,7 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
                 say!(
                     out,
                     "the search ranges are those the second round's model was built for: {}",
-                    built
-                        .focus
-                        .iter()
-                        .map(|(n, [lo, hi])| format!("{n} [{lo:.4}, {hi:.4}]"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    build::ranges_text(&built.focus)
                 );
                 set = build::narrow(&set, &built);
             }

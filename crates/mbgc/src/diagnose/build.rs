@@ -729,12 +729,7 @@ pub fn build(
             "local model {}: {}; second round over {}",
             plan.name,
             precision_text(&built),
-            focused
-                .varied
-                .iter()
-                .map(|(n, [a, b])| format!("{n} [{a:.4}, {b:.4}]"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            ranges_text(&focused.varied)
         ),
     );
     let text = serde_json::to_string_pretty(&focus)
@@ -1033,6 +1028,15 @@ pub fn precision_text(b: &Built) -> String {
                 p.measurement_sd
             )
         })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `mu_pp [0.2000, 0.7000], ...`: parameter ranges for messages.
+pub fn ranges_text(ranges: &[(String, [f64; 2])]) -> String {
+    ranges
+        .iter()
+        .map(|(n, [lo, hi])| format!("{n} [{lo:.4}, {hi:.4}]"))
         .collect::<Vec<_>>()
         .join(", ")
 }
