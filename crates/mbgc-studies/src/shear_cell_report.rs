@@ -156,7 +156,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         w,
         "\n## Noise of one run\n\nMean and sample sd over the replicates (n runs), cohesion 0. \
          The three-run tables were made with the experiment as of commit 94342dc, the eight-run \
-         table with the current one.\n"
+         table later: its first three rows have the k = 12 three-run table's seeds and repeat \
+         those runs bit for bit (so they are not independent of it, and the later changes to \
+         the cell did not change its results). A run that needs a long pre-shear travel to \
+         reach a steady state stands out (the warnings column gives the travel).\n"
     );
     let mut head = "| replicates | n |".to_string();
     let mut rule = "|---|---|".to_string();
