@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use mbgc::error::write_atomic;
 use mbgc::metamodel::Metamodel;
 use mbgc::space::Space;
 use mbgc::train::{TrainPaths, TrainRecord};
@@ -213,14 +212,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     )?;
     equation_section(&mut w, &model);
 
-    if let Some(parent) = a.report.parent() {
-        if !parent.as_os_str().is_empty() {
-            std::fs::create_dir_all(parent)?;
-        }
-    }
-    write_atomic(&a.report, w.as_bytes())?;
-    crate::report_written(a.json, &a.report, serde_json::json!({ "model": a.name }));
-    Ok(())
+    crate::write_report(
+        a.json,
+        &a.report,
+        &w,
+        serde_json::json!({ "model": a.name }),
+    )
 }
 
 fn space_section(w: &mut String, space: &Space, record: &TrainRecord, train: &[Run]) {

@@ -45,6 +45,22 @@ pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;
 pub mod shear_cell_report;
 
+/// Writes a study's report atomically (its directory made first), then says where it went
+/// ([`report_written`]).
+pub fn write_report(
+    json: bool,
+    report: &std::path::Path,
+    text: &str,
+    fields: serde_json::Value,
+) -> anyhow::Result<()> {
+    if let Some(parent) = report.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)?;
+    }
+    mbgc::error::write_atomic(report, text.as_bytes())?;
+    report_written(json, report, fields);
+    Ok(())
+}
+
 /// Tells where a study's report went: a line on standard error, and with `--json` one JSON
 /// object on standard output (`report`, then the study's own fields), as every command does.
 pub fn report_written(json: bool, report: &std::path::Path, fields: serde_json::Value) {

@@ -10,8 +10,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use mbgc::error::write_atomic;
-
 /// The responses of the shear cell, in report order, with units.
 const RESPONSES: [(&str, &str); 5] = [
     ("internal_friction", "deg"),
@@ -249,14 +247,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
          k = 12 against the metamodel budget, and a firmer steady-state test (issue 36)."
     );
 
-    if let Some(parent) = a.report.parent() {
-        if !parent.as_os_str().is_empty() {
-            std::fs::create_dir_all(parent)?;
-        }
-    }
-    write_atomic(&a.report, w.as_bytes())?;
-    crate::report_written(a.json, &a.report, serde_json::json!({ "data": a.data }));
-    Ok(())
+    crate::write_report(a.json, &a.report, &w, serde_json::json!({ "data": a.data }))
 }
 
 #[cfg(test)]
