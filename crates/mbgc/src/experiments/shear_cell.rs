@@ -688,6 +688,27 @@ impl Experiment for ShearCell {
         let bulk_density = mass_in / (l * w * lid_mean);
         let preshear_travel = travel;
 
+        // The normal stress on the shear plane holds the weight of the material above it, which
+        // the lid cannot take off: a failure stress below that weight is never reached, and all
+        // failure points would sit at the weight (a locus of one point, silently NaN).
+        let overburden = {
+            let p = &sim.particles;
+            let above: f64 = (0..p.len())
+                .filter(|&i| p.x[i][2] > lay.split)
+                .map(|i| p.m[i])
+                .sum();
+            above * G / ((lay.size[0] - travel) * lay.size[1])
+        };
+        let lowest = FAILURE_FRACTIONS[0] * sigma_pre;
+        if lowest < overburden {
+            return Err(Error::invalid(format!(
+                "shear cell: normal_stress {sigma_pre} Pa puts the lowest failure point at \
+                 {lowest:.0} Pa, below the {overburden:.0} Pa that the material above the shear \
+                 plane weighs; expected normal_stress above {:.0} Pa for this cell",
+                overburden / FAILURE_FRACTIONS[0]
+            )));
+        }
+
         // Failure at smaller normal stresses, each from a copy of the pre-sheared state.
         let mut locus = Vec::new();
         let mut failed_peaks = 0;
@@ -860,6 +881,39 @@ mod tests {
         assert_eq!(
             get(&big, "cohesion").to_bits(),
             (4.0 * get(&base, "cohesion")).to_bits()
+        );
+    }
+
+    /// Measured at k = 12, 10 mm and 1000 Pa: the three failure points all sat at the weight of
+    /// the upper half (1.04e3 Pa) and the locus was NaN without a word. The run now says why.
+    #[test]
+    fn a_normal_stress_below_the_overburden_is_refused_by_name() {
+        let cell = ShearCell {
+            cell_scale: 4.0,
+            class: ModelClass::parse("hertz,mindlin,epsd2").unwrap(),
+            ..ShearCell::default()
+        };
+        let p = ParamSet::from_pairs(&[
+            ("E_p", 5e6),
+            ("E_w", 5e6),
+            ("nu_p", 0.3),
+            ("rho_p", 2600.0),
+            ("d50", 4.0),
+            ("normal_stress", 200.0),
+            ("e_pp", 0.5),
+            ("e_pw", 0.5),
+            ("mu_pp", 0.5),
+            ("mu_pw", 0.3),
+            ("mu_r_pp", 0.1),
+            ("mu_r_pw", 0.1),
+        ]);
+        let e = cell
+            .run(&p, 3, &RunOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("normal_stress 200 Pa") && e.contains("weighs"),
+            "{e}"
         );
     }
 
