@@ -371,13 +371,18 @@ struct Stress {
     shear: f64,
 }
 
-fn stress(sim: &Simulation, lay: &Layout, travel: f64) -> Stress {
-    let area = (lay.size[0] - travel) * lay.size[1];
+/// Mass of the particles above the shear plane: their weight is part of its normal stress.
+fn mass_above(sim: &Simulation, lay: &Layout) -> f64 {
     let p = &sim.particles;
-    let above: f64 = (0..p.len())
+    (0..p.len())
         .filter(|&i| p.x[i][2] > lay.split)
         .map(|i| p.m[i])
-        .sum();
+        .sum()
+}
+
+fn stress(sim: &Simulation, lay: &Layout, travel: f64) -> Stress {
+    let area = (lay.size[0] - travel) * lay.size[1];
+    let above = mass_above(sim, lay);
     let lid = sim.wall_force(LID);
     let shelf = sim.wall_force(SHELF);
     let push: f64 = UPPER
@@ -691,14 +696,7 @@ impl Experiment for ShearCell {
         // The normal stress on the shear plane holds the weight of the material above it, which
         // the lid cannot take off: a failure stress below that weight is never reached, and all
         // failure points would sit at the weight (a locus of one point, silently NaN).
-        let overburden = {
-            let p = &sim.particles;
-            let above: f64 = (0..p.len())
-                .filter(|&i| p.x[i][2] > lay.split)
-                .map(|i| p.m[i])
-                .sum();
-            above * G / ((lay.size[0] - travel) * lay.size[1])
-        };
+        let overburden = mass_above(&sim, &lay) * G / ((lay.size[0] - travel) * lay.size[1]);
         let lowest = FAILURE_FRACTIONS[0] * sigma_pre;
         if lowest < overburden {
             return Err(Error::invalid(format!(
