@@ -27,7 +27,11 @@
 //! Stresses: the normal stress on the shear plane is the lid's plus the weight of the material
 //! above the plane per area; the shear stress is the horizontal force on the upper half (its
 //! walls and the lid) per plan area. The shear is quasi-static: the upper half moves at
-//! `0.01 sqrt(sigma_pre / rho_p)`, an inertial number of 1e-3 over a shear band 10 d50 wide.
+//! `0.02 sqrt(sigma_pre / rho_p)`, an inertial number I of 2e-3 over a shear band 10 d50 wide
+//! (4e-3 if it is 5 d50). Dense flow's mu(I) law (GDR MiDi 2004; Jop et al. 2006: mu_s +
+//! (mu_2 - mu_s) / (I_0 / I + 1), mu_2 - mu_s about 0.26, I_0 about 0.28) raises the stress ratio
+//! by under 0.004 there, a tenth of one run's noise; half that speed needs 1.75 times the time
+//! steps (docs/shear_cell.md).
 //!
 //! Responses: `internal_friction` (degrees, the slope of the linear yield locus through the
 //! failure points), `cohesion` (Pa, its intercept), `unconfined_yield_strength` (Pa, the Mohr
@@ -71,13 +75,19 @@ pub const OWN_PARAMETERS: [&str; 6] = ["E_p", "E_w", "nu_p", "rho_p", "d50", "no
 /// range a ring shear tester's standard procedure spans).
 pub const FAILURE_FRACTIONS: [f64; 3] = [0.25, 0.5, 0.75];
 
+/// Speed of the upper half in units of sqrt(normal stress / rho_p) (the module's documentation
+/// gives the inertial number and why it is quasi-static).
+const SHEAR_SPEED: f64 = 0.02;
+
 /// Pre-shear travel in d50 (the module's documentation gives the measurement behind it).
 pub const PRESHEAR_TRAVEL: f64 = 2.0;
 
 /// Steady pre-shear: the stress ratio of its last 0.5 d50 within this fraction of the 0.5 d50
-/// before (a 2 % test fired on the noise at the first chance, and 2 d50 of travel is too short
-/// for a longer window).
-pub const STEADY_TOLERANCE: f64 = 0.05;
+/// before. The ratio fluctuates: in eight cohesionless k = 12 replicates at 5 kPa the two windows
+/// differed by 0.6-9.7 % (four above 5 %; their difference has an sd of about 6 %), so the test
+/// is set at twice that, where it catches the cell's breakdown (-18 % over 0.5 d50) and not its
+/// noise; 2 d50 of travel is too short for longer windows.
+pub const STEADY_TOLERANCE: f64 = 0.12;
 
 /// Longest pre-shear plus failure travel, as a fraction of the cell's length, run without a
 /// warning (the k = 12 cell broke down beyond about 15 %).
@@ -249,7 +259,7 @@ impl ShearCell {
         let dt = self.dt_fraction * rayleigh_time(0.5 * lay.d_min, rho, e, nu);
         let t0 = (lay.d_max / G).sqrt();
         let fall = (2.0 * column_top / G).sqrt();
-        let v_shear = 0.01 * (sigma / rho).sqrt();
+        let v_shear = SHEAR_SPEED * (sigma / rho).sqrt();
         let steps = |t: f64| ((t / dt).ceil() as u64).max(1);
         Schedule {
             dt,
@@ -965,7 +975,8 @@ mod tests {
     }
 
     /// The measured k = 12 curve (docs of this module): level from 1.5 to 2.5 d50, rising by 8 %
-    /// from 2.5 to 3.5 and falling by 18 % into 4 d50.
+    /// from 2.5 to 3.5 (within the window-to-window scatter of about 6 %) and falling by 18 %
+    /// into 4 d50 as the cell breaks down.
     #[test]
     fn the_steadiness_test_passes_a_level_pre_shear_and_names_a_moving_one() {
         let at = |ratios: &[f64]| -> Vec<(f64, f64)> {
@@ -975,16 +986,17 @@ mod tests {
                 .collect()
         };
         assert_eq!(steadiness(&at(&[0.8317, 0.8534])), Ok(()));
+        assert_eq!(steadiness(&at(&[0.8613, 0.9277])), Ok(()));
         // Noise of a few % bin to bin, level on average.
         let mut noisy = at(&[0.85, 0.85]);
         for (i, b) in noisy.iter_mut().enumerate() {
             b.1 *= 1.0 + 0.04 * if i % 2 == 0 { 1.0 } else { -1.0 };
         }
         assert_eq!(steadiness(&noisy), Ok(()));
-        let rising = steadiness(&at(&[0.8613, 0.9277])).unwrap_err();
-        assert!(rising.contains("from 0.861 to 0.928"), "{rising}");
         let falling = steadiness(&at(&[0.9277, 0.7598])).unwrap_err();
-        assert!(falling.contains("not steady"), "{falling}");
+        assert!(falling.contains("from 0.928 to 0.760"), "{falling}");
+        let rising = steadiness(&at(&[0.75, 0.9])).unwrap_err();
+        assert!(rising.contains("not steady"), "{rising}");
         let short = steadiness(&at(&[0.85])).unwrap_err();
         assert!(short.contains("5 bins"), "{short}");
     }
