@@ -61,7 +61,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub retry_failed: bool,
     /// Code that simulates: embedded (mbgc's DEM) or liggghts (LIGGGHTS 3.8 on the `liggghts`
-    /// executable, shear-box only). Recorded in the table's `backend` column and in each run id.
+    /// executable, shear-box and shear-cell only). Recorded in the table's `backend` column and in each run id.
     #[arg(long, default_value = "embedded", value_parser = parse_backend)]
     pub backend: Backend,
     /// MPI processes per LIGGGHTS run (`mpirun -np N`); --threads then defaults to cores / N.

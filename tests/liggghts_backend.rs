@@ -317,7 +317,7 @@ fn options_the_chosen_backend_would_ignore_are_refused_naming_them() {
         ),
         (
             &["--experiment", "hopper", "--backend", "liggghts"][..],
-            "shear-box only",
+            "the shear box and the shear cell only",
         ),
         (
             &["--experiment", "shear-box", "--backend", "lammps"][..],

@@ -8,6 +8,7 @@ use crate::experiments::shear_cell::ShearCell;
 use crate::experiments::wall_impact::WallImpact;
 use crate::experiments::Experiment;
 use crate::liggghts::shear_box_experiment::{DeckMode, LiggghtsShearBox};
+use crate::liggghts::shear_cell_experiment::LiggghtsShearCell;
 use mbgc_dem::contact::ModelClass;
 use std::sync::Mutex;
 
@@ -66,9 +67,17 @@ fn liggghts_experiment(
             },
             mode,
         )?)),
+        "shear-cell" => Ok(Box::new(LiggghtsShearCell::new(
+            ShearCell {
+                cell_scale: s.box_scale.unwrap_or(ShearCell::default().cell_scale),
+                class: s.model_class.unwrap_or_default(),
+                ..ShearCell::default()
+            },
+            mode,
+        )?)),
         _ if all().iter().any(|(n, _)| *n == name) => Err(Error::invalid(format!(
-            "--experiment {name} --backend liggghts: mbgc writes LIGGGHTS decks for shear-box \
-             only; run {name} with the embedded backend"
+            "--experiment {name} --backend liggghts: mbgc writes LIGGGHTS decks for the shear box \
+             and the shear cell only; run {name} with the embedded backend"
         ))),
         _ => Err(Error::invalid(format!(
             "--experiment {name}: unknown experiment (known: {})",

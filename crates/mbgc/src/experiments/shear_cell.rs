@@ -17,6 +17,18 @@
 //! steadiness is tested, not waited for: the mean stress ratio of its last 0.5 d50 must lie
 //! within [`STEADY_TOLERANCE`] of the 0.5 d50 before, or the run says it was not steady.
 //!
+//! **Known limit (issue 36, measured): for most of the metamodel's space the split box reaches
+//! no steady pre-shear before it breaks down.** Three of the first four runs of the campaign
+//! over `examples/space_shear_cell.toml` failed the steadiness test, the ratio still rising by
+//! 14-21 % over the last d50. One of them (mu_pp 0.99, mu_r_pp 0.035, E 4.5 MPa, 8.9 kPa),
+//! pre-sheared by a temporary change over 4.5 d50: 0.19, 0.37, 0.49, 0.58, 0.63, 0.66, 0.68 at
+//! 0.5-3.5 d50, then 0.65 and 0.59; the same run in a cell 3k long: 0.40 at 2 d50, 0.49 at 3,
+//! 0.58 at 4, 0.63 at 5, 0.64 at 5.5, then falling. In both lengths the stress ratio climbs
+//! until about 15 % of the cell's length and falls after it: the course is set by the cell
+//! (likely the shear zone spreading from the pushing end wall), not by the material. Periodic boundaries in the shear direction (a rough lid and floor, no end walls)
+//! are the way to a steady state; the engine has none yet. The `warnings` column gives each
+//! run's stress ratio per 0.5 d50 of pre-shear, so a table shows where it stood.
+//!
 //! Geometry, in units of d_max (the PSD's Q3 99 % diameter) so that the cell holds the same
 //! number of particles at every size: length 2k, width k, the bed about k tall, split at k/2
 //! (k = `cell_scale`, 12 by default: at k = 8 three cohesionless replicates at 5 kPa scattered
@@ -41,6 +53,9 @@
 
 use std::time::Instant;
 
+use super::shear_test::{
+    line, steadiness, unconfined_yield_strength, Bins, SERVO_GAIN, TRAVEL_SHARE,
+};
 use super::{
     materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
     RHO_RANGE,
@@ -81,17 +96,6 @@ const SHEAR_SPEED: f64 = 0.02;
 
 /// Pre-shear travel in d50 (the module's documentation gives the measurement behind it).
 pub const PRESHEAR_TRAVEL: f64 = 2.0;
-
-/// Steady pre-shear: the stress ratio of its last 0.5 d50 within this fraction of the 0.5 d50
-/// before. The ratio fluctuates: in eight cohesionless k = 12 replicates at 5 kPa the two windows
-/// differed by 0.6-9.7 % (four above 5 %; their difference has an sd of about 6 %), so the test
-/// is set at twice that, where it catches the cell's breakdown (-18 % over 0.5 d50) and not its
-/// noise; 2 d50 of travel is too short for longer windows.
-pub const STEADY_TOLERANCE: f64 = 0.12;
-
-/// Longest pre-shear plus failure travel, as a fraction of the cell's length, run without a
-/// warning (the k = 12 cell broke down beyond about 15 %).
-const TRAVEL_SHARE: f64 = 0.15;
 
 /// Solid fraction of the poured column (random insertion jams near 0.25; see the shear box).
 const FILL_FRACTION: f64 = 0.2;
@@ -443,11 +447,6 @@ fn spill(sim: &mut Simulation, lay: &Layout) -> f64 {
     mass
 }
 
-/// Gain of the lid's servo: full speed at a relative stress error of 1 / SERVO_GAIN. The
-/// dilation at a failure peak lifts the lid at about a third of the shear speed, which this
-/// follows within about 7 % of the target stress.
-const SERVO_GAIN: f64 = 5.0;
-
 /// The lid's vertical speed for a target normal stress: proportional to the relative error,
 /// at most `v_servo`.
 fn servo(sim: &mut Simulation, s: &Stress, target: f64, v_servo: f64) {
@@ -459,84 +458,6 @@ fn set_shear(sim: &mut Simulation, v: f64) {
     for w in UPPER.iter().chain([&LID]) {
         sim.walls[*w].velocity[0] = v;
     }
-}
-
-/// Bins of travel, each the mean normal and shear stress of its samples.
-#[derive(Debug, Default)]
-struct Bins {
-    width: f64,
-    current: (f64, f64, usize),
-    start: f64,
-    done: Vec<(f64, f64)>,
-}
-
-impl Bins {
-    fn new(width: f64, start: f64) -> Bins {
-        Bins {
-            width,
-            start,
-            ..Bins::default()
-        }
-    }
-    fn add(&mut self, travel: f64, s: &Stress) {
-        self.current.0 += s.normal;
-        self.current.1 += s.shear;
-        self.current.2 += 1;
-        if travel - self.start >= self.width * (self.done.len() + 1) as f64 {
-            let n = self.current.2 as f64;
-            self.done.push((self.current.0 / n, self.current.1 / n));
-            self.current = (0.0, 0.0, 0);
-        }
-    }
-    /// Mean (normal, shear) over the last `k` bins.
-    fn last(&self, k: usize) -> Option<(f64, f64)> {
-        (self.done.len() >= k).then(|| {
-            let b = &self.done[self.done.len() - k..];
-            (
-                b.iter().map(|x| x.0).sum::<f64>() / k as f64,
-                b.iter().map(|x| x.1).sum::<f64>() / k as f64,
-            )
-        })
-    }
-}
-
-/// The steady-state test of the pre-shear on its bins of 0.1 d50: the stress ratio of the last
-/// five within [`STEADY_TOLERANCE`] of the five before; the error says how far it moved.
-fn steadiness(bins: &[(f64, f64)]) -> std::result::Result<(), String> {
-    let n = bins.len();
-    if n < 10 {
-        return Err(format!(
-            "pre-shear not tested for steadiness: {n} bins of 0.1 d50, 10 needed"
-        ));
-    }
-    let ratio =
-        |b: &[(f64, f64)]| b.iter().map(|x| x.1).sum::<f64>() / b.iter().map(|x| x.0).sum::<f64>();
-    let (last, before) = (ratio(&bins[n - 5..]), ratio(&bins[n - 10..n - 5]));
-    if (last - before).abs() < STEADY_TOLERANCE * last.abs() {
-        Ok(())
-    } else {
-        Err(format!(
-            "pre-shear not steady: its stress ratio went from {before:.3} to {last:.3} over its \
-             last d50 of travel"
-        ))
-    }
-}
-
-/// Least-squares line `y = a + b x`; returns (a, b).
-fn line(pts: &[(f64, f64)]) -> (f64, f64) {
-    let n = pts.len() as f64;
-    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
-    let (mx, my) = (sx / n, sy / n);
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let b = sxy / sxx;
-    (my - b * mx, b)
-}
-
-/// The unconfined yield strength of a linear yield locus with cohesion `c` and friction angle
-/// `phi` (radians): the Mohr circle through the origin tangent to the locus.
-pub fn unconfined_yield_strength(c: f64, phi: f64) -> f64 {
-    2.0 * c * (1.0 + phi.sin()) / phi.cos()
 }
 
 impl Experiment for ShearCell {
@@ -689,7 +610,7 @@ impl Experiment for ShearCell {
         // Pre-shear over a fixed travel, then test that it was steady.
         set_shear(&mut sim, sch.v_shear);
         let start = sim.time;
-        let mut bins = Bins::new(sch.bin, 0.0);
+        let mut bins = Bins::new(sch.bin);
         let mut travel = 0.0;
         let mut heights = Vec::new();
         while travel < sch.preshear {
@@ -698,7 +619,7 @@ impl Experiment for ShearCell {
             spilled += spill(&mut sim, &lay);
             let s = stress(&sim, &lay, travel);
             servo(&mut sim, &s, sigma_pre, sch.v_servo);
-            bins.add(travel, &s);
+            bins.add(travel, s.normal, s.shear);
             heights.push(lid_height(&sim));
         }
         let steady = match steadiness(&bins.done) {
@@ -708,6 +629,16 @@ impl Experiment for ShearCell {
                 false
             }
         };
+        // The pre-shear's course, for the table: whether it levelled off shows there.
+        let curve = bins
+            .done
+            .chunks(5)
+            .map(|c| {
+                let (n, t) = c.iter().fold((0.0, 0.0), |a, x| (a.0 + x.0, a.1 + x.1));
+                format!("{:.3}", t / n)
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
         let (pre_normal, pre_shear) = bins.last(5).unwrap_or((f64::NAN, f64::NAN));
         let shear_ratio = pre_shear / pre_normal;
         let k = (heights.len() / 4).max(1);
@@ -755,7 +686,7 @@ impl Experiment for ShearCell {
             // The peak of a running mean over 0.3 d50 of travel: the largest single bin would
             // pick the noise's largest excursion, a bias of the same size at every normal stress
             // that shows up as a cohesion.
-            let mut bins = Bins::new(sch.bin, 0.0);
+            let mut bins = Bins::new(sch.bin);
             let mut peak: Option<(f64, f64)> = None;
             let mut past_peak = false;
             let mut t = 0.0;
@@ -766,7 +697,7 @@ impl Experiment for ShearCell {
                 let s = stress(&c, &lay, travel + t);
                 servo(&mut c, &s, target, sch.v_servo);
                 let before = bins.done.len();
-                bins.add(t, &s);
+                bins.add(t, s.normal, s.shear);
                 if bins.done.len() > before && bins.done.len() >= 3 {
                     let b = bins.last(3).unwrap();
                     if peak.is_none_or(|p| b.1 > p.1) {
@@ -845,8 +776,10 @@ impl Experiment for ShearCell {
                 wall_time_s: clock.elapsed().as_secs_f64(),
                 warnings: {
                     warnings.push(format!(
-                        "pre-shear travel {:.2} d50; failure points (normal, shear) in Pa: {}",
+                        "pre-shear travel {:.2} d50 (stress ratio per 0.5 d50 of it: {}); \
+                         failure points (normal, shear) in Pa: {}",
                         preshear_travel / lay.d50,
+                        curve,
                         locus
                             .iter()
                             .map(|(s, t)| format!("({s:.4e}, {t:.4e})"))
@@ -962,48 +895,5 @@ mod tests {
             e.contains("normal_stress 200 Pa") && e.contains("weighs"),
             "{e}"
         );
-    }
-
-    #[test]
-    fn the_unconfined_yield_strength_is_the_mohr_circle_through_the_origin() {
-        let (c, phi) = (1000.0, 30f64.to_radians());
-        let fc = unconfined_yield_strength(c, phi);
-        // The circle centred at fc/2 with radius fc/2 touches the line tau = c + sigma tan phi.
-        let dist = (c + 0.5 * fc * phi.tan()) * phi.cos();
-        assert!((dist - 0.5 * fc).abs() < 1e-9 * fc, "{fc} {dist}");
-        assert!((fc - 2.0 * c * 3f64.sqrt()).abs() < 1e-9 * fc);
-    }
-
-    /// The measured k = 12 curve (docs of this module): level from 1.5 to 2.5 d50, rising by 8 %
-    /// from 2.5 to 3.5 (within the window-to-window scatter of about 6 %) and falling by 18 %
-    /// into 4 d50 as the cell breaks down.
-    #[test]
-    fn the_steadiness_test_passes_a_level_pre_shear_and_names_a_moving_one() {
-        let at = |ratios: &[f64]| -> Vec<(f64, f64)> {
-            ratios
-                .iter()
-                .flat_map(|&r| std::iter::repeat_n((5000.0, 5000.0 * r), 5))
-                .collect()
-        };
-        assert_eq!(steadiness(&at(&[0.8317, 0.8534])), Ok(()));
-        assert_eq!(steadiness(&at(&[0.8613, 0.9277])), Ok(()));
-        // Noise of a few % bin to bin, level on average.
-        let mut noisy = at(&[0.85, 0.85]);
-        for (i, b) in noisy.iter_mut().enumerate() {
-            b.1 *= 1.0 + 0.04 * if i % 2 == 0 { 1.0 } else { -1.0 };
-        }
-        assert_eq!(steadiness(&noisy), Ok(()));
-        let falling = steadiness(&at(&[0.9277, 0.7598])).unwrap_err();
-        assert!(falling.contains("from 0.928 to 0.760"), "{falling}");
-        let rising = steadiness(&at(&[0.75, 0.9])).unwrap_err();
-        assert!(rising.contains("not steady"), "{rising}");
-        let short = steadiness(&at(&[0.85])).unwrap_err();
-        assert!(short.contains("5 bins"), "{short}");
-    }
-
-    #[test]
-    fn a_line_through_points_on_a_line_is_that_line() {
-        let (a, b) = line(&[(1.0, 3.0), (2.0, 5.0), (4.0, 9.0)]);
-        assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
     }
 }

@@ -9,6 +9,9 @@
 //! - [`shear_box_fill`]: the shear box filling itself, mbgc's procedure in LIGGGHTS' own words;
 //!   [`fill_run`] reads such a run back; [`shear_box_experiment`] makes it the shear-box
 //!   experiment of `mbgc simulate --backend liggghts`.
+//! - [`shear_cell`]: the shear cell (pour, servo lid, pre-shear, three failure tests from a
+//!   restart) as one deck; [`shear_cell_experiment`] makes it the shear-cell experiment of
+//!   `mbgc simulate --backend liggghts`.
 //! - [`mesh`]: STL walls; [`number`]: numbers as LIGGGHTS reads them; [`parse`]: logs, dumps.
 
 pub mod binary;
@@ -20,6 +23,8 @@ pub mod parse;
 pub mod shear_box;
 pub mod shear_box_experiment;
 pub mod shear_box_fill;
+pub mod shear_cell;
+pub mod shear_cell_experiment;
 
 pub use binary::{find_binary, require_binary, require_mpirun, run_deck, run_deck_on};
 pub use closed_box::{LiggghtsCase, LiggghtsResult};

@@ -1,0 +1,149 @@
+//! What a shear test measures and how, shared by the shear cell and its LIGGGHTS backend so that
+//! both engines' runs are judged by one rule: bins of travel, the pre-shear's steadiness test,
+//! the lid's servo gain, the travel a cell takes before it breaks down, the yield locus through
+//! the failure points and the unconfined yield strength of that locus.
+
+/// Steady pre-shear: the stress ratio of its last 0.5 d50 within this fraction of the 0.5 d50
+/// before. The ratio fluctuates: in eight cohesionless k = 12 replicates at 5 kPa the two windows
+/// differed by 0.6-9.7 % (four above 5 %; their difference has an sd of about 6 %), so the test
+/// is set at twice that, where it catches the cell's breakdown (-18 % over 0.5 d50) and not its
+/// noise; 2 d50 of travel is too short for longer windows.
+pub const STEADY_TOLERANCE: f64 = 0.12;
+
+/// Longest pre-shear plus failure travel, as a fraction of the cell's length, run without a
+/// warning (the k = 12 cell broke down beyond about 15 %).
+pub const TRAVEL_SHARE: f64 = 0.15;
+
+/// Gain of the lid's servo: full speed at a relative stress error of 1 / SERVO_GAIN. The
+/// dilation at a failure peak lifts the lid at about a third of the shear speed, which this
+/// follows within about 7 % of the target stress.
+pub const SERVO_GAIN: f64 = 5.0;
+
+/// Bins of travel, each the mean normal and shear stress of its samples.
+#[derive(Debug, Default)]
+pub struct Bins {
+    width: f64,
+    current: (f64, f64, usize),
+    /// The finished bins: (mean normal, mean shear stress), Pa.
+    pub done: Vec<(f64, f64)>,
+}
+
+impl Bins {
+    /// Bins `width` long in travel (m), from a travel of 0.
+    pub fn new(width: f64) -> Bins {
+        Bins {
+            width,
+            ..Bins::default()
+        }
+    }
+
+    /// Adds a sample of the stresses at `travel`.
+    pub fn add(&mut self, travel: f64, normal: f64, shear: f64) {
+        self.current.0 += normal;
+        self.current.1 += shear;
+        self.current.2 += 1;
+        if travel >= self.width * (self.done.len() + 1) as f64 {
+            let n = self.current.2 as f64;
+            self.done.push((self.current.0 / n, self.current.1 / n));
+            self.current = (0.0, 0.0, 0);
+        }
+    }
+
+    /// Mean (normal, shear) over the last `k` bins.
+    pub fn last(&self, k: usize) -> Option<(f64, f64)> {
+        (self.done.len() >= k).then(|| {
+            let b = &self.done[self.done.len() - k..];
+            (
+                b.iter().map(|x| x.0).sum::<f64>() / k as f64,
+                b.iter().map(|x| x.1).sum::<f64>() / k as f64,
+            )
+        })
+    }
+}
+
+/// The steady-state test of the pre-shear on its bins of 0.1 d50: the stress ratio of the last
+/// five within [`STEADY_TOLERANCE`] of the five before; the error says how far it moved.
+pub fn steadiness(bins: &[(f64, f64)]) -> std::result::Result<(), String> {
+    let n = bins.len();
+    if n < 10 {
+        return Err(format!(
+            "pre-shear not tested for steadiness: {n} bins of 0.1 d50, 10 needed"
+        ));
+    }
+    let ratio =
+        |b: &[(f64, f64)]| b.iter().map(|x| x.1).sum::<f64>() / b.iter().map(|x| x.0).sum::<f64>();
+    let (last, before) = (ratio(&bins[n - 5..]), ratio(&bins[n - 10..n - 5]));
+    if (last - before).abs() < STEADY_TOLERANCE * last.abs() {
+        Ok(())
+    } else {
+        Err(format!(
+            "pre-shear not steady: its stress ratio went from {before:.3} to {last:.3} over its \
+             last d50 of travel"
+        ))
+    }
+}
+
+/// Least-squares line `y = a + b x`; returns (a, b).
+pub fn line(pts: &[(f64, f64)]) -> (f64, f64) {
+    let n = pts.len() as f64;
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let b = sxy / sxx;
+    (my - b * mx, b)
+}
+
+/// The unconfined yield strength of a linear yield locus with cohesion `c` and friction angle
+/// `phi` (radians): the Mohr circle through the origin tangent to the locus.
+pub fn unconfined_yield_strength(c: f64, phi: f64) -> f64 {
+    2.0 * c * (1.0 + phi.sin()) / phi.cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The measured k = 12 curve (docs of `experiments::shear_cell`): level from 1.5 to 2.5 d50, rising by 8 %
+    /// from 2.5 to 3.5 (within the window-to-window scatter of about 6 %) and falling by 18 %
+    /// into 4 d50 as the cell breaks down.
+    #[test]
+    fn the_steadiness_test_passes_a_level_pre_shear_and_names_a_moving_one() {
+        let at = |ratios: &[f64]| -> Vec<(f64, f64)> {
+            ratios
+                .iter()
+                .flat_map(|&r| std::iter::repeat_n((5000.0, 5000.0 * r), 5))
+                .collect()
+        };
+        assert_eq!(steadiness(&at(&[0.8317, 0.8534])), Ok(()));
+        assert_eq!(steadiness(&at(&[0.8613, 0.9277])), Ok(()));
+        // Noise of a few % bin to bin, level on average.
+        let mut noisy = at(&[0.85, 0.85]);
+        for (i, b) in noisy.iter_mut().enumerate() {
+            b.1 *= 1.0 + 0.04 * if i % 2 == 0 { 1.0 } else { -1.0 };
+        }
+        assert_eq!(steadiness(&noisy), Ok(()));
+        let falling = steadiness(&at(&[0.9277, 0.7598])).unwrap_err();
+        assert!(falling.contains("from 0.928 to 0.760"), "{falling}");
+        let rising = steadiness(&at(&[0.75, 0.9])).unwrap_err();
+        assert!(rising.contains("not steady"), "{rising}");
+        let short = steadiness(&at(&[0.85])).unwrap_err();
+        assert!(short.contains("5 bins"), "{short}");
+    }
+
+    #[test]
+    fn a_line_through_points_on_a_line_is_that_line() {
+        let (a, b) = line(&[(1.0, 3.0), (2.0, 5.0), (4.0, 9.0)]);
+        assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_unconfined_yield_strength_is_the_mohr_circle_through_the_origin() {
+        let (c, phi) = (1000.0, 30f64.to_radians());
+        let fc = unconfined_yield_strength(c, phi);
+        // The circle centred at fc/2 with radius fc/2 touches the line tau = c + sigma tan phi.
+        let dist = (c + 0.5 * fc * phi.tan()) * phi.cos();
+        assert!((dist - 0.5 * fc).abs() < 1e-9 * fc, "{fc} {dist}");
+        assert!((fc - 2.0 * c * 3f64.sqrt()).abs() < 1e-9 * fc);
+    }
+}
