@@ -54,7 +54,7 @@
 use std::time::Instant;
 
 use super::shear_test::{
-    line, steadiness, unconfined_yield_strength, Bins, SERVO_GAIN, TRAVEL_SHARE,
+    steadiness, unconfined_yield_strength, yield_locus, Bins, Travels, SERVO_GAIN,
 };
 use super::{
     materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
@@ -722,31 +722,18 @@ impl Experiment for ShearCell {
                 100.0 * spilled / total_mass
             ));
         }
-        let short = travel + longest > TRAVEL_SHARE * l;
-        if short {
-            warnings.push(format!(
-                "the cell is short for its travel: {:.1} d50 of pre-shear and failure in a \
-                 length of {:.1} d50 (over {:.0} %, where a k = 12 cell broke down; a larger \
-                 --box-scale avoids it)",
-                (travel + longest) / lay.d50,
-                l / lay.d50,
-                100.0 * TRAVEL_SHARE
-            ));
-        }
-        if failed_peaks > 0 {
-            warnings.push(format!(
-                "{failed_peaks} of {} failure points showed no peak within {:.1} d50 of travel \
-                 (the largest shear stress is taken)",
-                FAILURE_FRACTIONS.len(),
-                sch.max_failure / lay.d50
-            ));
-        }
-        let (cohesion, slope) = if locus.len() >= 2 {
-            line(&locus)
-        } else {
-            (f64::NAN, f64::NAN)
-        };
-        let phi = slope.atan();
+        let (cohesion, phi, locus_valid) = yield_locus(
+            &locus,
+            Travels {
+                preshear: travel / lay.d50,
+                longest_failure: longest / lay.d50,
+                max_failure: sch.max_failure / lay.d50,
+                length: l / lay.d50,
+            },
+            failed_peaks,
+            FAILURE_FRACTIONS.len(),
+            &mut warnings,
+        );
         let outside = sim
             .particles
             .x
@@ -770,7 +757,7 @@ impl Experiment for ShearCell {
                 ("shear_ratio".into(), shear_ratio),
             ],
             diagnostics: Diagnostics {
-                settled: settled && steady && !short && failed_peaks == 0,
+                settled: settled && steady && locus_valid,
                 steps: sim.step,
                 particles: n,
                 wall_time_s: clock.elapsed().as_secs_f64(),

@@ -83,6 +83,56 @@ pub fn steadiness(bins: &[(f64, f64)]) -> std::result::Result<(), String> {
     }
 }
 
+/// The travels of one cell run, in units of d50, for [`yield_locus`].
+#[derive(Debug, Clone, Copy)]
+pub struct Travels {
+    /// Pre-shear travel.
+    pub preshear: f64,
+    /// Longest travel of a failure test.
+    pub longest_failure: f64,
+    /// Travel limit of a failure test.
+    pub max_failure: f64,
+    /// The cell's length.
+    pub length: f64,
+}
+
+/// The yield locus through the failure points (normal, shear stress): (cohesion in Pa, angle of
+/// internal friction in radians), NaN below two points. Pushes the warnings of a cell too short
+/// for its travel and of failure tests without a peak (`failed_peaks` of `tests`), and says
+/// whether the run stays valid on both counts.
+pub fn yield_locus(
+    locus: &[(f64, f64)],
+    t: Travels,
+    failed_peaks: usize,
+    tests: usize,
+    warnings: &mut Vec<String>,
+) -> (f64, f64, bool) {
+    let short = t.preshear + t.longest_failure > TRAVEL_SHARE * t.length;
+    if short {
+        warnings.push(format!(
+            "the cell is short for its travel: {:.1} d50 of pre-shear and failure in a length of \
+             {:.1} d50 (over {:.0} %, where a k = 12 cell broke down; a larger --box-scale \
+             avoids it)",
+            t.preshear + t.longest_failure,
+            t.length,
+            100.0 * TRAVEL_SHARE
+        ));
+    }
+    if failed_peaks > 0 {
+        warnings.push(format!(
+            "{failed_peaks} of {tests} failure points showed no peak within {:.1} d50 of travel \
+             (the largest shear stress is taken)",
+            t.max_failure
+        ));
+    }
+    let (cohesion, slope) = if locus.len() >= 2 {
+        line(locus)
+    } else {
+        (f64::NAN, f64::NAN)
+    };
+    (cohesion, slope.atan(), !short && failed_peaks == 0)
+}
+
 /// Least-squares line `y = a + b x`; returns (a, b).
 pub fn line(pts: &[(f64, f64)]) -> (f64, f64) {
     let n = pts.len() as f64;

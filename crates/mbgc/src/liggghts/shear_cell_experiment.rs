@@ -43,7 +43,7 @@ use super::shear_cell::{
 use crate::error::{read_to_string, Error, Result};
 use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS};
 use crate::experiments::shear_test::{
-    line, steadiness, unconfined_yield_strength, Bins, TRAVEL_SHARE,
+    steadiness, unconfined_yield_strength, yield_locus, Bins, Travels,
 };
 use crate::experiments::{Diagnostics, Experiment, Outcome, ParamSet, RunOptions, RHO_RANGE};
 use mbgc_dem::contact::ModelClass;
@@ -262,31 +262,18 @@ pub fn measure(d: &CellDeck, run: &CellRun, rho: f64) -> Result<Outcome> {
             100.0 * run.spilled / run.inserted_mass
         ));
     }
-    let short = travel + longest > TRAVEL_SHARE * l;
-    if short {
-        warnings.push(format!(
-            "the cell is short for its travel: {:.1} d50 of pre-shear and failure in a length \
-             of {:.1} d50 (over {:.0} %, where a k = 12 cell broke down; a larger --box-scale \
-             avoids it)",
-            (travel + longest) / d.d50,
-            l / d.d50,
-            100.0 * TRAVEL_SHARE
-        ));
-    }
-    if failed_peaks > 0 {
-        warnings.push(format!(
-            "{failed_peaks} of {} failure points showed no peak within {:.1} d50 of travel \
-             (the largest shear stress is taken)",
-            FAILURE_FRACTIONS.len(),
-            d.max_failure / d.d50
-        ));
-    }
-    let (cohesion, slope) = if locus.len() >= 2 {
-        line(&locus)
-    } else {
-        (f64::NAN, f64::NAN)
-    };
-    let phi = slope.atan();
+    let (cohesion, phi, locus_valid) = yield_locus(
+        &locus,
+        Travels {
+            preshear: travel / d.d50,
+            longest_failure: longest / d.d50,
+            max_failure: d.max_failure / d.d50,
+            length: l / d.d50,
+        },
+        failed_peaks,
+        FAILURE_FRACTIONS.len(),
+        &mut warnings,
+    );
     let outside = run
         .bed
         .iter()
@@ -318,7 +305,7 @@ pub fn measure(d: &CellDeck, run: &CellRun, rho: f64) -> Result<Outcome> {
             ("shear_ratio".into(), shear_ratio),
         ],
         diagnostics: Diagnostics {
-            settled: run.fill_settled && steady && !short && failed_peaks == 0,
+            settled: run.fill_settled && steady && locus_valid,
             steps: run.preshear_end,
             particles: run.inserted,
             wall_time_s: 0.0,
