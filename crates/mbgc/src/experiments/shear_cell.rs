@@ -53,9 +53,7 @@
 
 use std::time::Instant;
 
-use super::shear_test::{
-    steadiness, unconfined_yield_strength, yield_locus, Bins, Travels, SERVO_GAIN,
-};
+use super::shear_test::{responses, steadiness, yield_locus, Bins, Travels, SERVO_GAIN};
 use super::{
     materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
     RHO_RANGE,
@@ -746,16 +744,7 @@ impl Experiment for ShearCell {
             )));
         }
         Ok(Outcome {
-            responses: vec![
-                ("internal_friction".into(), phi.to_degrees()),
-                ("cohesion".into(), cohesion),
-                (
-                    "unconfined_yield_strength".into(),
-                    unconfined_yield_strength(cohesion, phi),
-                ),
-                ("bulk_density".into(), bulk_density),
-                ("shear_ratio".into(), shear_ratio),
-            ],
+            responses: responses(cohesion, phi, bulk_density, shear_ratio),
             diagnostics: Diagnostics {
                 settled: settled && steady && locus_valid,
                 steps: sim.step,

@@ -133,6 +133,27 @@ pub fn yield_locus(
     (cohesion, slope.atan(), !short && failed_peaks == 0)
 }
 
+/// A cell run's responses in the table's order (the shear cell's `RESPONSES`): the locus's
+/// angle (radians here, degrees in the table) and cohesion, the unconfined yield strength they
+/// give, the bulk density and the steady shear ratio.
+pub fn responses(
+    cohesion: f64,
+    phi: f64,
+    bulk_density: f64,
+    shear_ratio: f64,
+) -> Vec<(String, f64)> {
+    vec![
+        ("internal_friction".into(), phi.to_degrees()),
+        ("cohesion".into(), cohesion),
+        (
+            "unconfined_yield_strength".into(),
+            unconfined_yield_strength(cohesion, phi),
+        ),
+        ("bulk_density".into(), bulk_density),
+        ("shear_ratio".into(), shear_ratio),
+    ]
+}
+
 /// Least-squares line `y = a + b x`; returns (a, b).
 pub fn line(pts: &[(f64, f64)]) -> (f64, f64) {
     let n = pts.len() as f64;

@@ -42,9 +42,7 @@ use super::shear_cell::{
 };
 use crate::error::{read_to_string, Error, Result};
 use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS};
-use crate::experiments::shear_test::{
-    steadiness, unconfined_yield_strength, yield_locus, Bins, Travels,
-};
+use crate::experiments::shear_test::{responses, steadiness, yield_locus, Bins, Travels};
 use crate::experiments::{Diagnostics, Experiment, Outcome, ParamSet, RunOptions, RHO_RANGE};
 use mbgc_dem::contact::ModelClass;
 
@@ -294,16 +292,7 @@ pub fn measure(d: &CellDeck, run: &CellRun, rho: f64) -> Result<Outcome> {
             .join(", ")
     ));
     Ok(Outcome {
-        responses: vec![
-            ("internal_friction".into(), phi.to_degrees()),
-            ("cohesion".into(), cohesion),
-            (
-                "unconfined_yield_strength".into(),
-                unconfined_yield_strength(cohesion, phi),
-            ),
-            ("bulk_density".into(), bulk_density),
-            ("shear_ratio".into(), shear_ratio),
-        ],
+        responses: responses(cohesion, phi, bulk_density, shear_ratio),
         diagnostics: Diagnostics {
             settled: run.fill_settled && steady && locus_valid,
             steps: run.preshear_end,
