@@ -31,7 +31,7 @@ fn base_model(label: &str, error: &[(&str, f64)], miss: [f64; 2]) -> Surrogate {
             ("mu_r_pp", [0.0, 1.0]),
             ("d50", [1.0, 30.0]),
         ],
-        &[("mu_r_pw", 0.0)],
+        &[("mu_r_pw", 0.0), ("sigma_ln", 0.1)],
         error,
         move |r, x| truth(x[0], x[1], 0.0, x[2])[r] + miss[r],
     )
@@ -51,7 +51,7 @@ fn models() -> Vec<Surrogate> {
             ("ced_pp", [0.0, 4e4]),
             ("d50", [1.0, 30.0]),
         ],
-        &[("mu_r_pw", 0.0), ("ced_pw", 0.0)],
+        &[("mu_r_pw", 0.0), ("ced_pw", 0.0), ("sigma_ln", 0.1)],
         &MODEL_ERROR,
         |r, x| truth(x[0], x[1], x[2], x[3])[r],
     );
@@ -469,4 +469,32 @@ fn a_strength_beyond_the_models_is_reported_as_cut_at_their_edge() {
         .unwrap();
     assert_eq!(s.at_edge, None, "{s:?}");
     assert!(!d.verdict.contains("upper end"), "{}", d.verdict);
+}
+
+/// A sample's size spread must reach the model: one trained on monosized runs (no sigma_ln
+/// among its inputs or constants) is refused for graded samples, with the reason.
+#[test]
+fn a_model_without_the_size_spread_is_refused_for_graded_samples() {
+    let monosized = Surrogate::from_fn(
+        "monosized.json",
+        ModelClass::parse("hertz,mindlin,epsd2").unwrap(),
+        Some("shear-box"),
+        &[
+            ("mu_pp", [0.05, 1.0]),
+            ("mu_r_pp", [0.0, 1.0]),
+            ("d50", [1.0, 30.0]),
+        ],
+        &[("mu_r_pw", 0.0)],
+        &MODEL_ERROR,
+        |r, x| truth(x[0], x[1], 0.0, x[2])[r],
+    );
+    let s = set("hertz,mindlin,epsd2", "", 0.5, 0.3, 0.0, 3);
+    let err = diagnose(&s, &[monosized], &Options::default())
+        .err()
+        .expect("a graded set on a monosized model must be refused")
+        .to_string();
+    assert!(
+        err.contains("sigma_ln = 0.1") && err.contains("monosized"),
+        "{err}"
+    );
 }

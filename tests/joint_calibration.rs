@@ -41,7 +41,7 @@ fn models() -> Vec<Surrogate> {
             ("rho_p", [2000.0, 3000.0]),
             ("d50", [1.0, 30.0]),
         ],
-        &[],
+        &[("sigma_ln", 0.1)],
         &[("shear_angle", 0.2), ("bulk_density", 1.0)],
         |r, x| box_truth(x[0], x[1], x[2])[r],
     );
@@ -56,7 +56,7 @@ fn models() -> Vec<Surrogate> {
             ("d50", [1.0, 30.0]),
             ("normal_stress", [5e3, 6e4]),
         ],
-        &[],
+        &[("sigma_ln", 0.1)],
         &[
             ("internal_friction", 0.3),
             ("bulk_density", 1.0),

@@ -216,6 +216,27 @@ impl<'m> Problem<'m> {
                     in_domain(k, v, format!("psd ({name} = {v:.4})"))?;
                     fixed[k] = Some(v);
                     notes.push(format!("{name} = {v:.4} from the PSD"));
+                } else if let Some(c) = model.constants.iter().find(|c| c.name == name) {
+                    if !same_value(c.value, v) {
+                        return Err(Error::out_of_domain(
+                            file,
+                            format!("psd ({name} = {v:.4})"),
+                            format!(
+                                "{}, the value the metamodel's campaign held {name} at: the \
+                                 model describes no other",
+                                c.value
+                            ),
+                        ));
+                    }
+                } else if name == "sigma_ln" && v != 0.0 {
+                    // Dropping it would calibrate a graded material on monosized runs.
+                    return Err(Error::input(
+                        file,
+                        format!("psd (sigma_ln = {v:.4})"),
+                        "a model that knows the size spread: this metamodel has no sigma_ln \
+                         (its runs used the experiment's default, monosized spheres)"
+                            .to_string(),
+                    ));
                 }
             }
         }

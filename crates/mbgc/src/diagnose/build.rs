@@ -367,7 +367,11 @@ fn local_plan(
     let specs = class.parameters(exp.pairs());
     let mut lines = Vec::new();
     let mut varied = Vec::new();
-    for name in exp.parameters() {
+    // An experiment's optional inputs (the shear box's sigma_ln) join the space when the set
+    // gives them: left out, the runs would take the experiment's default (monosized spheres)
+    // while the samples were measured on their own size distributions.
+    let optional = exp.optional_parameters();
+    for name in exp.parameters().into_iter().chain(optional.iter().copied()) {
         let spec = specs
             .iter()
             .find(|(n, _, _)| *n == name)
@@ -379,6 +383,9 @@ fn local_plan(
             .and_then(|c| c.fixed.iter().find(|(n, _)| n == name))
             .or_else(|| set.fixed.iter().find(|(n, _)| n == name))
             .map(|(_, v)| *v);
+        if optional.contains(&name) && fixed.is_none() && per_sample_values(set, name)?.is_none() {
+            continue;
+        }
         let what = spec.map_or(String::new(), |s| s.what.to_string());
         let unit = unit(name, spec.map(|s| s.unit));
         let entry = |min: f64, max: f64, log: bool, fixed: Option<f64>| {
@@ -1114,6 +1121,45 @@ mod tests {
         let d = fitted("mu_pp", 0.5, 0.49, 0.51);
         let [lo, hi] = focus_box(&plan, &[&d])[0].1;
         assert!((lo - 0.45).abs() < 1e-12 && (hi - 0.55).abs() < 1e-12);
+    }
+
+    /// Issue 35: the local models of the cohesive sets had been trained on monosized runs
+    /// (sigma_ln, optional in the shear box, was left out of their space), which put their
+    /// density 27 kg/m3 below the measurements at the true parameters.
+    #[test]
+    fn a_local_space_holds_the_samples_size_spread() {
+        let set = |sigma: &str| {
+            let mut t = String::from(
+                "name = \"s\"\n[model]\nclass = \"hertz,mindlin,epsd2\"\n[fixed]\nE_p = 4.5e6\n\
+                 E_w = 4.5e6\nnu_p = 0.3\ne_pp = 0.5\ne_pw = 0.5\nmu_pw = 0.3\nrho_p = 2600\n\
+                 mu_r_pw = 0.001\n[bounds]\nmu_pp = [0.1, 1.0]\nmu_r_pp = [0.0, 0.5]\n",
+            );
+            for (d, s) in [(2, "0.12"), (8, sigma)] {
+                t += &format!(
+                    "[[sample]]\nname = \"{d} mm\"\nexperiment = \"shear-box\"\n\
+                     psd = {{ d50_mm = {d}, sigma_ln = {s} }}\n\
+                     measured.shear_angle = {{ value = 30, sd = 1 }}\n"
+                );
+            }
+            MeasurementSet::from_toml_str(&t, "set.toml").unwrap()
+        };
+        let same = local_plan(&set("0.12"), &[], "shear-box", None, String::new()).unwrap();
+        assert!(
+            same.space
+                .lines()
+                .any(|l| l.starts_with("sigma_ln = ") && l.contains("fixed = 0.12")),
+            "{}",
+            same.space
+        );
+        let spread = local_plan(&set("0.2"), &[], "shear-box", None, String::new()).unwrap();
+        assert!(
+            spread
+                .varied
+                .iter()
+                .any(|(n, [a, b])| n == "sigma_ln" && *a < 0.12 && *b > 0.2),
+            "{:?}",
+            spread.varied
+        );
     }
 
     #[test]

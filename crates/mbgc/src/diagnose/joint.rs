@@ -392,6 +392,23 @@ impl<'s> Joint<'s> {
                         };
                         slots.push((k, j));
                     }
+                    // A size spread the model never saw would be silently dropped: its runs
+                    // took the experiment's default (monosized spheres), which pack and shear
+                    // otherwise.
+                    if let Some((_, v, from)) =
+                        known.iter().find(|(n, v, _)| n == "sigma_ln" && *v != 0.0)
+                    {
+                        let reads = m.inputs.iter().any(|i| i == "sigma_ln")
+                            || m.constants.iter().any(|(c, _)| c == "sigma_ln");
+                        if !reads {
+                            return Err(format!(
+                                "sample \"{}\": {from} gives sigma_ln = {v}, but {} has no \
+                                 sigma_ln (its runs used the experiment's default, monosized \
+                                 spheres); use a model trained at this size spread",
+                                s.name, m.label
+                            ));
+                        }
+                    }
                     // A group its fixed inputs already put outside the training range has no
                     // point of the search box inside it: say which, instead of a likelihood
                     // that is zero everywhere.
