@@ -51,6 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         skin: 0.001,
         domain: ([-0.01, -0.01, -0.01], [0.06, 0.06, 0.13]),
         max_dt_fraction: 0.25,
+        periodic: [false; 3],
     };
     let mut sim = Simulation::new(scene)?;
     let steps = (0.5 / dt) as u64;

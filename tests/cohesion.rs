@@ -128,6 +128,7 @@ fn scene(particles: Particles, walls: Vec<Wall>, i: Interaction, gravity: f64, d
         skin: 0.5 * R,
         domain: ([-0.05; 3], [0.05; 3]),
         max_dt_fraction: 0.3,
+        periodic: [false; 3],
     }
 }
 

@@ -49,6 +49,7 @@ fn scene(
         skin: 1e-3,
         domain,
         max_dt_fraction: 0.3,
+        periodic: [false; 3],
     }
 }
 

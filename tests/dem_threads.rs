@@ -55,6 +55,7 @@ fn scene() -> Scene {
         skin: 5e-4,
         domain: ([-0.01; 3], [0.05, 0.05, 0.1]),
         max_dt_fraction: 0.3,
+        periodic: [false; 3],
     }
 }
 

@@ -2,6 +2,10 @@
 //! of every DEM code that mbgc compares (its own engine, LIGGGHTS): solid fraction in a measuring
 //! box, coordination number, and the free-surface height used to place that box.
 //!
+//! Each measure has a `_periodic` twin for a domain periodic along some axes ([`PeriodicBox`]):
+//! spheres count with their images across the box and pairs touch through their nearest images.
+//! The plain forms are the twins with [`PeriodicBox::NONE`].
+//!
 //! The `f64` measures return NaN when they are undefined (no particles, `positions` and `radii` of
 //! different lengths, an empty measuring box), so a misuse shows up in the numbers instead of as a
 //! panic.
@@ -9,6 +13,7 @@
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
+use crate::periodic::PeriodicBox;
 use crate::{Error, Result};
 
 /// Solid volume fraction inside the axis-aligned measuring box `[lo, hi]`.
@@ -18,6 +23,19 @@ use crate::{Error, Result};
 /// between particles are counted twice, as every DEM post-processor does; with the overlaps of a
 /// settled bed (1e-6..1e-4 of a diameter) this is far below the noise of the measure.
 pub fn packing_fraction(positions: &[[f64; 3]], radii: &[f64], lo: [f64; 3], hi: [f64; 3]) -> f64 {
+    packing_fraction_periodic(positions, radii, lo, hi, &PeriodicBox::NONE)
+}
+
+/// [`packing_fraction`] in a periodic domain: a sphere counts with the parts of its images
+/// ([`sphere_box_volume_periodic`]) inside the box, so a measuring box spanning a whole period
+/// holds every sphere's whole volume.
+pub fn packing_fraction_periodic(
+    positions: &[[f64; 3]],
+    radii: &[f64],
+    lo: [f64; 3],
+    hi: [f64; 3],
+    pbox: &PeriodicBox,
+) -> f64 {
     let box_volume = (0..3).map(|k| hi[k] - lo[k]).product::<f64>();
     if positions.len() != radii.len() || !(0..3).all(|k| hi[k] > lo[k]) {
         return f64::NAN;
@@ -25,9 +43,55 @@ pub fn packing_fraction(positions: &[[f64; 3]], radii: &[f64], lo: [f64; 3], hi:
     let solid: f64 = positions
         .iter()
         .zip(radii)
-        .map(|(c, &r)| sphere_box_volume(*c, r, lo, hi))
+        .map(|(c, &r)| sphere_box_volume_periodic(*c, r, lo, hi, pbox))
         .sum();
     solid / box_volume
+}
+
+/// [`sphere_box_volume`] summed over the sphere's images in a periodic domain: the sphere
+/// wrapped into the period box, shifted by -1, 0 and +1 periods along every periodic axis. For a
+/// measuring box no wider than a period, this is the sphere's volume inside the box however the
+/// box and the sphere sit across the period box's faces.
+pub fn sphere_box_volume_periodic(
+    c: [f64; 3],
+    r: f64,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    pbox: &PeriodicBox,
+) -> f64 {
+    if !pbox.any() {
+        return sphere_box_volume(c, r, lo, hi);
+    }
+    if !c.iter().all(|v| v.is_finite()) {
+        return 0.0;
+    }
+    let c = pbox.wrap(c);
+    let shifts = |k: usize| -> &'static [f64] {
+        if pbox.is_periodic(k) {
+            &[-1.0, 0.0, 1.0]
+        } else {
+            &[0.0]
+        }
+    };
+    let l = pbox.period();
+    let mut total = 0.0;
+    for &sz in shifts(2) {
+        for &sy in shifts(1) {
+            for &sx in shifts(0) {
+                // 0 * inf along a non-periodic axis would be NaN: its shift is never applied.
+                let image: [f64; 3] = std::array::from_fn(|k| {
+                    let s = [sx, sy, sz][k];
+                    if s == 0.0 {
+                        c[k]
+                    } else {
+                        c[k] + s * l[k]
+                    }
+                });
+                total += sphere_box_volume(image, r, lo, hi);
+            }
+        }
+    }
+    total
 }
 
 /// Volume of the part of the sphere (centre `c`, radius `r`) inside the box `[lo, hi]`.
@@ -156,6 +220,17 @@ fn disk_quadrant_area(rho: f64, a: f64, b: f64) -> f64 {
 /// Number of particle-particle contacts (centre distance < r_i + r_j, i.e. overlap > 0) of each
 /// particle, found with a cell list of side 2 r_max so the cost is O(N).
 pub fn contact_counts(positions: &[[f64; 3]], radii: &[f64]) -> Result<Vec<usize>> {
+    contact_counts_periodic(positions, radii, &PeriodicBox::NONE)
+}
+
+/// [`contact_counts`] in a periodic domain: pairs touch through their nearest images. Refuses a
+/// period not longer than two largest diameters (4 r_max), where a pair could touch through
+/// two images at once.
+pub fn contact_counts_periodic(
+    positions: &[[f64; 3]],
+    radii: &[f64],
+    pbox: &PeriodicBox,
+) -> Result<Vec<usize>> {
     if positions.len() != radii.len() {
         return Err(Error::invalid(format!(
             "contact_counts: {} positions but {} radii",
@@ -177,29 +252,73 @@ pub fn contact_counts(positions: &[[f64; 3]], radii: &[f64]) -> Result<Vec<usize
     }
     let r_max = radii.iter().copied().fold(0.0, f64::max);
     let cell = 2.0 * r_max;
-    let key = |p: &[f64; 3]| -> [i64; 3] { std::array::from_fn(|k| (p[k] / cell).floor() as i64) };
+    let (lo, period) = (pbox.lo(), pbox.period());
+    if let Some(k) = (0..3).find(|&k| pbox.is_periodic(k) && period[k] <= 2.0 * cell) {
+        return Err(Error::invalid(format!(
+            "contact_counts: the period {:.4e} m along axis {k} must exceed two largest \
+             diameters ({:.4e} m)",
+            period[k],
+            2.0 * cell
+        )));
+    }
+    // Along a periodic axis, a whole number of cells of at least 2 r_max spans the period, and
+    // cell keys wrap around it.
+    let dims: [i64; 3] = std::array::from_fn(|k| {
+        if pbox.is_periodic(k) {
+            ((period[k] / cell).floor() as i64).max(1)
+        } else {
+            0
+        }
+    });
+    let wrapped: Vec<[f64; 3]> = positions.iter().map(|p| pbox.wrap(*p)).collect();
+    let key = |p: &[f64; 3]| -> [i64; 3] {
+        std::array::from_fn(|k| {
+            if dims[k] > 0 {
+                (((p[k] - lo[k]) / (period[k] / dims[k] as f64)).floor() as i64).min(dims[k] - 1)
+            } else {
+                (p[k] / cell).floor() as i64
+            }
+        })
+    };
     let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (i, p) in positions.iter().enumerate() {
+    for (i, p) in wrapped.iter().enumerate() {
         cells.entry(key(p)).or_default().push(i);
     }
-    for (i, p) in positions.iter().enumerate() {
+    let mut around: Vec<[i64; 3]> = Vec::with_capacity(27);
+    for (i, p) in wrapped.iter().enumerate() {
         let k = key(p);
+        around.clear();
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let Some(members) = cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                        continue;
-                    };
-                    // Each pair once (j > i), credited to both.
-                    for &j in members.iter().filter(|&&j| j > i) {
-                        let q = positions[j];
-                        let d2 = (0..3).map(|m| (p[m] - q[m]).powi(2)).sum::<f64>();
-                        let reach = radii[i] + radii[j];
-                        if d2 < reach * reach {
-                            counts[i] += 1;
-                            counts[j] += 1;
+                    let d = [dx, dy, dz];
+                    around.push(std::array::from_fn(|m| {
+                        let c = k[m] + d[m];
+                        if dims[m] > 0 {
+                            c.rem_euclid(dims[m])
+                        } else {
+                            c
                         }
-                    }
+                    }));
+                }
+            }
+        }
+        // With fewer than three cells along an axis, two offsets wrap to the same cell.
+        around.sort_unstable();
+        around.dedup();
+        for c in &around {
+            let Some(members) = cells.get(c) else {
+                continue;
+            };
+            // Each pair once (j > i), credited to both.
+            for &j in members.iter().filter(|&&j| j > i) {
+                let q = wrapped[j];
+                let d = pbox.min_image(std::array::from_fn(|m| p[m] - q[m]));
+                let d2 = (0..3).map(|m| d[m] * d[m]).sum::<f64>();
+                let reach = radii[i] + radii[j];
+                if d2 < reach * reach {
+                    counts[i] += 1;
+                    counts[j] += 1;
                 }
             }
         }
@@ -210,7 +329,16 @@ pub fn contact_counts(positions: &[[f64; 3]], radii: &[f64]) -> Result<Vec<usize
 /// Mean number of particle-particle contacts (overlap > 0) per particle, over all particles.
 /// Wall contacts are not counted. NaN if undefined (see the module docs).
 pub fn coordination_number(positions: &[[f64; 3]], radii: &[f64]) -> f64 {
-    match contact_counts(positions, radii) {
+    coordination_number_periodic(positions, radii, &PeriodicBox::NONE)
+}
+
+/// [`coordination_number`] in a periodic domain ([`contact_counts_periodic`]).
+pub fn coordination_number_periodic(
+    positions: &[[f64; 3]],
+    radii: &[f64],
+    pbox: &PeriodicBox,
+) -> f64 {
+    match contact_counts_periodic(positions, radii, pbox) {
         Ok(c) if !c.is_empty() => c.iter().sum::<usize>() as f64 / c.len() as f64,
         _ => f64::NAN,
     }
@@ -225,11 +353,24 @@ pub fn coordination_number_in(
     lo: [f64; 3],
     hi: [f64; 3],
 ) -> f64 {
-    let Ok(counts) = contact_counts(positions, radii) else {
+    coordination_number_in_periodic(positions, radii, lo, hi, &PeriodicBox::NONE)
+}
+
+/// [`coordination_number_in`] in a periodic domain: contacts through nearest images
+/// ([`contact_counts_periodic`]), centres taken wrapped into the period box.
+pub fn coordination_number_in_periodic(
+    positions: &[[f64; 3]],
+    radii: &[f64],
+    lo: [f64; 3],
+    hi: [f64; 3],
+    pbox: &PeriodicBox,
+) -> f64 {
+    let Ok(counts) = contact_counts_periodic(positions, radii, pbox) else {
         return f64::NAN;
     };
     let (sum, n) = positions
         .iter()
+        .map(|p| pbox.wrap(*p))
         .zip(&counts)
         .filter(|(p, _)| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]))
         .fold((0usize, 0usize), |(s, n), (_, &c)| (s + c, n + 1));
@@ -332,6 +473,53 @@ mod tests {
         // Exactly touching spheres (zero overlap) are not in contact.
         let (pos, radii) = cubic(3, 2.0 * r * (1.0 + 1e-9), r);
         assert_eq!(coordination_number(&pos, &radii), 0.0);
+    }
+
+    #[test]
+    fn a_periodic_lattice_has_six_contacts_everywhere_and_counts_whole_spheres() {
+        let r = 0.005;
+        let a = 2.0 * r * (1.0 - 1e-6);
+        for n in [5, 6] {
+            // Centres at (i + 0.5) a, shifted so the lattice straddles the box faces.
+            let (mut pos, radii) = cubic(n, a, r);
+            for p in &mut pos {
+                p[0] -= 0.5 * a;
+                p[1] += 0.2 * a;
+            }
+            let l = n as f64 * a;
+            let pbox = PeriodicBox::new(([0.0; 3], [l; 3]), [true; 3]).unwrap();
+            let counts = contact_counts_periodic(&pos, &radii, &pbox).unwrap();
+            assert!(counts.iter().all(|&c| c == 6), "n = {n}: {counts:?}");
+            // Without periodicity the faces lose their bonds.
+            let z = coordination_number(&pos, &radii);
+            assert!((z - 6.0 * (n as f64 - 1.0) / n as f64).abs() < 1e-12, "{z}");
+            assert_eq!(coordination_number_periodic(&pos, &radii, &pbox), 6.0);
+            assert_eq!(
+                coordination_number_in_periodic(&pos, &radii, [0.0; 3], [l; 3], &pbox),
+                6.0
+            );
+            // The period box holds every sphere whole, the cut ones through their images.
+            let phi = packing_fraction_periodic(&pos, &radii, [0.0; 3], [l; 3], &pbox);
+            let expected = PI / 6.0 / (1.0 - 1e-6f64).powi(3);
+            assert!((phi - expected).abs() < 1e-6, "{phi} vs {expected}");
+            let plain = packing_fraction(&pos, &radii, [0.0; 3], [l; 3]);
+            assert!(
+                plain < 0.95 * expected,
+                "without images, cut spheres are lost: {plain}"
+            );
+        }
+        // Periodic along x only: the bonds across the y and z faces stay missing.
+        let (pos, radii) = cubic(4, a, r);
+        let l = 4.0 * a;
+        let pbox = PeriodicBox::new(([0.0; 3], [l; 3]), [true, false, false]).unwrap();
+        let total: usize = contact_counts_periodic(&pos, &radii, &pbox)
+            .unwrap()
+            .iter()
+            .sum();
+        assert_eq!(total, 2 * (16 * 4 + 2 * 16 * 3));
+        // Too short a period for the nearest image to be unique.
+        let pbox = PeriodicBox::new(([0.0; 3], [3.9 * r; 3]), [false, true, false]).unwrap();
+        assert!(contact_counts_periodic(&pos, &radii, &pbox).is_err());
     }
 
     #[test]

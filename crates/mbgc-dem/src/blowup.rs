@@ -15,8 +15,9 @@ pub enum BlowUp {
         /// Id of the first offending particle.
         particle: u32,
     },
-    /// A particle left the scene's domain box: it escaped the walls (tunnelled through a wall at
-    /// too large a step, or was ejected by a spurious force).
+    /// A particle left the scene's domain box along a non-periodic axis: it escaped the walls
+    /// (tunnelled through a wall at too large a step, or was ejected by a spurious force). Along
+    /// a periodic axis a particle outside the box is merely waiting to be wrapped in.
     LeftDomain {
         /// Step at which the check found it.
         step: u64,
@@ -27,7 +28,8 @@ pub enum BlowUp {
     },
     /// Kinetic energy (translational plus rotational) exceeded 1.5 times the energy the scene
     /// started with: the integration creates energy. Checked only for closed scenes (no moving
-    /// walls, no cohesion), which cannot gain energy physically.
+    /// walls or moving driven particles, no cohesion, no gravity along a periodic axis), which
+    /// cannot gain energy physically. Driven particles' own kinetic energy is not counted.
     EnergyGrowth {
         /// Step at which the check found it.
         step: u64,
@@ -38,8 +40,9 @@ pub enum BlowUp {
         budget: f64,
     },
     /// A particle moved faster than the scene's speed limit
-    /// ([`crate::Simulation::speed_limit`]), ten times anything free fall, moving walls and the
-    /// initial velocities can produce.
+    /// ([`crate::Simulation::speed_limit`], raised by ten times the fastest driven particle),
+    /// ten times anything free fall, moving walls and the initial velocities can produce. Driven
+    /// particles themselves are not checked.
     TooFast {
         /// Step at which the check found it.
         step: u64,

@@ -200,6 +200,7 @@ pub fn run_impact(imp: &Impact) -> Result<ImpactResult> {
         skin: 0.1 * r_min,
         domain: ([-size; 3], [size; 3]),
         max_dt_fraction: (dt / t_r).max(0.3),
+        periodic: [false; 3],
     };
     let mut sim = Simulation::new(scene)?;
     let mut res = ImpactResult::default();

@@ -5,9 +5,14 @@
 //! It is a library of physics only. It reads and writes no files (a VTK snapshot is returned as
 //! text by [`vtk::to_vtk`]; the caller decides where it goes), parses no configuration, and knows
 //! nothing of experiments, sampling designs or metamodels: those live in `mbgc`, which builds a
-//! [`Scene`] and reads the particles back. It handles spheres only (no clumps or polyhedra), has
-//! no periodic boundaries and runs on one machine (threads, not MPI). Its errors
-//! ([`Error`]) name the offending parameter and the range expected.
+//! [`Scene`] and reads the particles back. It handles spheres only (no clumps or polyhedra) and
+//! runs on one machine (threads, not MPI). Its errors ([`Error`]) name the offending parameter
+//! and the range expected.
+//!
+//! The domain can be periodic along any of its axes ([`Scene::periodic`], [`periodic`]); walls
+//! then bound it along the others only. Particles can be driven ([`Particles::drive`]): moved at
+//! the velocity the caller sets, whatever the forces, with the contact forces on them still
+//! summed, so that glued layers of them make rough floors and servo-controlled rough lids.
 //!
 //! Entry points: describe the solids and their pair interactions in [`Materials`], the effects of
 //! the contact law in a [`ModelClass`] (e.g. `ModelClass::parse("hertz,mindlin,epsd2")`), place
@@ -24,6 +29,7 @@
 //! - [`insertion`]: random sequential insertion of a poured cloud.
 //! - [`walls`]: analytic planes, rectangles, cylinders and orifice plates.
 //! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
+//! - [`periodic`]: the period box, wrapping and nearest images.
 //! - [`sim`]: a simulation, its run loop and blow-up checks ([`blowup`]); the velocity-Verlet
 //!   step, serial or by a team of threads, is private to the crate; [`timestep`]: the Rayleigh
 //!   time.
@@ -65,6 +71,7 @@
 //!     skin: 0.5 * r,
 //!     domain: ([-0.1; 3], [0.1; 3]),
 //!     max_dt_fraction: 0.25,
+//!     periodic: [false; 3],
 //! })?;
 //! sim.run(500).expect("no blow-up");
 //!
@@ -92,6 +99,7 @@ pub mod material;
 pub mod neighbor;
 pub mod param_set;
 pub mod particles;
+pub mod periodic;
 pub mod sim;
 mod step;
 mod team;
@@ -104,6 +112,7 @@ pub use blowup::BlowUp;
 pub use contact::ModelClass;
 pub use material::{Interaction, Materials, Solid};
 pub use particles::Particles;
+pub use periodic::PeriodicBox;
 pub use sim::{Scene, Simulation};
 pub use walls::{Shape, Wall};
 

@@ -5,9 +5,14 @@
 //! moved more than skin / 2 since the last build (the LAMMPS/LIGGGHTS criterion). At a rebuild the
 //! particles are reordered by cell, so that neighbours in space are neighbours in memory, and the
 //! history of every pair still in contact is carried to the new list by merging sorted pairs.
+//!
+//! With periodic axes ([`NeighborList::with_periodic`]) a rebuild first wraps the positions into
+//! the period box, the grid spans exactly that box along the periodic axes, the search wraps
+//! around it and distances are minimum-image ones.
 
 use super::contact::History;
 use super::particles::{Particles, PermuteScratch};
+use super::periodic::PeriodicBox;
 use super::vec3::*;
 
 /// The half Verlet list in compressed rows (CSR), with one contact history per entry.
@@ -27,6 +32,7 @@ pub struct NeighborList {
     /// the force loop then skips them without touching their 48-byte histories.
     pub live: Vec<u8>,
     x_build: Vec<V3>,
+    pbox: PeriodicBox,
     /// Number of rebuilds so far (for performance reports: a run rebuilding every few steps has
     /// too small a skin).
     pub builds: u64,
@@ -49,6 +55,20 @@ impl NeighborList {
             skin,
             ..Default::default()
         }
+    }
+
+    /// An empty list with this skin (m) for a domain periodic as `pbox`.
+    pub fn with_periodic(skin: f64, pbox: PeriodicBox) -> Self {
+        NeighborList {
+            skin,
+            pbox,
+            ..Default::default()
+        }
+    }
+
+    /// The period box the list wraps positions into ([`PeriodicBox::NONE`] if none).
+    pub fn periodic_box(&self) -> PeriodicBox {
+        self.pbox
     }
 
     /// Whether some particle moved more than half the skin since the last build.
@@ -74,6 +94,10 @@ impl NeighborList {
 
     /// Sorts the particles by cell, rebuilds the list and carries the history of touching pairs.
     /// `wall_hist` holds `n_walls` entries per particle and is reordered with the particles.
+    /// Along periodic axes the positions are wrapped into the period box first.
+    ///
+    /// Along a periodic axis, the period must exceed twice the largest cutoff 2 r_max + skin
+    /// ([`crate::Simulation::new`] checks it): a pair is listed once, through its nearest image.
     pub fn rebuild(&mut self, p: &mut Particles, wall_hist: &mut Vec<History>, n_walls: usize) {
         let n = p.len();
         self.builds += 1;
@@ -86,7 +110,17 @@ impl NeighborList {
             self.x_build.clear();
             return;
         }
-        // Grid over the particles' bounding box; cells at least as large as the largest cutoff.
+        let pbox = self.pbox;
+        let periodic = pbox.any();
+        if periodic {
+            // Before the sort, so that cells, the list and `x_build` all see the wrapped
+            // positions (the displacement test then measures the drift since this build).
+            for x in p.x.iter_mut() {
+                *x = pbox.wrap(*x);
+            }
+        }
+        // Grid over the particles' bounding box, exactly the period box along periodic axes;
+        // cells at least as large as the largest cutoff.
         let r_max = p.r.iter().copied().fold(0.0, f64::max);
         let mut h = 2.0 * r_max + self.skin;
         let mut lo = [f64::INFINITY; 3];
@@ -96,6 +130,10 @@ impl NeighborList {
                 lo[k] = lo[k].min(x[k]);
                 hi[k] = hi[k].max(x[k]);
             }
+        }
+        for k in (0..3).filter(|&k| pbox.is_periodic(k)) {
+            lo[k] = pbox.lo()[k];
+            hi[k] = lo[k] + pbox.period()[k];
         }
         let cells_along = |h: f64| -> [usize; 3] {
             let mut d = [1usize; 3];
@@ -219,6 +257,13 @@ impl NeighborList {
         self.new_nb.clear();
         let skin = self.skin;
         let mut ci = 0usize;
+        // Periodic search: the distinct cells around the current one with an index >= its own,
+        // ascending (particles are sorted by cell, so a partner j > i lies in such a cell, and
+        // ascending cells give an ascending row). Wrapped offsets can meet the same cell twice
+        // when an axis has fewer than three cells; the dedup lists each pair once.
+        let mut around = [0u32; 27];
+        let mut n_around = 0usize;
+        let mut around_of = usize::MAX;
         for i in 0..n {
             self.start.push(self.new_nb.len() as u32);
             let c = self.cell_of[i] as usize;
@@ -229,30 +274,87 @@ impl NeighborList {
             );
             let xi = p.x[i];
             let ri = p.r[i] + skin;
-            // Own cell: later particles only.
-            let end = self.cell_start[c + 1] as usize;
-            for j in i + 1..end {
-                let cut = ri + p.r[j];
-                if norm2(sub(xi, p.x[j])) < cut * cut {
-                    self.new_nb.push(j as u32);
+            if periodic {
+                if around_of != c {
+                    around_of = c;
+                    n_around = 0;
+                    let at = [ix, iy, iz];
+                    for dz in -1i64..=1 {
+                        for dy in -1i64..=1 {
+                            for dx in -1i64..=1 {
+                                let mut q = [0usize; 3];
+                                let mut inside = true;
+                                for (k, d) in [dx, dy, dz].into_iter().enumerate() {
+                                    let j = at[k] as i64 + d;
+                                    let m = dims[k] as i64;
+                                    q[k] = if pbox.is_periodic(k) {
+                                        j.rem_euclid(m) as usize
+                                    } else if (0..m).contains(&j) {
+                                        j as usize
+                                    } else {
+                                        inside = false;
+                                        0
+                                    };
+                                }
+                                let cj = (q[2] * dims[1] + q[1]) * dims[0] + q[0];
+                                if inside && cj >= c {
+                                    around[n_around] = cj as u32;
+                                    n_around += 1;
+                                }
+                            }
+                        }
+                    }
+                    let cells = &mut around[..n_around];
+                    cells.sort_unstable();
+                    let mut kept = 0;
+                    for k in 0..cells.len() {
+                        if k == 0 || cells[k] != cells[kept - 1] {
+                            cells[kept] = cells[k];
+                            kept += 1;
+                        }
+                    }
+                    n_around = kept;
                 }
-            }
-            for &(dz, dy, dx) in stencil {
-                let (jx, jy, jz) = (ix as i64 + dx, iy as i64 + dy, iz as i64 + dz);
-                if jx < 0
-                    || jy < 0
-                    || jz < 0
-                    || jx >= dims[0] as i64
-                    || jy >= dims[1] as i64
-                    || jz >= dims[2] as i64
-                {
-                    continue;
+                for &cj in &around[..n_around] {
+                    let cj = cj as usize;
+                    let first = if cj == c {
+                        i + 1
+                    } else {
+                        self.cell_start[cj] as usize
+                    };
+                    for j in first..self.cell_start[cj + 1] as usize {
+                        let cut = ri + p.r[j];
+                        if norm2(pbox.min_image(sub(xi, p.x[j]))) < cut * cut {
+                            self.new_nb.push(j as u32);
+                        }
+                    }
                 }
-                let cj = ((jz as usize * dims[1]) + jy as usize) * dims[0] + jx as usize;
-                for j in self.cell_start[cj] as usize..self.cell_start[cj + 1] as usize {
+            } else {
+                // Own cell: later particles only.
+                let end = self.cell_start[c + 1] as usize;
+                for j in i + 1..end {
                     let cut = ri + p.r[j];
                     if norm2(sub(xi, p.x[j])) < cut * cut {
                         self.new_nb.push(j as u32);
+                    }
+                }
+                for &(dz, dy, dx) in stencil {
+                    let (jx, jy, jz) = (ix as i64 + dx, iy as i64 + dy, iz as i64 + dz);
+                    if jx < 0
+                        || jy < 0
+                        || jz < 0
+                        || jx >= dims[0] as i64
+                        || jy >= dims[1] as i64
+                        || jz >= dims[2] as i64
+                    {
+                        continue;
+                    }
+                    let cj = ((jz as usize * dims[1]) + jy as usize) * dims[0] + jx as usize;
+                    for j in self.cell_start[cj] as usize..self.cell_start[cj + 1] as usize {
+                        let cut = ri + p.r[j];
+                        if norm2(sub(xi, p.x[j])) < cut * cut {
+                            self.new_nb.push(j as u32);
+                        }
                     }
                 }
             }
@@ -354,5 +456,79 @@ mod tests {
             }
         }
         assert_eq!(seen, marks.len());
+    }
+
+    /// Every pair within the cutoff through its nearest image, listed once, in ascending rows of
+    /// partners above the row, for boxes of one, two and many cells along the periodic axes.
+    #[test]
+    fn periodic_lists_hold_each_nearest_image_pair_once() {
+        use crate::periodic::PeriodicBox;
+        use rand::RngExt;
+        let mut rng = crate::test_rng(8);
+        let (r, skin) = (0.02, 0.01);
+        let cut = 2.0 * r + skin;
+        // First box, x: barely over two cutoffs (two cells), y: many cells; z is not periodic.
+        // The last box holds 12 particles spread 3 m in z, so that the cell cap (8 n + 64)
+        // coarsens the grid to one cell along x and y, where every wrapped offset is the cell
+        // itself.
+        for (lx, ly, n, height) in [
+            (2.05 * cut, 1.0, 300, 0.3),
+            (0.3, 0.25, 400, 0.3),
+            (2.2 * cut, 2.2 * cut, 12, 3.0),
+        ] {
+            let pbox =
+                PeriodicBox::new(([0.0, -0.5, 0.0], [lx, ly - 0.5, 1.0]), [true, true, false])
+                    .unwrap();
+            let mut p = Particles::new();
+            for k in 0..n {
+                // Some start outside the box: the rebuild wraps them in.
+                let z = match (height > 1.0, k) {
+                    (true, 0) => 0.0,
+                    (true, 1) => height,
+                    (true, _) => 0.05 * rng.random::<f64>(),
+                    _ => height * rng.random::<f64>(),
+                };
+                let x = [
+                    -lx + 3.0 * lx * rng.random::<f64>(),
+                    -0.5 + ly * rng.random::<f64>(),
+                    z,
+                ];
+                p.add(x, r * (0.5 + 0.5 * rng.random::<f64>()), 1000.0, 0)
+                    .unwrap();
+            }
+            let mut nl = NeighborList::with_periodic(skin, pbox);
+            nl.rebuild(&mut p, &mut Vec::new(), 0);
+            let lo = pbox.lo();
+            for x in &p.x {
+                assert!(x[0] >= lo[0] && x[0] < lo[0] + lx, "wrapped in x: {x:?}");
+                assert!(x[1] >= lo[1] && x[1] < lo[1] + ly, "wrapped in y: {x:?}");
+            }
+            assert_eq!(
+                nl.x_build(),
+                &p.x[..],
+                "the build remembers wrapped positions"
+            );
+            let mut brute = 0;
+            for i in 0..p.len() {
+                let row = &nl.nb[nl.start[i] as usize..nl.start[i + 1] as usize];
+                assert!(
+                    row.windows(2).all(|w| w[0] < w[1]),
+                    "row {i} ascending: {row:?}"
+                );
+                assert!(
+                    row.iter().all(|&j| j as usize > i),
+                    "row {i} above the diagonal"
+                );
+                for j in i + 1..p.len() {
+                    let c = p.r[i] + p.r[j] + skin;
+                    if norm2(pbox.min_image(sub(p.x[i], p.x[j]))) < c * c {
+                        brute += 1;
+                        assert!(row.contains(&(j as u32)), "pair {i} {j} missing");
+                    }
+                }
+            }
+            assert_eq!(nl.pairs(), brute, "box {lx} x {ly}");
+            assert!(brute > n / 3, "the test must see pairs: {brute}");
+        }
     }
 }

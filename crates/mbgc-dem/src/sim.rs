@@ -8,6 +8,7 @@ use super::contact::{History, ModelClass};
 use super::material::Materials;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
+use super::periodic::PeriodicBox;
 use super::step::{self, Host, Params, Plan, Raw};
 use super::team;
 use super::timestep::rayleigh_time;
@@ -34,7 +35,18 @@ pub struct Scene {
     /// Neighbour skin, m (> 0): see [`NeighborList::skin`].
     pub skin: f64,
     /// Particles outside this box (lo, hi) make the run fail: they have left the experiment.
+    /// Along a periodic axis it is the period box instead, and leaving it is no failure.
     pub domain: (V3, V3),
+    /// Per axis (x, y, z), whether the domain box `domain` is periodic along it; the period is
+    /// `domain.1[k] - domain.0[k]` and must exceed twice the largest neighbour cutoff,
+    /// 2 (2 r_max + skin). A particle leaving the box through one face comes back through the
+    /// opposite one, and pairs interact through their nearest images.
+    ///
+    /// Walls do not know about periodicity: a plane is infinite and a finite wall has no image
+    /// across the box. Bound a periodic domain along its other axes only (e.g. Plane walls
+    /// normal to z for a cell periodic in x and y), or with rough layers of driven particles
+    /// ([`Particles::drive`]).
+    pub periodic: [bool; 3],
     /// Largest accepted dt as a fraction of the Rayleigh time (dimensionless; 0.2..0.3 is usual,
     /// seed 004 runs at 0.25). A guard against a mistyped step, not a stability proof: Hertz
     /// contacts at high impact speed can need less.
@@ -64,7 +76,9 @@ pub struct Simulation {
     pub gravity: V3,
     /// Time step, s.
     pub dt: f64,
-    /// Box (lo, hi), m, outside which a particle makes the run fail ([`BlowUp::LeftDomain`]).
+    /// Box (lo, hi), m, outside which a particle makes the run fail ([`BlowUp::LeftDomain`]);
+    /// along periodic axes it is the period box, fixed at [`Simulation::new`] (changing it here
+    /// does not change the period).
     pub domain: (V3, V3),
     /// Pair list and the pair contact histories.
     pub neighbors: NeighborList,
@@ -76,15 +90,19 @@ pub struct Simulation {
     pub time: f64,
     /// Speed beyond which a particle signals a blow-up, m/s: ten times the free-fall speed over
     /// the domain diagonal plus the fastest wall and the fastest initial particle, plus 1 m/s.
+    /// [`Simulation::check`] adds ten times the current speed of the fastest driven particle.
     pub speed_limit: f64,
-    /// Energy the scene starts with (kinetic, elastic, and potential down to the domain floor);
-    /// without moving walls or cohesion, the kinetic energy can never exceed it.
+    /// Energy the scene starts with (kinetic, elastic, and potential down to the domain floor,
+    /// driven particles' kinetic and potential energy left out); without moving walls or driven
+    /// particles, cohesion, or gravity along a periodic axis, the kinetic energy can never
+    /// exceed it.
     pub energy_budget: f64,
     /// Per wall, the particles within reach of it (r + skin) at the last list build.
     pub(crate) wall_nb: Vec<Vec<u32>>,
     /// How far each wall has moved since the last list build.
     pub(crate) wall_moved: Vec<f64>,
     threads: usize,
+    pbox: PeriodicBox,
 }
 
 impl Simulation {
@@ -101,6 +119,7 @@ impl Simulation {
             skin,
             domain,
             max_dt_fraction,
+            periodic,
         } = scene;
         if class.limit_force {
             materials.prepare_limit_force();
@@ -158,8 +177,49 @@ impl Simulation {
                 )));
             }
         }
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        let Some(pbox) = PeriodicBox::new(domain, periodic) else {
+            let k = (0..3)
+                .find(|&k| {
+                    let l = domain.1[k] - domain.0[k];
+                    periodic[k] && !(l.is_finite() && l > 0.0 && domain.0[k].is_finite())
+                })
+                .unwrap_or(0);
+            return Err(Error::invalid(format!(
+                "periodic axis {}: the domain must span a positive, finite period, found {} to {}",
+                AXES[k], domain.0[k], domain.1[k]
+            )));
+        };
+        // Minimum image: no pair may come within the cutoff through two images at once.
+        let r_max = particles.r.iter().copied().fold(0.0, f64::max);
+        let min_period = 2.0 * (2.0 * r_max + skin);
+        for k in (0..3).filter(|&k| periodic[k]) {
+            let l = domain.1[k] - domain.0[k];
+            if l <= min_period {
+                return Err(Error::invalid(format!(
+                    "periodic axis {}: the period {l:.4e} m must exceed twice the largest \
+                     neighbour cutoff, 2 (2 r_max + skin) = {min_period:.4e} m",
+                    AXES[k]
+                )));
+            }
+        }
+        // The step tells driven particles by their zero inverse mass.
+        if let Some(i) = (0..particles.len()).find(|&i| {
+            let (a, b) = (particles.inv_m[i], particles.inv_i[i]);
+            if particles.driven[i] {
+                a != 0.0 || b != 0.0
+            } else {
+                !(a > 0.0 && b > 0.0)
+            }
+        }) {
+            return Err(Error::invalid(format!(
+                "particle {i}: its driven flag and its inverse mass and inertia disagree (set them \
+                 through Particles::drive and Particles::release)"
+            )));
+        }
         for (i, x) in particles.x.iter().enumerate() {
-            if !inside(*x, domain) {
+            // Along periodic axes the first rebuild wraps it in.
+            if !inside(*x, domain, periodic) {
                 return Err(Error::invalid(format!(
                     "particle {i} starts outside the domain at {x:?}"
                 )));
@@ -181,7 +241,7 @@ impl Simulation {
             gravity,
             dt,
             domain,
-            neighbors: NeighborList::new(skin),
+            neighbors: NeighborList::with_periodic(skin, pbox),
             wall_hist,
             step: 0,
             time: 0.0,
@@ -190,11 +250,14 @@ impl Simulation {
             wall_nb: vec![Vec::new(); n_walls],
             wall_moved: vec![0.0; n_walls],
             threads: 1,
+            pbox,
         };
         sim.rebuild_lists();
         sim.compute_forces();
         let floor = sim.domain.0;
+        // Driven particles cannot turn their height into motion.
         let potential: f64 = (0..sim.particles.len())
+            .filter(|&i| !sim.particles.driven[i])
             .map(|i| {
                 -sim.particles.m[i] * dot(sim.gravity, sub(sim.particles.x[i], floor)).min(0.0)
             })
@@ -212,6 +275,25 @@ impl Simulation {
     /// sums).
     pub fn set_threads(&mut self, threads: usize) {
         self.threads = threads.max(1);
+    }
+
+    /// Per axis, whether the domain is periodic along it ([`Scene::periodic`]).
+    pub fn periodic(&self) -> [bool; 3] {
+        self.pbox.periodic()
+    }
+
+    /// The period box ([`PeriodicBox::NONE`] without periodic axes).
+    pub fn periodic_box(&self) -> PeriodicBox {
+        self.pbox
+    }
+
+    /// The separation x_i - x_j of particles `i` and `j` (current indices), m: the nearest
+    /// image along periodic axes. Stress and fabric sums over pairs must use it, not the raw
+    /// difference of positions.
+    pub fn separation(&self, i: usize, j: usize) -> V3 {
+        let x = &self.particles.x;
+        self.pbox
+            .min_image(sub(self.pbox.wrap(x[i]), self.pbox.wrap(x[j])))
     }
 
     /// The number of threads set by [`Simulation::set_threads`].
@@ -296,7 +378,7 @@ impl Simulation {
             keep[i]
         });
         self.particles.retain(&keep);
-        self.neighbors = NeighborList::new(self.neighbors.skin);
+        self.neighbors = NeighborList::with_periodic(self.neighbors.skin, self.pbox);
         self.rebuild_lists();
         let p = &self.particles;
         let nl = &mut self.neighbors;
@@ -356,11 +438,24 @@ impl Simulation {
             .all(|x| x.iter().all(|c| c.is_finite()))
     }
 
-    /// Looks for NaN, particles outside the domain and impossible speeds.
+    /// Looks for NaN, particles outside the domain (along non-periodic axes) and impossible
+    /// speeds. Driven particles are not held to the speed limit (their speed is the caller's);
+    /// the fastest of them raises the free particles' limit as a wall's speed does, and a moving
+    /// one, like a moving wall, feeds energy in, so the energy check is then off.
     pub fn check(&self) -> std::result::Result<(), BlowUp> {
         let p = &self.particles;
+        let mut driven_speed2 = 0.0f64;
+        let mut driven_moving = false;
+        for i in (0..p.len()).filter(|&i| p.driven[i]) {
+            driven_speed2 = driven_speed2.max(norm2(p.v[i]));
+            driven_moving |= p.v[i] != [0.0; 3] || p.w[i] != [0.0; 3];
+        }
+        // Gravity along a periodic axis does work without end (a chute flow).
+        let gravity_periodic = (0..3).any(|k| self.pbox.is_periodic(k) && self.gravity[k] != 0.0);
         let closed = self.walls.iter().all(|w| w.velocity == [0.0; 3])
-            && self.class.cohesion == super::contact::CohesionKind::None;
+            && self.class.cohesion == super::contact::CohesionKind::None
+            && !driven_moving
+            && !gravity_periodic;
         if closed {
             let (kt, kr) = self.kinetic_energy();
             // A wide margin: this is a guard against runaway integration, not a balance.
@@ -372,7 +467,9 @@ impl Simulation {
                 });
             }
         }
-        let lim2 = self.speed_limit * self.speed_limit;
+        let lim = self.speed_limit + 10.0 * driven_speed2.sqrt();
+        let lim2 = lim * lim;
+        let periodic = self.pbox.periodic();
         for i in 0..p.len() {
             let (x, v) = (p.x[i], p.v[i]);
             if !(x.iter().chain(&v).all(|c| c.is_finite())) {
@@ -381,14 +478,14 @@ impl Simulation {
                     particle: p.id[i],
                 });
             }
-            if !inside(x, self.domain) {
+            if !inside(x, self.domain, periodic) {
                 return Err(BlowUp::LeftDomain {
                     step: self.step,
                     particle: p.id[i],
                     position: x,
                 });
             }
-            if norm2(v) > lim2 {
+            if norm2(v) > lim2 && !p.driven[i] {
                 return Err(BlowUp::TooFast {
                     step: self.step,
                     particle: p.id[i],
@@ -399,12 +496,13 @@ impl Simulation {
         Ok(())
     }
 
-    /// Recomputes all forces and torques (gravity, contacts, walls).
+    /// Recomputes all forces and torques (gravity, contacts, walls; contacts only for driven
+    /// particles).
     pub fn compute_forces(&mut self) {
         let g = self.gravity;
         let p = &mut self.particles;
         for i in 0..p.len() {
-            p.f[i] = scale(g, p.m[i]);
+            p.f[i] = scale(g, if p.driven[i] { 0.0 } else { p.m[i] });
             p.t[i] = [0.0; 3];
         }
         let model = self.class;
@@ -429,7 +527,8 @@ impl Simulation {
         ))
     }
 
-    /// Kinetic energy (translational, rotational), J.
+    /// Kinetic energy (translational, rotational) of the free particles, J; driven particles
+    /// are left out (see [`Particles::translational_energy`]).
     pub fn kinetic_energy(&self) -> (f64, f64) {
         (
             self.particles.translational_energy(),
@@ -437,7 +536,8 @@ impl Simulation {
         )
     }
 
-    /// Gravitational potential energy -sum m g.x relative to the origin, J.
+    /// Gravitational potential energy -sum m g.x relative to the origin, J (positions as stored:
+    /// along a periodic axis they jump by a period when wrapped).
     pub fn potential_energy(&self) -> f64 {
         let p = &self.particles;
         (0..p.len())
@@ -446,16 +546,19 @@ impl Simulation {
     }
 
     /// Touching particle pairs as (i, j, overlap in m), current indices, from the neighbour list
-    /// (so only as current as its last rebuild's candidate pairs, which the skin guarantees).
+    /// (so only as current as its last rebuild's candidate pairs, which the skin guarantees);
+    /// nearest images along periodic axes. Pairs of two driven particles are not contacts (the
+    /// step skips them) and are left out.
     pub fn touching_pairs(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
         let p = &self.particles;
         let nl = &self.neighbors;
+        let pbox = self.pbox;
         (0..p.len()).flat_map(move |i| {
             (nl.start[i] as usize..nl.start[i + 1] as usize).filter_map(move |e| {
                 let j = nl.nb[e] as usize;
                 let s = p.r[i] + p.r[j];
-                let d2 = norm2(sub(p.x[i], p.x[j]));
-                (d2 < s * s).then(|| (i, j, s - d2.sqrt()))
+                let d2 = norm2(pbox.min_image(sub(p.x[i], p.x[j])));
+                (d2 < s * s && !(p.driven[i] && p.driven[j])).then(|| (i, j, s - d2.sqrt()))
             })
         })
     }
@@ -491,8 +594,8 @@ impl Simulation {
     }
 }
 
-fn inside(x: V3, (lo, hi): (V3, V3)) -> bool {
-    (0..3).all(|k| x[k] >= lo[k] && x[k] <= hi[k])
+fn inside(x: V3, (lo, hi): (V3, V3), periodic: [bool; 3]) -> bool {
+    (0..3).all(|k| periodic[k] || (x[k] >= lo[k] && x[k] <= hi[k]))
 }
 
 impl Host for Simulation {

@@ -33,6 +33,7 @@ use super::contact::{Contact, ContactLaw, ContactOutput, History};
 use super::material::Materials;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
+use super::periodic::PeriodicBox;
 use super::vec3::*;
 use super::walls::Wall;
 
@@ -130,6 +131,9 @@ pub(crate) struct Raw {
     n_walls: usize,
     wall_nb: *const Vec<u32>,
     materials: *const Materials,
+    pbox: PeriodicBox,
+    /// Whether some particle is driven; the flags change only between runs.
+    any_driven: bool,
 }
 
 impl Raw {
@@ -154,7 +158,12 @@ impl Raw {
         ] {
             debug_assert_eq!(len, n, "particle arrays of unequal length");
         }
-        for len in [p.inv_m.len(), p.inv_i.len(), p.material.len()] {
+        for len in [
+            p.inv_m.len(),
+            p.inv_i.len(),
+            p.material.len(),
+            p.driven.len(),
+        ] {
             debug_assert_eq!(len, n, "particle arrays of unequal length");
         }
         debug_assert_eq!(
@@ -176,6 +185,7 @@ impl Raw {
         );
         debug_assert_eq!(wall_nb.len(), walls.len(), "one list per wall");
         let xb = nl.x_build();
+        let pbox = nl.periodic_box();
         Raw {
             n,
             x: p.x.as_mut_ptr(),
@@ -203,11 +213,14 @@ impl Raw {
             n_walls: walls.len(),
             wall_nb: wall_nb.as_ptr(),
             materials,
+            pbox,
+            any_driven: p.driven.contains(&true),
         }
     }
 
-    /// Half kick and drift of the particles in `own`, forces reset to gravity; returns their
-    /// largest squared displacement since the list build (infinite without a list).
+    /// Half kick and drift of the particles in `own`, forces reset to gravity (to zero for
+    /// driven particles, whose zero inverse mass makes the kick a no-op); returns their largest
+    /// squared displacement since the list build (infinite without a list).
     ///
     /// # Safety
     /// The views are current and nobody else accesses these particles meanwhile.
@@ -251,6 +264,15 @@ impl Raw {
             f[k] = scale(g, m[k]);
             t[k] = [0.0; 3];
         }
+        // A driven particle's force is its contacts alone: what a lid's servo needs. A pass of
+        // its own, so that scenes without driven particles pay nothing in the loop above.
+        if self.any_driven {
+            for k in 0..len {
+                if inv_m[k] == 0.0 {
+                    f[k] = [0.0; 3];
+                }
+            }
+        }
         if xb.is_none() {
             max_disp2 = f64::INFINITY;
         }
@@ -281,6 +303,7 @@ impl Raw {
             w: std::slice::from_raw_parts(self.w, n),
             r: std::slice::from_raw_parts(self.r, n),
             m: std::slice::from_raw_parts(self.m, n),
+            inv_m: std::slice::from_raw_parts(self.inv_m, n),
             mat: std::slice::from_raw_parts(self.mat, n),
         };
         let materials = &*self.materials;
@@ -289,9 +312,16 @@ impl Raw {
         let (e0, e1) = (start[rows.start] as usize, start[rows.end] as usize);
         let hist = std::slice::from_raw_parts_mut(self.hist.add(e0), e1 - e0);
         let live = std::slice::from_raw_parts_mut(self.live.add(e0), e1 - e0);
-        pair_rows(
-            law, materials, dt, rows, start, nb, hist, live, e0, view, f_out, t_out,
-        );
+        // Two instances of the pair loop, so that the non-periodic one carries no image test.
+        if self.pbox.any() {
+            pair_rows::<L, true>(
+                law, materials, dt, rows, start, nb, hist, live, e0, view, &self.pbox, f_out, t_out,
+            );
+        } else {
+            pair_rows::<L, false>(
+                law, materials, dt, rows, start, nb, hist, live, e0, view, &self.pbox, f_out, t_out,
+            );
+        }
         let n_walls = self.n_walls;
         if n_walls > 0 {
             let wh = std::slice::from_raw_parts_mut(
@@ -630,6 +660,8 @@ struct P<'a> {
     w: &'a [V3],
     r: &'a [f64],
     m: &'a [f64],
+    /// Zero for driven particles.
+    inv_m: &'a [f64],
     mat: &'a [u16],
 }
 
@@ -741,6 +773,7 @@ pub(crate) fn wall_force<L: ContactLaw>(
         w: &q.w,
         r: &q.r,
         m: &q.m,
+        inv_m: &q.inv_m,
         mat: &q.material,
     };
     let mut total = [0.0; 3];
@@ -754,10 +787,11 @@ pub(crate) fn wall_force<L: ContactLaw>(
     total
 }
 
-/// Contacts of rows `rows`; `hist` starts at list entry `base`.
+/// Contacts of rows `rows`; `hist` starts at list entry `base`. With `PERIODIC`, separations
+/// are minimum images in `pbox`. Pairs of two driven particles are skipped as if apart.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn pair_rows<L: ContactLaw>(
+fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
     law: &L,
     materials: &Materials,
     dt: f64,
@@ -768,21 +802,28 @@ fn pair_rows<L: ContactLaw>(
     live: &mut [u8],
     base: usize,
     p: P,
+    pbox: &PeriodicBox,
     f: &mut [V3],
     t: &mut [V3],
 ) {
     for i in rows {
         let (xi, ri, mi, mati) = (p.x[i], p.r[i], p.m[i], p.mat[i]);
+        let driven_i = p.inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
         for e in start[i] as usize..start[i + 1] as usize {
             let j = nb[e] as usize;
             // A half list: the team's buffers are cleared only from a member's first row on.
             debug_assert!(j > i, "entry {e}: {i} -> {j} is not a half-list entry");
-            let d = sub(xi, p.x[j]);
+            let mut d = sub(xi, p.x[j]);
+            if PERIODIC {
+                d = pbox.min_image(d);
+            }
             let rsum = ri + p.r[j];
             let dist2 = norm2(d);
             let lv = &mut live[e - base];
-            if dist2 >= rsum * rsum {
+            // A glued layer of driven particles exerts nothing on itself; the test costs a load
+            // only for touching pairs.
+            if dist2 >= rsum * rsum || (driven_i && p.inv_m[j] == 0.0) {
                 // Most separated pairs have no history: skip them without loading it.
                 if *lv != 0 {
                     hist[e - base] = History::default();

@@ -158,6 +158,7 @@ mod tests {
             skin: 5e-4,
             domain: ([-0.01; 3], [0.04; 3]),
             max_dt_fraction: 0.3,
+            periodic: [false; 3],
         })
         .unwrap()
     }

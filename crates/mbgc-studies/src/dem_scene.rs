@@ -195,6 +195,7 @@ pub fn scene(spec: &BenchSpec, x: &[V3], r: &[f64]) -> Result<Scene> {
             ],
         ),
         max_dt_fraction: 0.3,
+        periodic: [false; 3],
     })
 }
 

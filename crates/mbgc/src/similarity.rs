@@ -234,16 +234,18 @@ pub fn per_particle_weight(name: &str) -> Monomial {
 }
 
 /// The groups of a bulk experiment under gravity whose only lengths are d50 and sizes in units
-/// of it, and whose stresses are E_p, E_w, `stresses` (the experiment's own, as (group name,
-/// parameter, meaning)) and any effect parameter of the class that is a stress (cohesion's
-/// energy density): K_p = E_p / (rho_p g d50), K_w, the experiment's, then C_pp =
+/// of it, and whose stresses are E_p, E_w (when the material meets walls: `pairs`), `stresses`
+/// (the experiment's own, as (group name, parameter, meaning)) and any effect parameter of the
+/// class for those pairs that is a stress (cohesion's energy density): K_p = E_p /
+/// (rho_p g d50), K_w, the experiment's, then C_pp =
 /// ced_pp / (rho_p g d50) and the like. `None` when the class has an effect parameter of
 /// another dimension (a spring in N/m), which would need a group of its own.
 pub fn bulk_groups(
     class: &mbgc_dem::contact::ModelClass,
+    pairs: &[mbgc_dem::contact::Pair],
     stresses: &[(&str, &str, &str)],
 ) -> Option<Vec<Group>> {
-    let params = class.parameters(&mbgc_dem::contact::Pair::BOTH);
+    let params = class.parameters(pairs);
     let stress = |unit: &str| unit == "J/m^3" || unit == "Pa";
     if params
         .iter()
@@ -251,18 +253,18 @@ pub fn bulk_groups(
     {
         return None;
     }
-    let mut groups = vec![
-        Group {
-            name: "K_p".into(),
-            what: "dimensionless particle stiffness E_p / (rho_p g d50)".into(),
-            monomial: per_particle_weight("E_p"),
-        },
-        Group {
+    let mut groups = vec![Group {
+        name: "K_p".into(),
+        what: "dimensionless particle stiffness E_p / (rho_p g d50)".into(),
+        monomial: per_particle_weight("E_p"),
+    }];
+    if pairs.contains(&mbgc_dem::contact::Pair::ParticleWall) {
+        groups.push(Group {
             name: "K_w".into(),
             what: "dimensionless wall stiffness E_w / (rho_p g d50)".into(),
             monomial: per_particle_weight("E_w"),
-        },
-    ];
+        });
+    }
     for (group, name, what) in stresses {
         groups.push(Group {
             name: group.to_string(),

@@ -781,6 +781,7 @@ impl Hopper {
                 [catch_radius + margin, catch_radius + margin, top + margin],
             ),
             max_dt_fraction: 0.3,
+            periodic: [false; 3],
         };
         let mut sim = Simulation::new(scene)?;
         sim.set_threads(opts.threads);

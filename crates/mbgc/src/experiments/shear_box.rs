@@ -539,7 +539,7 @@ impl Experiment for ShearBox {
     /// dimension (a spring in N/m, a damper) would need a group of its own: no similarity then.
     fn similarity(&self) -> Option<Similarity> {
         Some(Similarity {
-            groups: crate::similarity::bulk_groups(&self.class, &[])?,
+            groups: crate::similarity::bulk_groups(&self.class, &Pair::BOTH, &[])?,
             scaled: vec![ScaledResponse {
                 response: "bulk_density".into(),
                 factor: Monomial {
@@ -653,6 +653,7 @@ impl ShearBox {
             skin,
             domain,
             max_dt_fraction: self.dt_fraction + 1e-9,
+            periodic: [false; 3],
         };
         let mut sim = Simulation::new(scene)?;
         sim.set_threads(opts.threads.max(1));
