@@ -1,8 +1,7 @@
-//! The shear cell's first verification (issue 36): `mbgc bench shear-cell --report
-//! docs/shear_cell.md` regenerates it from the campaign tables under `docs/data/shear_cell/`
-//! (the commands that made them are in its README): the noise of one run per response at two
-//! cell sizes, whether a cohesionless yield locus passes through the origin within that noise,
-//! how the cohesion intercept grows with the SJKR energy density against an order-of-magnitude
+//! The shear cell's verification (issue 36): `mbgc bench shear-cell --report
+//! docs/shear_cell.md` regenerates it from the tables under `docs/data/shear_cell/` (the
+//! commands that made them are in its READMEs): the noise of one run per response, whether a
+//! cohesionless yield locus passes through the origin within that noise, how the cohesion intercept grows with the SJKR energy density against an order-of-magnitude
 //! estimate from the contact pull-off, and the cost of a run. It runs no DEM itself.
 
 use std::fmt::Write as _;
@@ -124,68 +123,12 @@ fn sjkr_estimate(run: &Run) -> f64 {
     rumpf * pull / (d * d)
 }
 
-/// `mbgc bench shear-cell`: the report from the tables under `--data`.
-pub fn run(a: &Args) -> anyhow::Result<()> {
-    let table = |name: &str| a.data.join(name);
-    let sets: [(&str, &str); 5] = [
-        ("k = 8, three replicates", "k8_cohesionless.csv"),
-        ("k = 12, three replicates", "k12_cohesionless.csv"),
-        ("k = 12, eight replicates", "k12_noise.csv"),
-        (
-            "k = 12, eight, pre-shear 2 d50, I 1e-3",
-            "k12_preshear2_noise.csv",
-        ),
-        (
-            "k = 12, eight, pre-shear 2 d50, I 2e-3 (current)",
-            "k12_current_noise.csv",
-        ),
-    ];
-    let inputs: Vec<(&str, PathBuf)> = sets
-        .iter()
-        .map(|(_, f)| ("a table", table(f)))
-        .chain([
-            ("a table", table("k12_cohesive.csv")),
-            ("a table", table("k12_cohesion_series.csv")),
-            ("a table", table("liggghts/mbgc_k12.csv")),
-            ("a table", table("liggghts/liggghts_k12.csv")),
-        ])
-        .collect();
-    let refs: Vec<(&str, &Path)> = inputs.iter().map(|(w, p)| (*w, p.as_path())).collect();
-    mbgc::outputs::refuse_overwriting_inputs("--report", &a.report, &refs)?;
-
-    let mut w = String::new();
-    let _ = writeln!(
-        w,
-        "# The shear cell: noise, the cohesionless locus, cohesion and cost (issue 36)\n\n\
-         Regenerate with\n\n```\ncargo run --release -- bench shear-cell --report \
-         docs/shear_cell.md\n```\n\n(seconds: it reads the campaign tables under \
-         `{}`, whose README gives the `mbgc simulate` commands that made them; it runs no DEM).\n\n\
-         The material: monosized spheres of 10 mm, E 5e7 Pa, nu 0.3, rho_p 2600 kg/m3, e 0.5, \
-         mu_pp 0.5, mu_pw 0.3, rolling friction 0.1, class `hertz,mindlin,epsd2,sjkr`, \
-         pre-shear normal stress 5000 Pa, failure at 0.25, 0.5 and 0.75 of it. Every row of a \
-         replicate table has the same inputs; the runs differ by their seed only.",
-        a.data.display()
-    );
-
-    // Noise per cell size.
-    let _ = writeln!(
-        w,
-        "\n## Noise of one run\n\nMean and sample sd over the replicates (n runs), cohesion 0. \
-         The three-run tables were made with the experiment as of commit 94342dc, the first \
-         eight-run table later: its first three rows have the k = 12 three-run table's seeds \
-         and repeat those runs bit for bit (so they are not independent of it, and the later \
-         changes to the cell did not change its results). Those versions pre-sheared until two \
-         windows of 0.5 d50 agreed within 2 %, which happened by chance after 1.5-2.1 d50 in \
-         seven runs and after 4.3 d50, where the cell breaks down, in the eighth (shear ratio \
-         0.66). The last two tables pre-shear a fixed 2 d50 (the same seeds), at an inertial \
-         number of 1e-3 and, as now, 2e-3 (their wall times were taken beside other runs and \
-         builds on two cores, so their time steps measure the cost: the faster shear needs 0.57 \
-         times as many; the fill is the same). `steady` counts the runs \
-         whose table says they came to a steady state: the I 1e-3 table was made with a 5 % \
-         steadiness test between the pre-shear's last two windows of 0.5 d50, which four runs \
-         failed by 6-10 % (the window-to-window scatter), the current table with 12 %; the \
-         first tables stopped at the first two windows that agreed.\n"
-    );
+/// A table of mean ± sd per response, wall time, steps, spheres and steady runs, one line per
+/// replicate set; returns the sets that have runs.
+fn noise_table<'a>(
+    w: &mut String,
+    sets: &[(&'a str, PathBuf)],
+) -> anyhow::Result<Vec<(&'a str, Vec<Run>)>> {
     let mut head = "| replicates | n |".to_string();
     let mut rule = "|---|---|".to_string();
     for (r, u) in RESPONSES {
@@ -195,11 +138,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     head.push_str(" wall time, s (median, max) | time steps (median) | spheres | steady |");
     rule.push_str("---|---|---|---|");
     let _ = writeln!(w, "{head}\n{rule}");
-    let mut noise_rows = Vec::new();
+    let mut rows = Vec::new();
     for (label, file) in sets {
-        let rs = runs(&table(file))?;
+        let rs = runs(file)?;
         if rs.is_empty() {
-            let _ = writeln!(w, "| {label} | 0 | (no table `{file}` yet) |");
+            let _ = writeln!(w, "| {label} | 0 | (no table `{}` yet) |", file.display());
             continue;
         }
         let mut line = format!("| {label} | {} |", rs.len());
@@ -220,26 +163,98 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             rs.iter().filter(|x| x.get("settled") == 1.0).count()
         ));
         let _ = writeln!(w, "{line}");
-        noise_rows.push((label, rs));
+        rows.push((*label, rs));
     }
+    Ok(rows)
+}
 
-    // The cohesionless locus through the origin.
+/// The cohesion intercept of each cohesionless set against its standard error.
+fn origin_table(w: &mut String, rows: &[(&str, Vec<Run>)]) {
     let _ = writeln!(
         w,
-        "\n## A cohesionless locus through the origin\n\nThe cohesion intercept of each \
-         cohesionless table against its standard error (sd / sqrt n): a locus through the \
-         origin gives |mean| below about twice the standard error.\n\n\
-         | replicates | mean intercept (Pa) | standard error (Pa) | mean / se |\n|---|---|---|---|"
+        "| replicates | mean intercept (Pa) | standard error (Pa) | mean / se |\n|---|---|---|---|"
     );
-    for (label, rs) in &noise_rows {
+    for (label, rs) in rows {
         let (m, sd, n) = mean_sd(&rs.iter().map(|x| x.get("cohesion")).collect::<Vec<_>>());
         let se = sd / (n as f64).sqrt();
         let _ = writeln!(w, "| {label} | {m:.1} | {se:.1} | {:.2} |", m / se);
     }
+}
+
+/// `mbgc bench shear-cell`: the report from the tables under `--data`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let table = |name: &str| a.data.join(name);
+    let periodic = [(
+        "periodic, k = 12, eight replicates",
+        table("periodic/k12_noise.csv"),
+    )];
+    let split: [(&str, &str); 5] = [
+        ("split box, k = 8, three", "k8_cohesionless.csv"),
+        ("split box, k = 12, three", "k12_cohesionless.csv"),
+        ("split box, k = 12, eight", "k12_noise.csv"),
+        (
+            "split box, k = 12, eight, 2 d50, I 1e-3",
+            "k12_preshear2_noise.csv",
+        ),
+        (
+            "split box, k = 12, eight, 2 d50, I 2e-3",
+            "k12_current_noise.csv",
+        ),
+    ];
+    let split: Vec<(&str, PathBuf)> = split
+        .iter()
+        .map(|(l, f)| (*l, table(&format!("split_box/{f}"))))
+        .collect();
+    let engines_files = [
+        ("mbgc", table("periodic/liggghts/mbgc_k12.csv")),
+        ("LIGGGHTS 3.8", table("periodic/liggghts/liggghts_k12.csv")),
+    ];
+    let series = table("periodic/k12_cohesion_series.csv");
+    let inputs: Vec<(&str, PathBuf)> = periodic
+        .iter()
+        .chain(&split)
+        .chain(&engines_files)
+        .map(|(_, f)| ("a table", f.clone()))
+        .chain([("a table", series.clone())])
+        .collect();
+    let refs: Vec<(&str, &Path)> = inputs.iter().map(|(w, p)| (*w, p.as_path())).collect();
+    mbgc::outputs::refuse_overwriting_inputs("--report", &a.report, &refs)?;
+
+    let mut w = String::new();
+    let _ = writeln!(
+        w,
+        "# The shear cell: noise, the cohesionless locus, cohesion and cost (issue 36)\n\n\
+         Regenerate with\n\n```\ncargo run --release -- bench shear-cell --report \
+         docs/shear_cell.md\n```\n\n(seconds: it reads the tables under `{}`, whose READMEs \
+         give the `mbgc simulate` commands that made them; it runs no DEM).\n\n\
+         The cell (`crates/mbgc/src/experiments/shear_cell.rs` gives the procedure and the \
+         reasons): periodic in the shear direction and across it, k = 12 d_max in both, a bed \
+         about k tall between a glued floor and a glued lid of the material's own grains, \
+         sheared without gravity under a servo-controlled normal stress. The material: \
+         monosized spheres of 10 mm, E 5e7 Pa, nu 0.3, rho_p 2600 kg/m3, e 0.5, mu_pp 0.5, \
+         rolling friction 0.1, class `hertz,mindlin,epsd2,sjkr`, pre-shear normal stress 5000 \
+         Pa, failure at 0.25, 0.5 and 0.75 of it. Every row of a replicate table has the same \
+         inputs; the runs differ by their seed only.",
+        a.data.display()
+    );
+    let _ = writeln!(
+        w,
+        "\n## Noise of one run\n\nMean and sample sd over the replicates (n runs), cohesion 0. \
+         `steady` counts the runs that reached a steady pre-shear and a failure peak at every \
+         point. The wall times were taken beside other runs and builds on two cores; the time \
+         steps measure the cost.\n"
+    );
+    let rows = noise_table(&mut w, &periodic)?;
+    let _ = writeln!(
+        w,
+        "\n## A cohesionless locus through the origin\n\nThe cohesion intercept against its \
+         standard error (sd / sqrt n): a locus through the origin gives |mean| below about \
+         twice the standard error.\n"
+    );
+    origin_table(&mut w, &rows);
 
     // Cohesion against ced.
-    let mut coh = runs(&table("k12_cohesive.csv"))?;
-    coh.extend(runs(&table("k12_cohesion_series.csv"))?);
+    let coh = runs(&series)?;
     let mut levels: Vec<f64> = coh.iter().map(|r| r.get("ced_pp")).collect();
     levels.sort_by(f64::total_cmp);
     levels.dedup();
@@ -254,6 +269,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
          | ced_pp (J/m3) | runs | cohesion (Pa), each run | mean | estimate (Pa) | mean / \
          estimate | bulk density (kg/m3) | shear ratio |\n|---|---|---|---|---|---|---|---|"
     );
+    if levels.is_empty() {
+        let _ = writeln!(w, "| (no table `{}` yet) |", series.display());
+    }
     for ced in levels {
         let at: Vec<&Run> = coh.iter().filter(|r| r.get("ced_pp") == ced).collect();
         let c: Vec<f64> = at.iter().map(|r| r.get("cohesion")).collect();
@@ -272,64 +290,77 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             m / est
         );
     }
-    // The LIGGGHTS deck of the same cell against mbgc's engine.
-    let engines = [
-        ("mbgc", runs(&table("liggghts/mbgc_k12.csv"))?),
-        ("LIGGGHTS 3.8", runs(&table("liggghts/liggghts_k12.csv"))?),
-    ];
-    let _ = writeln!(
-        w,
-        "\n## LIGGGHTS 3.8 against mbgc's engine\n\nThe same rows (k = 12, 6 kPa, cohesionless, \
-         the current version; `liggghts/README.md` gives the commands and each run), mean ± sd \
-         per engine, and the difference of the means over its standard error from the two \
-         engines' own scatter.\n"
-    );
-    let mut head = "| engine | n |".to_string();
-    let mut rule = "|---|---|".to_string();
-    for (r, u) in RESPONSES {
-        head.push_str(&format!(" {r} ({u}) |"));
-        rule.push_str("---|");
-    }
-    let _ = writeln!(w, "{head} wall time, s (median) |\n{rule}---|");
-    let stats = |rs: &[Run], r: &str| mean_sd(&rs.iter().map(|x| x.get(r)).collect::<Vec<_>>());
-    for (name, rs) in &engines {
-        let mut line = format!("| {name} | {} |", rs.len());
-        for (r, _) in RESPONSES {
-            let (m, sd, _) = stats(rs, r);
-            line.push_str(&format!(" {m:.4} ± {sd:.4} |"));
-        }
-        let mut t: Vec<f64> = rs.iter().map(|x| x.get("wall_time_s")).collect();
-        t.sort_by(f64::total_cmp);
-        let _ = writeln!(w, "{line} {:.0} |", mbgc::numeric::quantile_sorted(&t, 0.5));
-    }
-    let mut line = "| LIGGGHTS - mbgc, z |  |".to_string();
-    let mut largest = 0.0f64;
-    for (r, _) in RESPONSES {
-        let (ma, sa, na) = stats(&engines[0].1, r);
-        let (mb, sb, nb) = stats(&engines[1].1, r);
-        let se = (sa * sa / na as f64 + sb * sb / nb as f64).sqrt();
-        line.push_str(&format!(" {:+.4} ({:+.2}) |", mb - ma, (mb - ma) / se));
-        largest = largest.max(((mb - ma) / se).abs());
-    }
-    let _ = writeln!(w, "{line}  |");
-    let _ = writeln!(
-        w,
-        "\nThe largest difference is {largest:.2} standard errors. The bulk density is the one \
-         to watch: eight replicates of mbgc's cell scatter by only 1.5 kg/m3, so an offset of a few \
-         kg/m3 cannot be excluded with three runs each. The wall times were taken beside other \
-         jobs on two cores (the same load for both)."
-    );
 
+    // The LIGGGHTS deck of the same cell against mbgc's engine.
+    let engines: Vec<(&str, Vec<Run>)> = engines_files
+        .iter()
+        .map(|(n, f)| Ok((*n, runs(f)?)))
+        .collect::<anyhow::Result<_>>()?;
     let _ = writeln!(
         w,
-        "\nThe cohesion series ran with the second version (pre-shear until two windows agreed \
-         within 2 %, I 1e-3).\n\n## Not yet done\n\nA steady pre-shear over the metamodel's space: \
-         three of the global campaign's first four runs (`campaign/`) failed the steadiness \
-         test, and a longer cell only delays the climb of the stress ratio (the experiment's \
-         documentation gives the curves). Periodic boundaries in the shear direction come \
-         first; then the cohesion series and the comparison with LIGGGHTS with that version, \
-         and the campaign (issue 36)."
+        "\n## LIGGGHTS 3.8 against mbgc's engine\n\nThe same rows (k = 12, 6 kPa, cohesionless; \
+         `periodic/liggghts/README.md` gives the commands and each run), mean ± sd per engine, \
+         and the difference of the means over its standard error from the two engines' own \
+         scatter.\n"
     );
+    if engines.iter().any(|(_, rs)| rs.len() < 2) {
+        let _ = writeln!(
+            w,
+            "Not yet run with the periodic cell (fewer than two runs in a table)."
+        );
+    } else {
+        let mut head = "| engine | n |".to_string();
+        let mut rule = "|---|---|".to_string();
+        for (r, u) in RESPONSES {
+            head.push_str(&format!(" {r} ({u}) |"));
+            rule.push_str("---|");
+        }
+        let _ = writeln!(w, "{head} wall time, s (median) |\n{rule}---|");
+        let stats = |rs: &[Run], r: &str| mean_sd(&rs.iter().map(|x| x.get(r)).collect::<Vec<_>>());
+        for (name, rs) in &engines {
+            let mut line = format!("| {name} | {} |", rs.len());
+            for (r, _) in RESPONSES {
+                let (m, sd, _) = stats(rs, r);
+                line.push_str(&format!(" {m:.4} ± {sd:.4} |"));
+            }
+            let mut t: Vec<f64> = rs.iter().map(|x| x.get("wall_time_s")).collect();
+            t.sort_by(f64::total_cmp);
+            let _ = writeln!(w, "{line} {:.0} |", mbgc::numeric::quantile_sorted(&t, 0.5));
+        }
+        let mut line = "| LIGGGHTS - mbgc, z |  |".to_string();
+        let mut largest = 0.0f64;
+        for (r, _) in RESPONSES {
+            let (ma, sa, na) = stats(&engines[0].1, r);
+            let (mb, sb, nb) = stats(&engines[1].1, r);
+            let se = (sa * sa / na as f64 + sb * sb / nb as f64).sqrt();
+            line.push_str(&format!(" {:+.4} ({:+.2}) |", mb - ma, (mb - ma) / se));
+            largest = largest.max(((mb - ma) / se).abs());
+        }
+        let _ = writeln!(w, "{line}  |");
+        let _ = writeln!(
+            w,
+            "\nThe largest difference is {largest:.2} standard errors (three runs each)."
+        );
+    }
+
+    // History: the split box.
+    let _ = writeln!(
+        w,
+        "\n## History: the split box\n\nThe first version was Jenike's split box with end walls \
+         (`split_box/README.md` gives its commands and commits). Its stress ratio climbed until \
+         the halves had slid about 15 % of the cell's length apart and fell after it, so a \
+         steady pre-shear was reached for this material at 2 d50 but not over most of the \
+         campaign space (three of the first four campaign runs failed the steadiness test). \
+         Its replicates of the same material, for comparison: their shear ratio (0.83-0.88) \
+         and angle (42 deg) lie far above the periodic cell's, and their bulk density (1390 \
+         kg/m3, over the whole box) below its interior's. The split box had walls the periodic \
+         cell has not (end walls pushing the upper half, side walls with mu_pw 0.3 along the \
+         bed, the halves' rims at the shear plane); which of them raised the ratio was not \
+         measured.\n"
+    );
+    let old = noise_table(&mut w, &split)?;
+    let _ = writeln!(w);
+    origin_table(&mut w, &old);
 
     crate::write_report(a.json, &a.report, &w, serde_json::json!({ "data": a.data }))
 }

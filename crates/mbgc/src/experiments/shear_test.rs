@@ -98,8 +98,8 @@ pub struct Travels {
 
 /// The yield locus through the failure points (normal, shear stress): (cohesion in Pa, angle of
 /// internal friction in radians), NaN below two points. Pushes the warnings of a cell too short
-/// for its travel and of failure tests without a peak (`failed_peaks` of `tests`), and says
-/// whether the run stays valid on both counts.
+/// for its travel and of failure tests with neither a peak nor a plateau (`failed_peaks` of
+/// `tests`), and says whether the run stays valid on both counts.
 pub fn yield_locus(
     locus: &[(f64, f64)],
     t: Travels,
@@ -120,8 +120,8 @@ pub fn yield_locus(
     }
     if failed_peaks > 0 {
         warnings.push(format!(
-            "{failed_peaks} of {tests} failure points showed no peak within {:.1} d50 of travel \
-             (the largest shear stress is taken)",
+            "{failed_peaks} of {tests} failure points showed neither a peak nor a plateau \
+             within {:.1} d50 of travel (the largest shear stress is taken)",
             t.max_failure
         ));
     }
