@@ -489,10 +489,10 @@ fn a_model_without_the_size_spread_is_refused_for_graded_samples() {
         |r, x| truth(x[0], x[1], 0.0, x[2])[r],
     );
     let s = set("hertz,mindlin,epsd2", "", 0.5, 0.3, 0.0, 3);
-    let err = diagnose(&s, &[monosized], &Options::default())
-        .err()
-        .expect("a graded set on a monosized model must be refused")
-        .to_string();
+    let err = match diagnose(&s, &[monosized], &Options::default()) {
+        Ok(_) => panic!("a graded set on a monosized model must be refused"),
+        Err(e) => e.to_string(),
+    };
     assert!(
         err.contains("sigma_ln = 0.1") && err.contains("monosized"),
         "{err}"

@@ -607,7 +607,7 @@ impl Experiment for ShearCell {
             bins.add(travel, s.normal, s.shear);
             fractions.push((travel, interior_solid_fraction(&sim, &lay)));
             if bins.done.len() > before
-                && bins.done.len() % 5 == 0
+                && bins.done.len().is_multiple_of(5)
                 && travel >= sch.preshear - 0.5 * sch.bin
             {
                 match steadiness(&bins.done) {
