@@ -1,79 +1,109 @@
 //! The shear cell ([`crate::experiments::shear_cell`]) as a LIGGGHTS 3.8 deck that runs the
-//! whole procedure itself: pour, servo-lid consolidation, pre-shear over the fixed travel, and
-//! three failure tests from copies of the pre-sheared state. [`cell_deck`] takes every number
-//! from mbgc's own layout and schedule (cell in d_max units, time step, sample interval, shear
-//! and servo speeds, step counts), so that the two codes do the same things at the same steps;
-//! [`CellRun`] reads a finished run back for [`super::shear_cell_experiment`] to measure.
+//! whole procedure itself: pour, glue the floor and lid layers, servo-lid consolidation,
+//! pre-shear until steady, and three failure tests from copies of the pre-sheared state.
+//! [`cell_deck`] takes every number from mbgc's own layout and schedule (period, column, time
+//! step, sample interval, shear and servo speeds, step counts, travels), so that the two codes
+//! do the same things at the same steps; [`CellRun`] reads a finished run back for
+//! [`super::shear_cell_experiment`] to measure with mbgc's definitions.
 //!
 //! What the deck does, in mbgc's order:
 //!
-//! - Walls as STL meshes (`fix mesh/surface`): the floor, the lower half's four sides up to the
-//!   split, the upper half's four sides above it (one mesh), the lid and the shelf beyond the
-//!   lower half's far end, with mbgc's extents. LIGGGHTS accepts one mesh `wall/gran` fix only,
-//!   so all five meshes are in it from the start; the upper half, the lid and the shelf are
-//!   `mesh/surface/stress` meshes, whose total force (`f_ID[1..3]`, the particles' force on the
-//!   mesh, as mbgc's `wall_force`) the stresses are made of.
-//! - Pour: LIGGGHTS' own `insert/pack` (the particle count of mbgc's layout when monosized,
-//!   its mass as equal-mass templates of the PSD otherwise, as the shear-box backend) into
-//!   mbgc's column, fill until the unweighted rms speed falls below mbgc's threshold after the
-//!   free-fall time, in mbgc's chunks.
-//! - The lid, which waits above the column during the pour as mbgc's does, is put on the bed
-//!   (0.05 d_min above the highest particle top) by one step of `fix move/mesh` at the speed
-//!   that covers the distance in that step; mbgc places it between two steps. This is the one
-//!   step the LIGGGHTS run has that mbgc's has not.
-//! - Consolidation, pre-shear, relaxation and failure as a loop of `run <sample>` commands: after
-//!   each, the deck evaluates the stresses on the shear plane exactly as mbgc does (normal: lid
-//!   z-force plus the weight of the particles above the split plus the shelf's z-force; shear:
-//!   minus the x-forces on the upper walls and the lid, minus the shelf's x-force; both over
-//!   (length - travel) x width) and sets the lid's vertical speed for the next sample by mbgc's
-//!   servo (`fix move/mesh linear/variable`, with mbgc's gain and top speed). The upper walls
-//!   and the lid move at mbgc's shear speed during pre-shear and failure. Particles that left
-//!   the cell are deleted after each sample of the pre-shear and the failure, by mbgc's rule.
-//! - The three failure points: mbgc clones its simulation; the deck writes a restart file after the
-//!   pre-shear and starts each failure test with `clear` / `read_restart` (atoms, their contact
-//!   histories, the meshes where they were). A k = 4 cell continued in the same process and from
-//!   the restart gave stresses within 0.2 % of each other over the first 40 samples of the
-//!   relaxation: the restart's setup (neighbour lists and forces computed afresh) is the only
-//!   perturbation. The failure loop stops at mbgc's peak criterion (running mean of three 0.1 d50
-//!   bins of the shear stress falling 5 % below its peak after 0.5 d50), computed in the deck; the
-//!   responses are computed afterwards in Rust from every sample the deck printed, with mbgc's
-//!   definitions. The overburden check runs in the deck too (it skips the failure tests), and
-//!   again, authoritatively, in Rust on the pre-shear dump.
+//! - The cell: `boundary p p f`, a period of k d_max in x (the shear direction) and y, z from 4
+//!   d_max below the floor to 4 d_max above the poured column (mbgc's domain). One atom type:
+//!   the grains. The floor is a plane at z = 0 (`wall/gran ... primitive type 1 zplane`) of the
+//!   grains' own material, so every contact is a particle-particle one and no wall parameter
+//!   (E_w, mu_pw, ...) is read; the deck writes type 1's properties only.
+//! - Pour: LIGGGHTS' own `insert/pack` (the particle count of mbgc's layout when monosized, its
+//!   mass as equal-mass templates of the PSD otherwise, as the shear-box backend) into mbgc's
+//!   column over the whole period, fill until the unweighted rms speed falls below mbgc's
+//!   threshold after the free-fall time, in mbgc's chunks.
+//! - Glue: mbgc sorts the grains by centre height and glues the lowest ones until their volume
+//!   reaches [`LAYER_SOLID`] x [`LAYER`] d_max x the plan area (the one that crosses included),
+//!   and the highest ones likewise. The deck finds the same sets inside LIGGGHTS, by bisection
+//!   on a height: `mass(all,region)` of a block below (above) a cut is the prefix (suffix) of
+//!   the sorted grains, so halving the cut [`BISECTIONS`] times between the domain's ends
+//!   brackets the centre of the grain whose volume crosses the threshold (all grains have the
+//!   density rho_p, so mass counts volume). The cut's last two values differ in the 15th digit,
+//!   where two grain centres never coincide. `group ... region` makes the layers `floor` and
+//!   `lid`, `free` the rest. Chosen over stopping LIGGGHTS after the settle and letting Rust
+//!   pick the ids for a second deck because the run stays one deck in one process: no second
+//!   restart, nothing for a user of `--write-decks` to run between two stages, and `mbgc
+//!   campaign import` reads it as it reads every other deck; the log's `GLUED` line (counts
+//!   and masses of both layers) is checked against the rule when the run is measured.
+//! - Gravity off from the glue on, as in mbgc's shear (`unfix gravity`: the normal stress the
+//!   same at every depth). Glued grains (mbgc's driven particles): at rest, no spin, no
+//!   integration (`fix nve/sphere` on `free` only), and no contacts between two of them
+//!   (`neigh_modify exclude group glued glued`), so a contact with a glued grain is a normal
+//!   particle-particle contact with both masses in the effective mass, as mbgc's. The floor is
+//!   left where it settled; the lid moves rigidly by `fix move variable NULL NULL NULL v_vx
+//!   v_zero v_vz` (every step: x += v dt, v set, the spin left at zero).
+//! - Stresses, after each sample of `sample` steps, as mbgc's `stress`: the lid's contact force
+//!   per plan area (period x period), normal = `fcm(lid,z)` / area, shear = -`fcm(lid,x)` /
+//!   area (the forces of the sample's last step, as mbgc's).
+//! - Servo: after each sample the lid's vertical speed for the next one is mbgc's `drive_lid`,
+//!   -v_servo clamp(SERVO_GAIN (target - normal) / target, -1, 1); its horizontal speed is 0 in
+//!   consolidation and relaxation, the shear speed in pre-shear and failure.
+//! - Consolidation (mbgc's step count, in samples), then the pre-shear in 0.1 d50 bins of
+//!   travel: at every fifth finished bin from
+//!   [`PRESHEAR_TRAVEL`](crate::experiments::shear_cell::PRESHEAR_TRAVEL) - 0.5 bin on, mbgc's
+//!   steadiness test (the stress ratio of the last five bins within [`STEADY_TOLERANCE`] of the
+//!   five before), computed in the deck; it stops when steady or at
+//!   [`MAX_PRESHEAR_TRAVEL`](crate::experiments::shear_cell::MAX_PRESHEAR_TRAVEL) - 0.5 bin.
+//!   The measurement replays mbgc's loop on the samples the deck printed and warns if it would
+//!   have stopped elsewhere.
+//! - The interior slab's solid volume per sample: every grain sliced exactly between 1 d_max
+//!   above the floor layer's top and 1 d_max below the lid layer's bottom (the layers' mean
+//!   heights -+ half of [`LAYER`] d_max, mbgc's `interior_solid_fraction`), by an atom-style
+//!   variable of the spherical caps summed by `compute reduce`.
+//! - The free grains are dumped after the pre-shear, for mbgc's check that none passed
+//!   through the lid.
+//! - The three failure points: mbgc clones its simulation; the deck writes a restart file after
+//!   the pre-shear and starts each failure test with `clear` / `read_restart` (atoms, groups,
+//!   contact histories). Relaxation at the failure stress at rest (the servo answering the new
+//!   target from the pre-sheared stress, as mbgc's), then shear until mbgc's peak criterion
+//!   (running mean of three 0.1 d50 bins of the shear stress falling 5 % below its peak after
+//!   0.5 d50) or 2 d50, computed in the deck; the responses are computed afterwards in Rust
+//!   from every sample the deck printed, with mbgc's definitions (a test without a drop that
+//!   levelled off over its last 0.5 d50 fails at its plateau, as mbgc's).
 //!
-//! Other differences from mbgc's cell: the walls are triangle meshes (LIGGGHTS' face, edge and
-//! corner contacts) where mbgc's are analytic rectangles; the wall forces are those of the last
-//! step's force computation (mbgc evaluates them again in the state after the step); the
-//! numbers the deck computes with pass through its variables at 15 significant digits; regions
-//! include their boundaries where mbgc's tests are strict.
+//! Where the deck cannot do exactly what mbgc's engine does: LIGGGHTS inserts its own particles
+//! (the same number, mbgc's column); a failure test restarts from a file (neighbour lists and
+//! forces computed afresh, the only perturbation) instead of a clone in memory; a PSD is five
+//! equal-mass templates; the numbers the deck carries between commands (bin means, the cut,
+//! the servo's speed) pass through its variables at 15 significant digits; and the forces the
+//! stresses are made of are those of the last step's force computation, as in mbgc, but
+//! evaluated by LIGGGHTS' own contact code. [`LAYER_SOLID`] is mbgc's private constant copied.
 //!
-//! LIGGGHTS 3.8 traps the deck works around: an equal-style variable is redefined by deleting
-//! and appending it, which moves every later variable's index, and `fix move/mesh
-//! linear/variable` keeps the indices between runs without setup (`run N pre no`) - so the
-//! three variables the meshes read are defined first and never redefined; computes of
-//! atom-style variables in the thermo output crash such runs, so they exist only during the
-//! pour; `if` compares numbers but computes nothing; `newton off` must be given again after
-//! `read_restart`.
+//! LIGGGHTS 3.8 traps the deck works around: an equal- or atom-style variable is redefined by
+//! deleting and appending it (and an exhausted loop variable is deleted), which moves every
+//! later variable's index, while `fix move` and `compute reduce` keep the indices they found at
+//! setup through runs without setup (`run N pre no`): so the variables they read (the lid's
+//! speeds, the per-grain slice volume) are defined first and never redefined, and read
+//! everything else by name; a compute is current between runs only if the thermo output of the
+//! run's last step evaluated it, so the thermo line carries all three; `if` compares numbers
+//! but computes nothing; loop variables and labels are unique, because a loop left by a jump is
+//! never deleted and `jump SELF` finds the first label of its name.
 //!
-//! The deck prints one `SAMPLE` line per sample (phase, step, normal and shear stress, lid
-//! height), markers for each stage, and ends with `RUN_END` after its final dump. Its file
-//! names are those of the campaign's deck tools (`in.shear_box_fill`, `log.shear_box_fill`,
-//! `final.dump`, [`super::shear_box_fill`]), so `--write-decks`, their `run_all.sh` and
-//! `mbgc campaign import` handle shear-cell decks as they handle shear-box ones.
+//! The deck prints one `SAMPLE` line per sample (phase, step, normal and shear stress, mean
+//! floor and lid height, slab solid volume), markers for each stage, and ends with `RUN_END`
+//! after its final dump. Its file names are those of the campaign's deck tools
+//! (`in.shear_box_fill`, `log.shear_box_fill`, `final.dump`, [`super::shear_box_fill`]), so
+//! `--write-decks`, their `run_all.sh` and `mbgc campaign import` handle shear-cell decks as
+//! they handle shear-box ones.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::mesh::rect_stl;
 use super::number::num;
-use super::shear_box::{gran_model, write_cohesion, write_contact_properties, GranModel};
+use super::shear_box::{gran_model, GranModel};
 use super::shear_box_fill::prime_seed;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::experiments::shear_box::psd_classes;
-use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS};
-use crate::experiments::shear_test::SERVO_GAIN;
+use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS, LAYER};
+use crate::experiments::shear_test::{SERVO_GAIN, STEADY_TOLERANCE};
 use crate::experiments::ParamSet;
 use crate::psd::{default_range, Distribution, LogNormal};
-use mbgc_dem::contact::ModelClass;
+use mbgc_dem::contact::{ModelClass, Pair};
 use mbgc_dem::vec3::V3;
 
 pub use super::shear_box_fill::{FINAL_DUMP, INPUT, LOG};
@@ -81,7 +111,7 @@ pub use super::shear_box_fill::{FINAL_DUMP, INPUT, LOG};
 /// Gravity, m/s^2 (mbgc's).
 pub const G: f64 = 9.81;
 
-/// Dump at the end of the pre-shear: the bed whose bulk density and overburden are measured.
+/// Dump of the free grains at the end of the pre-shear (none may be above the lid).
 pub const PRESHEAR_DUMP: &str = "preshear.dump";
 
 /// The restart file the failure tests start from.
@@ -90,19 +120,25 @@ pub const RESTART: &str = "preshear.restart";
 /// Particle templates of equal mass standing for a continuous PSD (as the shear-box backend).
 pub const CLASSES: usize = 5;
 
+/// Solid fraction at which the glued layers' thickness is counted: mbgc's `LAYER_SOLID`
+/// (private to [`crate::experiments::shear_cell`]), copied.
+pub const LAYER_SOLID: f64 = 0.55;
+
+/// Gap between a glued layer and the interior slab the bulk density is measured in, in d_max
+/// (mbgc's `interior_solid_fraction`).
+pub const INTERIOR_GAP: f64 = 1.0;
+
+/// Halvings of the cut that finds a glued layer: the domain's height over 2^60 is far below
+/// the 15 digits the deck's variables carry, so the bisection ends at their resolution.
+pub const BISECTIONS: u32 = 60;
+
 /// What the deck needs, in SI units, all from mbgc's layout and schedule for the row.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellDeck {
     /// The contact law, written effect by effect in LIGGGHTS' words.
     pub class: ModelClass,
-    /// Length (shear direction), width and nominal bed height of the cell, m.
+    /// Period in x (the shear direction) and y, and nominal bed height, m.
     pub size: V3,
-    /// Height of the split plane, m.
-    pub split: f64,
-    /// Height of the upper walls' top and of the lid during the pour, m.
-    pub top: f64,
-    /// Length of the shelf beyond the lower half's far end, m.
-    pub shelf: f64,
     /// (diameter m, mass fraction) of each particle template.
     pub classes: Vec<(f64, f64)>,
     /// Particles of mbgc's layout (inserted by number when monosized).
@@ -111,7 +147,7 @@ pub struct CellDeck {
     pub mass: f64,
     /// Top of the poured column, m.
     pub column_top: f64,
-    /// Lower and upper corners of the simulation domain, m.
+    /// Lower and upper corners of the simulation domain, m (x and y: one period).
     pub domain: (V3, V3),
     /// Time step, s.
     pub dt: f64,
@@ -125,7 +161,9 @@ pub struct CellDeck {
     pub fall_steps: u64,
     /// Step limit of the fill.
     pub max_fill_steps: u64,
-    /// d50, smallest and largest diameter of mbgc's layout, m.
+    /// Mass of each glued layer, kg: rho_p x [`LAYER_SOLID`] x [`LAYER`] d_max x the plan area.
+    pub layer_mass: f64,
+    /// d50, m.
     pub d50: f64,
     /// Smallest diameter, m.
     pub d_min: f64,
@@ -133,9 +171,9 @@ pub struct CellDeck {
     pub d_max: f64,
     /// Pre-shear normal stress, Pa.
     pub sigma: f64,
-    /// Speed of the upper half, m/s.
+    /// Speed of the lid, m/s.
     pub v_shear: f64,
-    /// Top speed of the lid, m/s.
+    /// Top vertical speed of the lid, m/s.
     pub v_servo: f64,
     /// Steps per sample (and servo update).
     pub sample: u64,
@@ -143,7 +181,11 @@ pub struct CellDeck {
     pub bin: f64,
     /// Samples of the consolidation.
     pub consolidate_samples: u64,
-    /// Samples of the pre-shear (its travel reaches mbgc's fixed pre-shear travel).
+    /// Pre-shear travel before the first steadiness test, m.
+    pub preshear: f64,
+    /// Longest pre-shear, m.
+    pub max_preshear: f64,
+    /// Bound of the pre-shear loop, in samples (the steadiness rule stops it before).
     pub preshear_samples: u64,
     /// Samples of each failure test's relaxation at its normal stress.
     pub relax_samples: u64,
@@ -156,9 +198,30 @@ pub struct CellDeck {
 }
 
 impl CellDeck {
-    /// Travel after `n` samples at the shear speed, m (mbgc's `(time - start) * v_shear`).
+    /// Travel after `steps` steps at the shear speed, m (mbgc's `(time - start) * v_shear`).
     pub fn travel(&self, steps: u64) -> f64 {
         steps as f64 * self.dt * self.v_shear
+    }
+
+    /// Plan area of the cell, m^2.
+    pub fn area(&self) -> f64 {
+        self.size[0] * self.size[1]
+    }
+
+    /// Distance from a glued layer's mean centre height to the interior slab, m: half the
+    /// layer plus [`INTERIOR_GAP`] d_max.
+    pub fn interior_gap(&self) -> f64 {
+        (0.5 * LAYER + INTERIOR_GAP) * self.d_max
+    }
+
+    /// The interior slab's solid fraction from a sample's mean floor and lid heights and its
+    /// solid volume; NaN when the layers are too close for a slab (as mbgc's).
+    pub fn solid_fraction(&self, s: &Sample) -> f64 {
+        let (a, b) = (s.floor + self.interior_gap(), s.lid - self.interior_gap());
+        if b <= a {
+            return f64::NAN;
+        }
+        s.slab / (self.area() * (b - a))
     }
 }
 
@@ -201,26 +264,22 @@ pub fn cell_deck(cell: &ShearCell, p: &ParamSet, seed: u64) -> Result<CellDeck> 
     let [l, w, _] = lay.size;
     let top = sch.column_top + lay.d_max;
     let margin = 4.0 * lay.d_max;
+    let bin_samples = samples_for(sch.bin, sch.sample, sch.dt, sch.v_shear);
     Ok(CellDeck {
         class: cell.class,
         size: lay.size,
-        split: lay.split,
-        top,
-        shelf: sch.preshear + sch.max_failure + lay.d_max,
         classes,
         count: lay.diameters.len(),
         mass,
         column_top: sch.column_top,
-        domain: (
-            [-margin - l, -margin, -margin],
-            [2.0 * l + margin, w + margin, top + margin],
-        ),
+        domain: ([0.0, 0.0, -margin], [l, w, top + margin]),
         dt: sch.dt,
         skin: lay.d_min,
         chunk: sch.chunk,
         v_rest: sch.v_rest,
         fall_steps: (sch.fall / sch.dt) as u64,
         max_fill_steps: sch.max_fill_steps,
+        layer_mass: rho * LAYER_SOLID * LAYER * lay.d_max * l * w,
         d50: lay.d50,
         d_min: lay.d_min,
         d_max: lay.d_max,
@@ -230,7 +289,11 @@ pub fn cell_deck(cell: &ShearCell, p: &ParamSet, seed: u64) -> Result<CellDeck> 
         sample: sch.sample,
         bin: sch.bin,
         consolidate_samples: sch.consolidate_steps.div_ceil(sch.sample),
-        preshear_samples: samples_for(sch.preshear, sch.sample, sch.dt, sch.v_shear),
+        preshear: sch.preshear,
+        max_preshear: sch.max_preshear,
+        // The rule stops at the bin that reaches the longest pre-shear; one bin more is slack.
+        preshear_samples: samples_for(sch.max_preshear, sch.sample, sch.dt, sch.v_shear)
+            + bin_samples,
         relax_samples: (sch.consolidate_steps / 2).div_ceil(sch.sample),
         failure_samples: samples_for(sch.max_failure, sch.sample, sch.dt, sch.v_shear),
         max_failure: sch.max_failure,
@@ -248,162 +311,106 @@ fn stream_seed(seed: u64, k: u64) -> u64 {
     }
 }
 
-/// An STL solid of several rectangles (corner, edge a, edge b).
-fn rects_stl(name: &str, rects: &[(V3, V3, V3)]) -> String {
-    let mut s = format!("solid {name}\n");
-    for &(c, a, b) in rects {
-        let one = rect_stl(name, c, a, b);
-        for line in one.lines().filter(|l| l.starts_with(' ')) {
-            s.push_str(line);
-            s.push('\n');
-        }
-    }
-    s + &format!("endsolid {name}\n")
-}
+/// The LIGGGHTS property of each particle-particle parameter a LIGGGHTS class can have.
+const PROPERTIES: [(&str, &str); 4] = [
+    ("e_pp", "coefficientRestitution"),
+    ("mu_pp", "coefficientFriction"),
+    ("mu_r_pp", "coefficientRollingFriction"),
+    ("ced_pp", "cohesionEnergyDensity"),
+];
 
-/// The meshes of the cell, in the order of the wall fix: (name, stress mesh?, rectangles).
-type MeshSpec = (&'static str, bool, Vec<(V3, V3, V3)>);
-
-fn meshes(d: &CellDeck) -> Vec<MeshSpec> {
-    let [l, w, _] = d.size;
-    let (zs, top, dm) = (d.split, d.top, d.d_max);
-    let sides = |z0: f64, h: f64| {
-        vec![
-            ([0.0, 0.0, z0], [0.0, w, 0.0], [0.0, 0.0, h]),
-            ([l, 0.0, z0], [0.0, w, 0.0], [0.0, 0.0, h]),
-            ([0.0, 0.0, z0], [l, 0.0, 0.0], [0.0, 0.0, h]),
-            ([0.0, w, z0], [l, 0.0, 0.0], [0.0, 0.0, h]),
-        ]
+/// The grains' material, the only one of the cell (atom type 1, which the floor plane has
+/// too): modulus, Poisson ratio, and each particle-particle parameter of the class (its
+/// default when the row leaves it out, as mbgc's contact law takes it).
+fn write_grain_properties(s: &mut String, p: &ParamSet, class: &ModelClass) -> Result<()> {
+    let get = |k: &str| {
+        p.get(k)
+            .ok_or_else(|| Error::invalid(format!("parameter {k}: missing")))
     };
-    vec![
-        (
-            "floor",
-            false,
-            vec![(
-                [-0.5 * l, -dm, 0.0],
-                [2.0 * l, 0.0, 0.0],
-                [0.0, w + 2.0 * dm, 0.0],
-            )],
-        ),
-        ("lower", false, sides(0.0, zs)),
-        ("upper", true, sides(zs, top - zs)),
-        (
-            "lid",
-            true,
-            vec![([0.0, 0.0, top], [l, 0.0, 0.0], [0.0, w, 0.0])],
-        ),
-        (
-            "shelf",
-            true,
-            vec![([l, 0.0, zs], [d.shelf, 0.0, 0.0], [0.0, w, 0.0])],
-        ),
-    ]
-}
-
-/// The part of the deck that a restart does not restore: neighbour lists, contact law, walls,
-/// their motion, integration, regions, the stress variables and the output.
-fn physics(s: &mut String, p: &ParamSet, d: &CellDeck, law: &GranModel) -> Result<()> {
-    let [l, w, _] = d.size;
     let _ = writeln!(
         s,
-        "neighbor {} bin\nneigh_modify delay 0\ncommunicate single vel yes\n",
+        "fix m1 all property/global youngsModulus peratomtype {}\n\
+         fix m2 all property/global poissonsRatio peratomtype {}",
+        num(get("E_p")?),
+        num(get("nu_p")?)
+    );
+    let mut k = 3;
+    for e in class.effects() {
+        for spec in e.params {
+            let name = spec.name(Pair::ParticleParticle);
+            let property = PROPERTIES
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, prop)| *prop)
+                .ok_or_else(|| {
+                    Error::invalid(format!(
+                        "model class {class}: LIGGGHTS 3.8 has no property for {name} ({} '{}')",
+                        e.slot.label(),
+                        e.name
+                    ))
+                })?;
+            let v = p.get(name).or(spec.default).ok_or_else(|| {
+                Error::invalid(format!(
+                    "parameter {name}: missing ({} '{}')",
+                    e.slot.label(),
+                    e.name
+                ))
+            })?;
+            let _ = writeln!(
+                s,
+                "fix m{k} all property/global {property} peratomtypepair 1 {}",
+                num(v)
+            );
+            k += 1;
+        }
+    }
+    Ok(())
+}
+
+/// The part of the deck that a restart does not restore: neighbour lists, contact law, the
+/// floor plane.
+fn physics(s: &mut String, p: &ParamSet, d: &CellDeck, law: &GranModel) -> Result<()> {
+    let _ = writeln!(
+        s,
+        "neighbor {} bin\nneigh_modify delay 0\ncommunicate single vel yes",
         num(d.skin)
     );
-    write_contact_properties(s, p)?;
-    write_cohesion(s, p, &d.class)?;
+    write_grain_properties(s, p, &d.class)?;
     let GranModel { models, settings } = law;
     let _ = writeln!(
         s,
-        "\npair_style gran {models}{settings}\npair_coeff * *\ntimestep {}\n\
-         fix gravity all gravity {} vector 0.0 0.0 -1.0",
-        num(d.dt),
-        num(G)
-    );
-    let all = meshes(d);
-    for (name, stress, _) in &all {
-        let style = if *stress {
-            "mesh/surface/stress"
-        } else {
-            "mesh/surface"
-        };
-        let _ = writeln!(s, "fix {name} all {style} file {name}.stl type 2");
-    }
-    let names: Vec<&str> = all.iter().map(|m| m.0).collect();
-    let _ = writeln!(
-        s,
-        "fix walls all wall/gran {models} mesh n_meshes {} meshes {}{settings}",
-        names.len(),
-        names.join(" ")
-    );
-    // The upper half and the lid move at v_vx (0 or the shear speed), the lid vertically at
-    // v_vz (the servo's speed); the variables are numbers, set between runs.
-    let _ = writeln!(
-        s,
-        "fix move_upper all move/mesh mesh upper linear/variable v_vx v_zero v_zero\n\
-         fix move_lid all move/mesh mesh lid linear/variable v_vx v_zero v_vz\n\
-         fix integrate all nve/sphere"
-    );
-    let dm = num(d.d_max);
-    let _ = writeln!(
-        s,
-        "region above block INF INF INF INF {zs} INF units box\n\
-         region sp1 block INF -{dm} INF INF INF INF units box\n\
-         region sp2 block INF INF INF -{dm} INF INF units box\n\
-         region sp3 block INF INF {wd} INF INF INF units box\n\
-         region sp4 block {l} INF INF INF INF {zd} units box\n\
-         region spill union 4 sp1 sp2 sp3 sp4",
-        zs = num(d.split),
-        wd = num(w + d.d_max),
-        l = num(l),
-        zd = num(d.split - d.d_max),
-    );
-    // mbgc's stress on the shear plane, its servo, the rest criterion and the bed's top.
-    let _ = writeln!(
-        s,
-        "variable area equal ({l}-v_tr)*{w}\n\
-         variable sn equal (f_lid[3]+{g}*mass(all,above)+f_shelf[3])/v_area\n\
-         variable ss equal (-(f_upper[1]+f_lid[1])-f_shelf[1])/v_area\n\
-         variable err equal {gain}*(v_target-v_snow)/v_target\n\
-         variable vzs equal -{vs}*(v_err*(abs(v_err)<=1)+(v_err>1)-(v_err<-1))\n\
-         variable st equal step\n\
-         variable na equal count(all)\n\
-         variable mall equal mass(all)\n\
-         variable nsp equal count(all,spill)\n\
-         variable msp equal mass(all,spill)\n\
-         variable ob equal {g}*mass(all,above)/v_area\n\
-         thermo_style custom step atoms\nthermo {}\nthermo_modify lost ignore norm no\n",
-        d.chunk,
-        l = num(l),
-        w = num(w),
-        g = num(G),
-        gain = num(SERVO_GAIN),
-        vs = num(d.v_servo),
+        "pair_style gran {models}{settings}\npair_coeff * *\ntimestep {}\n\
+         fix floorplane all wall/gran {models} primitive type 1 zplane 0e0{settings}",
+        num(d.dt)
     );
     Ok(())
 }
 
-/// One sample: run, move the lid's height on, delete what left the cell (pre-shear and
-/// failure), measure, print, set the servo's speed.
-fn sample(s: &mut String, d: &CellDeck, phase: &str, spill: bool) {
+/// The glued layers and their motion, the integration of the free grains (without gravity,
+/// as mbgc's shear), the measuring computes and the thermo line that keeps them current: after
+/// the glue and after a restart.
+fn cell_fixes(s: &mut String) {
+    let _ = writeln!(
+        s,
+        "neigh_modify exclude group glued glued\n\
+         fix integrate free nve/sphere\n\
+         fix movelid lid move variable NULL NULL NULL v_vx v_zero v_vz\n\
+         compute zfl floor reduce ave z\ncompute zli lid reduce ave z\n\
+         compute slab all reduce sum v_slice\n\
+         thermo_style custom step atoms c_zfl c_zli c_slab\nthermo 0\n\
+         thermo_modify lost ignore norm no"
+    );
+}
+
+/// One sample: run, measure, print, set the servo's speed for the next one.
+fn sample(s: &mut String, d: &CellDeck, phase: &str) {
     let _ = writeln!(
         s,
         "run {} pre ${{pre}} post no\nvariable pre string no\n\
-         variable lz equal ${{lz}}+(${{vzset}})*{}",
-        d.sample,
-        num(d.sample as f64 * d.dt)
-    );
-    if spill {
-        let _ = writeln!(
-            s,
-            "if \"${{nsp}} > 0\" then \"variable spm equal ${{spm}}+${{msp}}\" \
-             \"delete_atoms region spill compress no\" \"variable pre string yes\""
-        );
-    }
-    let _ = writeln!(
-        s,
-        "variable snow equal ${{sn}}\nvariable ssnow equal ${{ss}}\n\
-         print \"SAMPLE {phase} ${{st}} ${{snow}} ${{ssnow}} ${{lz}}\"\n\
-         variable vzset equal ${{vzs}}"
+         variable snow equal ${{sn}}\nvariable ssnow equal ${{ss}}\n\
+         print \"SAMPLE {phase} ${{st}} ${{snow}} ${{ssnow}} ${{fm}} ${{lm}} ${{sv}}\"\n\
+         variable vzset equal ${{vzs}}",
+        d.sample
     );
 }
 
@@ -422,20 +429,21 @@ fn failure(
          clear\natom_modify map array\nprocessors 1 * 1\nread_restart {RESTART}\nnewton off"
     );
     physics(s, p, d, law)?;
+    cell_fixes(s);
+    // mbgc's clone starts with the servo's answer to the new target on the pre-sheared stress.
     let _ = writeln!(
         s,
-        "variable pre string yes\nvariable vxset equal 0\nvariable vzset equal ${{vzp}}\n\
-         variable lz equal ${{lzp}}\nvariable tr equal ${{trp}}\nvariable target equal {}\n\
+        "variable pre string yes\nvariable target equal {}\nvariable snow equal ${{snowp}}\n\
+         variable vxset equal 0\nvariable vzset equal ${{vzs}}\n\
          variable r{k} loop {}\nlabel relax{k}",
         num(fraction * d.sigma),
         d.relax_samples
     );
-    sample(s, d, &format!("R{k}"), false);
+    sample(s, d, &format!("R{k}"));
     let _ = writeln!(
         s,
         "next r{k}\njump SELF relax{k}\n\
          variable vxset equal {vs}\nvariable f0 equal ${{st}}\n\
-         variable tr equal ${{trp}}+(step-${{f0}})*{dv}\n\
          variable t equal (step-${{f0}})*{dv}\n\
          print \"FAIL_START {k} ${{f0}}\"\n\
          variable an equal 0\nvariable as equal 0\nvariable ac equal 0\nvariable nb equal 0\n\
@@ -446,7 +454,7 @@ fn failure(
         vs = num(d.v_shear),
         dv = num(d.dt * d.v_shear),
     );
-    sample(s, d, &format!("F{k}"), true);
+    sample(s, d, &format!("F{k}"));
     // mbgc's peak rule on bins of 0.1 d50: a new bin's running mean over three bins is the
     // peak while it rises; past 0.5 d50 of travel a mean 5 % below the peak ends the test.
     // LIGGGHTS' `if` compares numbers but computes nothing, hence `edge` and `lim`.
@@ -475,34 +483,87 @@ fn failure(
     Ok(())
 }
 
-/// Writes the wall meshes and the input script into `dir`.
+/// The bisection that glues the layer `name` (`floor`: the lowest grains, `lid`: the highest)
+/// of mass `mlay`: the cut between `lo` and `hi` is halved [`BISECTIONS`] times, keeping the
+/// side whose block holds at least the layer's mass.
+fn glue_layer(s: &mut String, d: &CellDeck, name: &str) {
+    let (lo, hi) = (d.domain.0[2], d.domain.1[2]);
+    // Floor: the block below the cut; the cut that holds the layer is `hi`. Lid: the block
+    // above it; the cut that holds it is `lo`.
+    let (block, enough, short, keep) = if name == "floor" {
+        ("INF ${zc}", "hi", "lo", "hi")
+    } else {
+        ("${zc} INF", "lo", "hi", "lo")
+    };
+    let tag = &name[..1];
+    let _ = writeln!(
+        s,
+        "variable lo equal {lo}\nvariable hi equal {hi}\nvariable g{tag} loop {BISECTIONS}\n\
+         label cut{name}\nvariable zc equal 0.5*(${{lo}}+${{hi}})\n\
+         region {tag}c${{g{tag}}} block INF INF INF INF {block} units box\n\
+         variable mc equal mass(all,{tag}c${{g{tag}}})\n\
+         if \"${{mc}} >= ${{mlay}}\" then \"variable {enough} equal ${{zc}}\" \
+         else \"variable {short} equal ${{zc}}\"\n\
+         next g{tag}\njump SELF cut{name}\n\
+         region {name}layer block INF INF INF INF {} units box\n\
+         group {name} region {name}layer",
+        block.replace("${zc}", &format!("${{{keep}}}")),
+        lo = num(lo),
+        hi = num(hi),
+    );
+}
+
+/// Writes the input script into `dir`.
 pub fn write_cell_deck(dir: &Path, p: &ParamSet, d: &CellDeck) -> Result<()> {
     let rho = p.require("rho_p", crate::experiments::RHO_RANGE.0, 1e5)?;
     if d.classes.is_empty() {
         return Err(Error::invalid("shear cell deck: no particle classes"));
     }
     let law = gran_model(&d.class)?;
-    for (name, _, rects) in meshes(d) {
-        write_atomic(
-            &dir.join(format!("{name}.stl")),
-            rects_stl(name, &rects).as_bytes(),
-        )?;
-    }
     let [l, w, _] = d.size;
     let (lo, hi) = d.domain;
+    let area = num(d.area());
     let mut s = String::from(
-        "# mbgc shear cell (Jenike split cell), run by LIGGGHTS itself. Type 1: particles, \
-         type 2: walls.\n\
-         # Stages: pour, lid, consolidation, pre-shear, restart, three failure tests.\n",
+        "# mbgc shear cell (periodic in x and y, glued floor and lid layers of the grains), run \
+         by LIGGGHTS itself.\n\
+         # One atom type: the grains; the floor plane is of their material.\n\
+         # Stages: pour, glue, consolidation, pre-shear until steady, restart, three failure \
+         tests.\n",
     );
     let _ = writeln!(
         s,
-        "echo none\nunits si\natom_style granular\natom_modify map array\nboundary f f f\n\
+        "echo none\nunits si\natom_style granular\natom_modify map array\nboundary p p f\n\
          newton off\nprocessors 1 * 1"
     );
+    // The variables that `fix move` and `compute reduce` read by index come first and are
+    // never redefined (module documentation); they read everything else by name.
     let _ = writeln!(
         s,
-        "region domain block {} {} {} {} {} {} units box\ncreate_box 2 domain",
+        "variable vx equal v_vxset\nvariable zero equal 0\nvariable vz equal v_vzset\n\
+         variable v2a atom vx*vx+vy*vy+vz*vz\n\
+         variable sa atom v_za-z+r\nvariable ca atom v_sa*(v_sa>0)-(v_sa-2*r)*(v_sa>2*r)\n\
+         variable sb atom v_zb-z+r\nvariable cb atom v_sb*(v_sb>0)-(v_sb-2*r)*(v_sb>2*r)\n\
+         variable slice atom PI*(v_cb*v_cb*(3*r-v_cb)-v_ca*v_ca*(3*r-v_ca))/3"
+    );
+    // mbgc's interior slab, stresses and servo, read by name.
+    let _ = writeln!(
+        s,
+        "variable za equal c_zfl+{gap}\nvariable zb equal c_zli-{gap}\n\
+         variable sn equal fcm(lid,z)/{area}\nvariable ss equal -fcm(lid,x)/{area}\n\
+         variable fm equal c_zfl\nvariable lm equal c_zli\nvariable sv equal c_slab\n\
+         variable err equal {gain}*(v_target-v_snow)/v_target\n\
+         variable vzs equal -{vs}*(v_err*(abs(v_err)<=1)+(v_err>1)-(v_err<-1))\n\
+         variable st equal step\nvariable na equal count(all)\nvariable mall equal mass(all)\n\
+         variable vxset equal 0\nvariable vzset equal 0\nvariable target equal {sigma}\n\
+         variable snow equal 0\nvariable pre string yes",
+        gap = num(d.interior_gap()),
+        gain = num(SERVO_GAIN),
+        vs = num(d.v_servo),
+        sigma = num(d.sigma),
+    );
+    let _ = writeln!(
+        s,
+        "region domain block {} {} {} {} {} {} units box\ncreate_box 1 domain",
         num(lo[0]),
         num(hi[0]),
         num(lo[1]),
@@ -510,20 +571,13 @@ pub fn write_cell_deck(dir: &Path, p: &ParamSet, d: &CellDeck) -> Result<()> {
         num(lo[2]),
         num(hi[2])
     );
-    // `fix move/mesh linear/variable` keeps the index of its variables between runs without
-    // setup (`pre no`), and LIGGGHTS 3.8 redefines an equal-style variable by deleting it and
-    // appending it, which moves every later one down: the mesh then reads another variable
-    // (the lid stood still, or the run stopped on an atom-style formula). So the three it reads
-    // come first and are never redefined; they read the speeds by name from vxset and vzset.
-    let _ = writeln!(
-        s,
-        "variable vx equal v_vxset\nvariable zero equal 0\nvariable vz equal v_vzset\n\
-         variable vxset equal 0\nvariable vzset equal 0\nvariable tr equal 0\n\
-         variable target equal {}\nvariable pre string yes",
-        num(d.sigma)
-    );
     physics(&mut s, p, d, &law)?;
     // Pour.
+    let _ = writeln!(
+        s,
+        "\n# Pour.\nfix gravity all gravity {} vector 0.0 0.0 -1.0\nfix integrate all nve/sphere",
+        num(G)
+    );
     let mut dist = format!(
         "fix pdd all particledistribution/discrete {} {}",
         stream_seed(d.seed, 1),
@@ -550,83 +604,125 @@ pub fn write_cell_deck(dir: &Path, p: &ParamSet, d: &CellDeck) -> Result<()> {
         s,
         "region column block 0 {} 0 {} 0 {} units box\n\
          fix ins all insert/pack seed {} distributiontemplate pdd maxattempt 20000 \
-         insert_every once overlapcheck yes all_in yes vel constant 0. 0. 0. region column {amount}",
+         insert_every once overlapcheck yes all_in yes vel constant 0. 0. 0. region column {amount}\n\
+         compute v2 all reduce sum v_v2a\nvariable vrms equal sqrt(c_v2/count(all))\n\
+         thermo_style custom step atoms c_v2\nthermo {}\nthermo_modify lost ignore norm no",
         num(l),
         num(w),
         num(d.column_top),
         stream_seed(d.seed, 0),
-    );
-    // The fill's rest test (mbgc's unweighted rms speed) and the bed's top: computes of
-    // atom-style variables, which LIGGGHTS 3.8 cannot evaluate in the thermo output of a run
-    // without setup (`pre no`, it crashes), so they are dropped before the samples start.
-    let _ = writeln!(
-        s,
-        "\nvariable v2a atom vx*vx+vy*vy+vz*vz\ncompute v2 all reduce sum v_v2a\n\
-         variable vrms equal sqrt(c_v2/count(all))\ncompute rad all property/atom radius\n\
-         variable zt atom z+c_rad\ncompute ztop all reduce max v_zt\n\
-         variable bedtop equal c_ztop\n\
-         thermo_style custom step atoms c_v2 c_ztop\nthermo_modify lost ignore norm no"
+        d.chunk,
     );
     let _ = writeln!(
         s,
-        "\nlabel fill\nrun {}\n\
+        "label fill\nrun {}\n\
          if \"(${{vrms}} < {} && ${{st}} > {}) || ${{st}} >= {}\" then \"jump SELF filled\"\n\
          jump SELF fill\nlabel filled\n\
          variable settled equal ${{vrms}}<{}\n\
-         print \"FILL_STEPS ${{st}} ${{settled}}\"\nprint \"INSERTED ${{na}} ${{mall}}\"\nunfix ins",
+         print \"FILL_STEPS ${{st}} ${{settled}}\"\nprint \"INSERTED ${{na}} ${{mall}}\"\n\
+         unfix ins\nuncompute v2\nunfix integrate\nunfix gravity",
         d.chunk,
         num(d.v_rest),
         d.fall_steps,
         d.max_fill_steps,
         num(d.v_rest),
     );
-    // Lid onto the bed in one step.
+    // Glue the floor and the lid.
     let _ = writeln!(
         s,
-        "\nvariable lid0 equal ${{bedtop}}+{}\nvariable vzset equal (${{lid0}}-{})/{}\nrun 1\n\
-         variable vzset equal 0\nvariable lz equal ${{lid0}}\nprint \"LID ${{st}} ${{lz}}\"\n\
-         thermo_style custom step atoms\nthermo_modify lost ignore norm no\n\
-         uncompute ztop\nuncompute rad\nuncompute v2",
-        num(0.05 * d.d_min),
-        num(d.top),
-        num(d.dt),
+        "\n# Glue the lowest and the highest layer.\nvariable mlay equal {}",
+        num(d.layer_mass)
     );
-    // Consolidation at the pre-shear stress, upper half at rest.
+    glue_layer(&mut s, d, "floor");
+    glue_layer(&mut s, d, "lid");
     let _ = writeln!(
         s,
-        "\nvariable c loop {}\nlabel consolidate",
+        "group glued union floor lid\ngroup free subtract all glued\n\
+         variable nfl equal count(floor)\nvariable nli equal count(lid)\n\
+         variable mfl equal mass(floor)\nvariable mli equal mass(lid)\n\
+         print \"GLUED ${{nfl}} ${{nli}} ${{mfl}} ${{mli}}\"\n\
+         velocity glued set 0.0 0.0 0.0\nset group glued omegax 0.0 omegay 0.0 omegaz 0.0"
+    );
+    cell_fixes(&mut s);
+    // Consolidation at the pre-shear stress, the lid at rest horizontally.
+    let _ = writeln!(
+        s,
+        "\n# Consolidation.\nvariable c loop {}\nlabel consolidate",
         d.consolidate_samples
     );
-    sample(&mut s, d, "C", false);
+    sample(&mut s, d, "C");
     let _ = writeln!(s, "next c\njump SELF consolidate");
-    // Pre-shear over the fixed travel.
+    // Pre-shear until steady: bins of 0.1 d50 of travel, the last ten bin means in n1..n10
+    // (normal) and s1..s10 (shear), mbgc's test at every fifth bin.
     let _ = writeln!(
         s,
-        "\nvariable vxset equal {}\nvariable p0 equal ${{st}}\nvariable tr equal (step-${{p0}})*{}\n\
-         variable spm equal 0\nprint \"PRESHEAR_START ${{p0}}\"\n\
-         variable p loop {}\nlabel preshear",
-        num(d.v_shear),
-        num(d.dt * d.v_shear),
-        d.preshear_samples
+        "\n# Pre-shear until steady.\nvariable vxset equal {}\nvariable p0 equal ${{st}}\n\
+         print \"PRESHEAR_START ${{p0}}\"\n\
+         variable an equal 0\nvariable as equal 0\nvariable ac equal 0\nvariable nb equal 0",
+        num(d.v_shear)
     );
-    sample(&mut s, d, "P", true);
+    for i in 1..=10 {
+        let _ = writeln!(s, "variable n{i} equal 0\nvariable s{i} equal 0");
+    }
+    let _ = writeln!(s, "variable p loop {}\nlabel preshear", d.preshear_samples);
+    sample(&mut s, d, "P");
     let _ = writeln!(
         s,
-        "next p\njump SELF preshear\n\
-         print \"PRESHEAR_END ${{st}} ${{spm}}\"\n\
-         write_dump all custom {PRESHEAR_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"\n\
-         variable trp equal ${{tr}}\nvariable vzp equal ${{vzset}}\nvariable lzp equal ${{lz}}\n\
-         print \"OVERBURDEN ${{ob}}\"\n\
-         if \"${{ob}} > {}\" then \"jump SELF finish\"\n\
-         write_restart {RESTART}",
-        num(FAILURE_FRACTIONS[0] * d.sigma),
+        "variable tt equal (${{st}}-${{p0}})*{dv}\n\
+         variable an equal ${{an}}+${{snow}}\nvariable as equal ${{as}}+${{ssnow}}\n\
+         variable ac equal ${{ac}}+1\n\
+         variable edge equal {bin}*(${{nb}}+1)\n\
+         if \"${{tt}} >= ${{edge}}\" then \"jump SELF pbin\"\n\
+         jump SELF pnext\nlabel pbin\nvariable nb equal ${{nb}}+1",
+        dv = num(d.dt * d.v_shear),
+        bin = num(d.bin),
+    );
+    for i in 1..10 {
+        let _ = writeln!(
+            s,
+            "variable n{i} equal ${{n{j}}}\nvariable s{i} equal ${{s{j}}}",
+            j = i + 1
+        );
+    }
+    let sum = |v: &str, r: std::ops::RangeInclusive<usize>| {
+        r.map(|i| format!("${{{v}{i}}}"))
+            .collect::<Vec<_>>()
+            .join("+")
+    };
+    let _ = writeln!(
+        s,
+        "variable n10 equal ${{an}}/${{ac}}\nvariable s10 equal ${{as}}/${{ac}}\n\
+         variable an equal 0\nvariable as equal 0\nvariable ac equal 0\n\
+         variable nm equal ${{nb}}%5\n\
+         if \"${{nm}} != 0 || ${{tt}} < {first}\" then \"jump SELF pnext\"\n\
+         if \"${{nb}} < 10\" then \"jump SELF plimit\"\n\
+         variable rl equal ({sl})/({nl})\nvariable rb equal ({sb})/({nbf})\n\
+         variable dev equal abs(${{rl}}-${{rb}})\nvariable tol equal {tol}*abs(${{rl}})\n\
+         if \"${{dev}} < ${{tol}}\" then \"jump SELF pdone\"\n\
+         label plimit\n\
+         if \"${{tt}} >= {last}\" then \"jump SELF pdone\"\n\
+         label pnext\nnext p\njump SELF preshear\nlabel pdone",
+        first = num(d.preshear - 0.5 * d.bin),
+        last = num(d.max_preshear - 0.5 * d.bin),
+        tol = num(STEADY_TOLERANCE),
+        sl = sum("s", 6..=10),
+        nl = sum("n", 6..=10),
+        sb = sum("s", 1..=5),
+        nbf = sum("n", 1..=5),
+    );
+    // The pre-sheared state: its free grains, the restart.
+    let _ = writeln!(
+        s,
+        "print \"PRESHEAR_END ${{st}} ${{na}}\"\n\
+         write_dump free custom {PRESHEAR_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"\n\
+         variable snowp equal ${{snow}}\nwrite_restart {RESTART}"
     );
     for (k, f) in FAILURE_FRACTIONS.iter().enumerate() {
         failure(&mut s, p, d, &law, k + 1, *f)?;
     }
     let _ = writeln!(
         s,
-        "\nlabel finish\n\
+        "\n\
          write_dump all custom {FINAL_DUMP} id radius x y z modify format \"%d %.17g %.17g %.17g %.17g\"\n\
          print \"RUN_END\""
     );
@@ -638,18 +734,22 @@ pub fn write_cell_deck(dir: &Path, p: &ParamSet, d: &CellDeck) -> Result<()> {
 pub struct Sample {
     /// Step at its end.
     pub step: u64,
-    /// Normal stress on the shear plane, Pa.
+    /// Normal stress (the lid's vertical contact force per area), Pa.
     pub normal: f64,
-    /// Shear stress on it, Pa.
+    /// Shear stress, Pa.
     pub shear: f64,
-    /// Height of the lid, m.
+    /// Mean centre height of the floor's grains, m.
+    pub floor: f64,
+    /// Mean centre height of the lid's grains, m.
     pub lid: f64,
+    /// Solid volume of the interior slab (every grain sliced), m^3.
+    pub slab: f64,
 }
 
 /// One failure test as the deck ran it.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct FailureRun {
-    /// Step at which the upper half started to move.
+    /// Step at which the lid started to move.
     pub start: u64,
     /// Its samples while shearing.
     pub samples: Vec<Sample>,
@@ -663,29 +763,43 @@ pub fn state(dir: &Path) -> RunState {
     super::fill_run::state(dir)
 }
 
+/// The glued layers as the deck chose them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Glued {
+    /// Grains of the floor and of the lid.
+    pub floor: usize,
+    /// Grains of the lid.
+    pub lid: usize,
+    /// Mass of the floor, kg.
+    pub floor_mass: f64,
+    /// Mass of the lid, kg.
+    pub lid_mass: f64,
+}
+
 /// A finished shear-cell run read back from its directory.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellRun {
-    /// Step at which the fill stopped, and whether it was at rest.
+    /// Step at which the fill stopped.
     pub fill_steps: u64,
     /// Whether the fill came to rest (rather than hitting the step limit).
     pub fill_settled: bool,
-    /// Particles inserted and their mass, kg.
+    /// Particles inserted.
     pub inserted: usize,
     /// Mass inserted, kg.
     pub inserted_mass: f64,
+    /// The glued layers.
+    pub glued: Glued,
     /// Step at which the pre-shear started.
     pub preshear_start: u64,
     /// Pre-shear samples.
     pub preshear: Vec<Sample>,
     /// Step at the end of the pre-shear (the main run's steps, as mbgc counts them).
     pub preshear_end: u64,
-    /// Mass deleted during the pre-shear, kg.
-    pub spilled: f64,
-    /// (radius, position) of each particle at the end of the pre-shear.
-    pub bed: Vec<(f64, V3)>,
-    /// The failure tests in [`FAILURE_FRACTIONS`] order (none when the deck stopped at the
-    /// overburden check).
+    /// Particles in the cell at the end of the pre-shear.
+    pub atoms: usize,
+    /// (radius, position) of each free grain at the end of the pre-shear.
+    pub free: Vec<(f64, V3)>,
+    /// The failure tests in [`FAILURE_FRACTIONS`] order.
     pub failures: Vec<FailureRun>,
     /// Steps of the whole run, summed over its `run` commands.
     pub steps: u64,
@@ -727,24 +841,26 @@ impl CellRun {
             }
         }
         let log_path = dir.join(LOG);
-        let bed_path = dir.join(PRESHEAR_DUMP);
-        let bed = super::parse::parse_dump_rows(
-            &bed_path.display().to_string(),
-            &read_to_string(&bed_path)?,
+        let free_path = dir.join(PRESHEAR_DUMP);
+        let free = super::parse::parse_dump_rows(
+            &free_path.display().to_string(),
+            &read_to_string(&free_path)?,
         )?
         .into_iter()
         .map(|(_, r, x)| (r, x))
         .collect();
-        Self::parse(&log_path.display().to_string(), &read_log(&log_path)?, bed)
+        Self::parse(&log_path.display().to_string(), &read_log(&log_path)?, free)
     }
 
-    /// The run from the text of its log (`file` names it in errors) and its pre-shear bed.
-    pub fn parse(file: &str, log: &str, bed: Vec<(f64, V3)>) -> Result<CellRun> {
+    /// The run from the text of its log (`file` names it in errors) and its free grains at the
+    /// end of the pre-shear.
+    pub fn parse(file: &str, log: &str, free: Vec<(f64, V3)>) -> Result<CellRun> {
         let bad = |field: &str, what: &str| Error::input(file, field, what.to_owned());
-        let words = |prefix: &str| -> Option<Vec<&str>> {
+        let words = |prefix: &str| -> Result<Vec<&str>> {
             log.lines()
                 .find_map(|l| l.strip_prefix(prefix))
                 .map(|r| r.split_whitespace().collect())
+                .ok_or_else(|| bad(prefix.trim_end(), "the line the deck prints"))
         };
         let int = |w: Option<&&str>, field: &str| -> Result<u64> {
             w.and_then(|s| s.parse::<f64>().ok())
@@ -757,23 +873,27 @@ impl CellRun {
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| bad(field, "a finite number after it"))
         };
-        let fill =
-            words("FILL_STEPS ").ok_or_else(|| bad("FILL_STEPS", "the line the deck prints"))?;
-        let ins = words("INSERTED ").ok_or_else(|| bad("INSERTED", "the line the deck prints"))?;
-        let pre = words("PRESHEAR_START ")
-            .ok_or_else(|| bad("PRESHEAR_START", "the line the deck prints"))?;
-        let end = words("PRESHEAR_END ")
-            .ok_or_else(|| bad("PRESHEAR_END", "the line the deck prints"))?;
+        let fill = words("FILL_STEPS ")?;
+        let ins = words("INSERTED ")?;
+        let glued = words("GLUED ")?;
+        let pre = words("PRESHEAR_START ")?;
+        let end = words("PRESHEAR_END ")?;
         let mut run = CellRun {
             fill_steps: int(fill.first(), "FILL_STEPS")?,
             fill_settled: real(fill.get(1), "FILL_STEPS")? > 0.5,
             inserted: int(ins.first(), "INSERTED")? as usize,
             inserted_mass: real(ins.get(1), "INSERTED")?,
+            glued: Glued {
+                floor: int(glued.first(), "GLUED")? as usize,
+                lid: int(glued.get(1), "GLUED")? as usize,
+                floor_mass: real(glued.get(2), "GLUED")?,
+                lid_mass: real(glued.get(3), "GLUED")?,
+            },
             preshear_start: int(pre.first(), "PRESHEAR_START")?,
             preshear: Vec::new(),
             preshear_end: int(end.first(), "PRESHEAR_END")?,
-            spilled: real(end.get(1), "PRESHEAR_END")?,
-            bed,
+            atoms: int(end.get(1), "PRESHEAR_END")? as usize,
+            free,
             failures: Vec::new(),
             steps: 0,
             loop_seconds: 0.0,
@@ -798,7 +918,9 @@ impl CellRun {
                     step: int(w.get(1), "SAMPLE")?,
                     normal: real(w.get(2), "SAMPLE")?,
                     shear: real(w.get(3), "SAMPLE")?,
-                    lid: real(w.get(4), "SAMPLE")?,
+                    floor: real(w.get(4), "SAMPLE")?,
+                    lid: real(w.get(5), "SAMPLE")?,
+                    slab: real(w.get(6), "SAMPLE")?,
                 };
                 match w.first().copied() {
                     Some("P") => run.preshear.push(s),
@@ -812,7 +934,7 @@ impl CellRun {
                         run.failures[k].samples.push(s);
                     }
                     Some(_) => {}
-                    None => return Err(bad("SAMPLE", "a phase, step and three numbers")),
+                    None => return Err(bad("SAMPLE", "a phase, step and five numbers")),
                 }
             } else if line.starts_with("Loop time of ") {
                 // "Loop time of T on P procs for N steps with A atoms"
@@ -844,21 +966,19 @@ impl CellRun {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiments::Experiment;
 
+    /// The comparison's row: the cell's parameters only (no wall parameter exists).
     pub(crate) fn params() -> ParamSet {
         ParamSet::from_pairs(&[
             ("E_p", 5e7),
-            ("E_w", 5e7),
             ("nu_p", 0.3),
             ("rho_p", 2600.0),
             ("d50", 10.0),
             ("normal_stress", 6000.0),
             ("e_pp", 0.5),
-            ("e_pw", 0.5),
             ("mu_pp", 0.5),
-            ("mu_pw", 0.3),
             ("mu_r_pp", 0.1),
-            ("mu_r_pw", 0.1),
         ])
     }
 
@@ -870,92 +990,192 @@ mod tests {
         }
     }
 
+    fn script(c: &ShearCell, p: &ParamSet) -> (CellDeck, String) {
+        let d = cell_deck(c, p, 7).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        write_cell_deck(dir.path(), p, &d).unwrap();
+        let files: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(files, [INPUT], "the deck is one input script, no meshes");
+        (d, std::fs::read_to_string(dir.path().join(INPUT)).unwrap())
+    }
+
     #[test]
-    fn the_deck_has_mbgcs_cell_schedule_and_stresses() {
-        let c = cell(4.0);
+    fn the_deck_is_mbgcs_periodic_cell_with_its_schedule() {
+        let c = cell(12.0);
         let p = params();
-        let d = cell_deck(&c, &p, 7).unwrap();
+        c.check(&p).unwrap();
+        let (d, s) = script(&c, &p);
         let lay = c.layout(&p, 7).unwrap();
         let sch = c.schedule(&lay, 2600.0, 5e7, 0.3, 6000.0);
-        // k = 4 d_max of 10 mm: mbgc's length, 40 mm wide and tall, split at 20 mm, the shelf
-        // 2 + 2 d50 + d_max long.
+        // k = 12 d_max of 10 mm: a period of 120 mm in x and y, mbgc's particles and column.
         assert_eq!(d.size, lay.size);
-        assert_eq!((lay.size[1], lay.size[2], d.split), (0.04, 0.04, 0.02));
-        assert!((d.shelf - 0.05).abs() < 1e-15);
-        let (l, w) = (num(lay.size[0]), num(lay.size[1]));
+        assert_eq!((lay.size[0], lay.size[1]), (0.12, 0.12));
         assert_eq!(d.count, lay.diameters.len());
-        assert_eq!((d.dt, d.sample), (sch.dt, sch.sample));
+        assert_eq!(
+            d.domain,
+            ([0.0, 0.0, -0.04], [0.12, 0.12, sch.column_top + 0.05])
+        );
+        assert_eq!((d.dt, d.sample, d.chunk), (sch.dt, sch.sample, sch.chunk));
+        assert_eq!(
+            (d.v_shear, d.v_servo, d.bin),
+            (sch.v_shear, sch.v_servo, sch.bin)
+        );
+        assert_eq!((d.preshear, d.max_preshear), (0.02, 0.06));
         assert_eq!(
             d.consolidate_samples,
             sch.consolidate_steps.div_ceil(sch.sample)
         );
-        // The pre-shear's samples reach 2 d50 of travel and no more.
+        assert_eq!(
+            d.relax_samples,
+            (sch.consolidate_steps / 2).div_ceil(sch.sample)
+        );
+        // The failure tests' samples reach 2 d50 of travel and no more; the pre-shear loop
+        // reaches past 6 d50, so that only the steadiness rule ends it.
         let travel = |n: u64| d.travel(n * d.sample);
-        assert!(travel(d.preshear_samples) >= 0.02);
-        assert!(travel(d.preshear_samples - 1) < 0.02);
-        let dir = tempfile::tempdir().unwrap();
-        write_cell_deck(dir.path(), &p, &d).unwrap();
-        let s = std::fs::read_to_string(dir.path().join(INPUT)).unwrap();
+        assert!(travel(d.failure_samples) >= 0.02 && travel(d.failure_samples - 1) < 0.02);
+        assert!(travel(d.preshear_samples) > 0.06 + 0.5 * d.bin);
+        // Each glued layer: 0.55 x 1.5 d_max x the plan area of solid, as mbgc's.
+        let layer = 2600.0 * 0.55 * 1.5 * 0.01 * 0.12 * 0.12;
+        assert!((d.layer_mass - layer).abs() < 1e-12 * layer);
+        assert!((d.interior_gap() - 0.0175).abs() < 1e-15);
+        let (l, area) = (num(0.12), num(0.12 * 0.12));
         let law = "model hertz tangential history rolling_friction epsd2";
         for want in [
+            "boundary p p f\n".to_string(),
+            format!("region domain block 0e0 {l} 0e0 {l} -4e-2 {} units box\n", num(d.domain.1[2])),
+            "create_box 1 domain\n".into(),
             format!("pair_style gran {law}\n"),
-            format!("fix walls all wall/gran {law} mesh n_meshes 5 meshes floor lower upper lid shelf\n"),
-            "fix lid all mesh/surface/stress file lid.stl type 2\n".into(),
-            "fix move_lid all move/mesh mesh lid linear/variable v_vx v_zero v_vz\n".into(),
+            format!("fix floorplane all wall/gran {law} primitive type 1 zplane 0e0\n"),
+            "fix m1 all property/global youngsModulus peratomtype 5e7\n".into(),
+            "fix m3 all property/global coefficientRestitution peratomtypepair 1 5e-1\n".into(),
+            "fix m4 all property/global coefficientFriction peratomtypepair 1 5e-1\n".into(),
+            "fix m5 all property/global coefficientRollingFriction peratomtypepair 1 1e-1\n".into(),
             format!("timestep {}\n", num(sch.dt)),
             format!("neighbor {} bin\n", num(lay.d_min)),
             format!("particles_in_region {}\n", lay.diameters.len()),
-            format!("region column block 0 {l} 0 {w} 0 {} units box\n", num(sch.column_top)),
-            "variable sn equal (f_lid[3]+9.81e0*mass(all,above)+f_shelf[3])/v_area\n".into(),
-            "variable ss equal (-(f_upper[1]+f_lid[1])-f_shelf[1])/v_area\n".into(),
-            format!("variable area equal ({l}-v_tr)*{w}\n"),
-            format!("variable vzs equal -{}*(", num(sch.v_servo)),
+            format!("region column block 0 {l} 0 {l} 0 {} units box\n", num(sch.column_top)),
+            // The layers: a cut halved 60 times, the floor below it, the lid above.
+            format!("variable mlay equal {}\n", num(d.layer_mass)),
+            "variable gf loop 60\n".into(),
+            "region fc${gf} block INF INF INF INF INF ${zc} units box\n".into(),
+            "if \"${mc} >= ${mlay}\" then \"variable hi equal ${zc}\" else \"variable lo equal ${zc}\"\n".into(),
+            "region floorlayer block INF INF INF INF INF ${hi} units box\ngroup floor region floorlayer\n".into(),
+            "region lc${gl} block INF INF INF INF ${zc} INF units box\n".into(),
+            "if \"${mc} >= ${mlay}\" then \"variable lo equal ${zc}\" else \"variable hi equal ${zc}\"\n".into(),
+            "region lidlayer block INF INF INF INF ${lo} INF units box\ngroup lid region lidlayer\n".into(),
+            "group glued union floor lid\ngroup free subtract all glued\n".into(),
+            "velocity glued set 0.0 0.0 0.0\nset group glued omegax 0.0 omegay 0.0 omegaz 0.0\n".into(),
+            // Gravity off from the glue on (mbgc's shear); glued grains: no contacts among them,
+            // not integrated; the lid rigid.
+            "unfix integrate\nunfix gravity\n".into(),
+            "neigh_modify exclude group glued glued\nfix integrate free nve/sphere\n".into(),
+            "fix movelid lid move variable NULL NULL NULL v_vx v_zero v_vz\n".into(),
+            // mbgc's stresses, slab and servo.
+            "compute zfl floor reduce ave z\ncompute zli lid reduce ave z\n".into(),
+            "compute slab all reduce sum v_slice\n".into(),
+            format!("variable sn equal fcm(lid,z)/{area}\n"),
+            format!("variable ss equal -fcm(lid,x)/{area}\n"),
+            "variable za equal c_zfl+1.75e-2\nvariable zb equal c_zli-1.75e-2\n".into(),
             "variable err equal 5e0*(v_target-v_snow)/v_target\n".into(),
+            format!("variable vzs equal -{}*(", num(sch.v_servo)),
+            "thermo_style custom step atoms c_zfl c_zli c_slab\nthermo 0\n".into(),
             format!("run {} pre ${{pre}} post no\n", sch.sample),
-            format!("variable p loop {}\n", d.preshear_samples),
             format!("variable c loop {}\n", d.consolidate_samples),
+            // The pre-shear: shear speed, bins, mbgc's steadiness test and travel limits.
             format!("variable vxset equal {}\n", num(sch.v_shear)),
-            format!("region sp4 block {l} INF INF INF INF 1e-2 units box\n"),
+            format!("variable p loop {}\n", d.preshear_samples),
+            format!("variable edge equal {}*(${{nb}}+1)\n", num(0.001)),
+            format!("if \"${{nm}} != 0 || ${{tt}} < {}\" then \"jump SELF pnext\"\n", num(0.02 - 0.0005)),
+            "variable rl equal (${s6}+${s7}+${s8}+${s9}+${s10})/(${n6}+${n7}+${n8}+${n9}+${n10})\n".into(),
+            "variable rb equal (${s1}+${s2}+${s3}+${s4}+${s5})/(${n1}+${n2}+${n3}+${n4}+${n5})\n".into(),
+            "variable tol equal 1.2e-1*abs(${rl})\n".into(),
+            format!("if \"${{tt}} >= {}\" then \"jump SELF pdone\"\n", num(0.06 - 0.0005)),
+            // Three failure tests from the restart, mbgc's peak rule.
+            "write_restart preshear.restart\n".into(),
             "variable target equal 1.5e3\n".into(),
             "variable target equal 3e3\n".into(),
             "variable target equal 4.5e3\n".into(),
-            "if \"${ob} > 1.5e3\" then \"jump SELF finish\"\n".into(),
+            format!("variable r2 loop {}\n", d.relax_samples),
+            format!("variable f3 loop {}\n", d.failure_samples),
             "if \"${tt} > 5e-3 && ${ms} < ${lim}\" then \"jump SELF done3\"\n".into(),
-            "variable lim equal 0.95*${ps}\n".into(),
-            format!("variable edge equal {}*(${{nb}}+1)\n", num(0.001)),
-            "if \"${tt} >= ${edge}\" then \"jump SELF bin2\"\n".into(),
-            "write_restart preshear.restart\n".into(),
             "print \"RUN_END\"\n".into(),
         ] {
             assert!(s.contains(&want), "missing {want:?} in\n{s}");
         }
+        // No wall material, no second atom type, no mesh.
+        assert_eq!(
+            s.matches("\nfix gravity").count(),
+            1,
+            "gravity in the pour only"
+        );
+        for absent in ["type 2", "peratomtypepair 2", ".stl", "E_w", "mesh"] {
+            assert!(!s.contains(absent), "{absent:?} in the deck");
+        }
         assert_eq!(s.matches("read_restart preshear.restart").count(), 3);
-        assert_eq!(s.matches("fix walls all wall/gran").count(), 4);
-        // Every label jumped to exists once.
+        assert_eq!(s.matches("fix movelid lid move").count(), 4);
+        // Every label jumped to exists once; every loop variable is used once.
         for j in s.split("jump SELF ").skip(1) {
             let to = j.split(['"', '\n']).next().unwrap();
             assert_eq!(s.matches(&format!("\nlabel {to}\n")).count(), 1, "{to}");
         }
-        let lid = std::fs::read_to_string(dir.path().join("lid.stl")).unwrap();
-        assert_eq!(lid.matches("facet normal").count(), 2);
+        let loops: Vec<&str> = s
+            .lines()
+            .filter(|l| l.starts_with("variable ") && l.contains(" loop "))
+            .map(|l| l.split_whitespace().nth(1).unwrap())
+            .collect();
+        let mut unique = loops.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), loops.len(), "{loops:?}");
+        // The variables read by index come before any that is redefined or deleted.
+        let first = |v: &str| s.find(&format!("variable {v} ")).unwrap();
+        let defined_last = ["vx", "zero", "vz", "v2a", "slice"]
+            .map(first)
+            .into_iter()
+            .max()
+            .unwrap();
+        assert!(defined_last < first("vxset") && defined_last < first("gf"));
+    }
+
+    #[test]
+    fn the_experiment_has_the_cells_parameters_and_sjkr_its_grains_cohesion() {
+        let c = ShearCell {
+            class: ModelClass::parse("hertz,mindlin,epsd2,sjkr").unwrap(),
+            ..cell(12.0)
+        };
+        let names = c.parameters();
+        for wall in ["E_w", "e_pw", "mu_pw", "mu_r_pw", "ced_pw"] {
+            assert!(!names.contains(&wall), "{wall} in {names:?}");
+        }
+        let mut p = params();
+        p.set("ced_pp", 0.0);
+        let (_, s) = script(&c, &p);
+        let law = "model hertz tangential history cohesion sjkr rolling_friction epsd2";
+        assert!(s.contains(&format!("pair_style gran {law}\n")), "{s}");
+        assert!(s.contains(&format!(
+            "fix floorplane all wall/gran {law} primitive type 1"
+        )));
         assert!(
-            lid.contains(&format!("vertex {l} {w} {}", num(d.top))),
-            "{lid}"
+            s.contains("fix m6 all property/global cohesionEnergyDensity peratomtypepair 1 0e0\n"),
+            "{s}"
         );
-        let upper = std::fs::read_to_string(dir.path().join("upper.stl")).unwrap();
-        assert_eq!(upper.matches("facet normal").count(), 8);
-        assert!(upper.starts_with("solid upper\n") && upper.ends_with("endsolid upper\n"));
+        // Without ced_pp the row is refused by name.
+        let e = cell_deck(&c, &params(), 1)
+            .and_then(|d| write_cell_deck(tempfile::tempdir().unwrap().path(), &params(), &d))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("ced_pp"), "{e}");
     }
 
     #[test]
     fn a_psd_is_poured_by_mass_as_equal_mass_templates() {
         let mut p = params();
         p.set("sigma_ln", 0.2);
-        let d = cell_deck(&cell(4.0), &p, 1).unwrap();
+        let (d, s) = script(&cell(5.0), &p);
         assert_eq!(d.classes.len(), CLASSES);
-        let dir = tempfile::tempdir().unwrap();
-        write_cell_deck(dir.path(), &p, &d).unwrap();
-        let s = std::fs::read_to_string(dir.path().join(INPUT)).unwrap();
         assert!(
             s.contains(&format!("mass_in_region {}\n", num(d.mass))),
             "{s}"
@@ -967,13 +1187,13 @@ mod tests {
     fn bad_rows_and_classes_are_refused_by_name() {
         let mut p = params();
         p.set("normal_stress", -1.0);
-        let e = cell_deck(&cell(4.0), &p, 1).unwrap_err().to_string();
+        let e = cell_deck(&cell(5.0), &p, 1).unwrap_err().to_string();
         assert!(e.contains("normal_stress"), "{e}");
-        let e = cell_deck(&cell(2.0), &params(), 1).unwrap_err().to_string();
+        let e = cell_deck(&cell(4.0), &params(), 1).unwrap_err().to_string();
         assert!(e.contains("--box-scale"), "{e}");
         let c = ShearCell {
             class: ModelClass::parse("tsuji,mindlin").unwrap(),
-            ..cell(4.0)
+            ..cell(5.0)
         };
         let d = cell_deck(&c, &params(), 1).unwrap();
         let dir = tempfile::tempdir().unwrap();
@@ -987,18 +1207,30 @@ mod tests {
     fn a_log_is_read_into_stages_and_samples() {
         let log = "LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, x)\n\
             Loop time of 2 on 1 procs for 100 steps with 10 atoms\n\
-            FILL_STEPS 100 1\nINSERTED 10 0.5\nPRESHEAR_START 200\n\
-            print \"SAMPLE P ${st} ${snow} ${ssnow} ${lz}\"\n\
-            SAMPLE C 190 5000 0 0.1\nSAMPLE P 230 5100 4000 0.1001\n\
+            FILL_STEPS 100 1\nINSERTED 10 0.5\nGLUED 2 3 0.1 0.15\n\
+            print \"SAMPLE P ${st} ${snow} ${ssnow} ${fm} ${lm} ${sv}\"\n\
+            SAMPLE C 190 5000 0 0.01 0.1 1e-4\nPRESHEAR_START 200\n\
+            SAMPLE P 230 5100 4000 0.01 0.1001 1.1e-4\n\
             Loop time of 1.5 on 1 procs for 30 steps with 10 atoms\n\
-            PRESHEAR_END 230 0.01\nFAIL_START 1 300\nSAMPLE R1 290 1 1 1\n\
-            SAMPLE F1 330 1500 1200 0.1002\nFAIL_START 2 400\nSAMPLE F2 430 3000 2500 0.1\n";
+            PRESHEAR_END 230 10\nFAIL_START 1 300\n\
+            SAMPLE R1 290 1 1 1 1 1\nSAMPLE F1 330 1500 1200 0.01 0.1002 1e-4\n\
+            FAIL_START 2 400\nSAMPLE F2 430 3000 2500 0.01 0.1 1e-4\n";
         let r = CellRun::parse("log", log, vec![]).unwrap();
         assert_eq!((r.fill_steps, r.fill_settled, r.inserted), (100, true, 10));
+        assert_eq!(
+            r.glued,
+            Glued {
+                floor: 2,
+                lid: 3,
+                floor_mass: 0.1,
+                lid_mass: 0.15
+            }
+        );
         assert_eq!((r.preshear_start, r.preshear_end, r.steps), (200, 230, 130));
-        assert_eq!(r.loop_seconds, 3.5);
+        assert_eq!((r.atoms, r.loop_seconds), (10, 3.5));
         assert_eq!(r.preshear.len(), 1);
-        assert_eq!(r.preshear[0].shear, 4000.0);
+        assert_eq!((r.preshear[0].shear, r.preshear[0].lid), (4000.0, 0.1001));
+        assert_eq!(r.preshear[0].slab, 1.1e-4);
         assert_eq!(r.failures.len(), 2);
         assert_eq!(r.failures[1].start, 400);
         assert_eq!(r.failures[0].samples[0].normal, 1500.0);
@@ -1010,9 +1242,28 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.starts_with("log.x: SAMPLE"), "{e}");
-        let e = CellRun::parse("log.x", &log.replace("PRESHEAR_END", "X"), vec![])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("PRESHEAR_END"), "{e}");
+        for line in ["PRESHEAR_END", "GLUED", "PRESHEAR_START"] {
+            let e = CellRun::parse("log.x", &log.replace(line, "X"), vec![])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(line), "{e}");
+        }
+    }
+
+    #[test]
+    fn the_interior_slab_is_mbgcs() {
+        let d = cell_deck(&cell(12.0), &params(), 1).unwrap();
+        // Layers 0.1 m apart: a slab from 0.0175 above the floor to 0.0175 below the lid.
+        let s = Sample {
+            step: 0,
+            normal: 0.0,
+            shear: 0.0,
+            floor: 0.01,
+            lid: 0.11,
+            slab: 0.6 * 0.12 * 0.12 * 0.065,
+        };
+        assert!((d.solid_fraction(&s) - 0.6).abs() < 1e-12);
+        let close = Sample { lid: 0.04, ..s };
+        assert!(d.solid_fraction(&close).is_nan());
     }
 }
