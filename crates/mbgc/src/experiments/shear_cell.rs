@@ -103,7 +103,7 @@ pub const MAX_PRESHEAR_TRAVEL: f64 = 6.0;
 pub const LAYER: f64 = 1.5;
 
 /// Solid fraction at which the glued layers' thickness is counted.
-const LAYER_SOLID: f64 = 0.55;
+pub const LAYER_SOLID: f64 = 0.55;
 
 /// Solid fraction of the poured column (random insertion jams near 0.25; see the shear box).
 const FILL_FRACTION: f64 = 0.2;

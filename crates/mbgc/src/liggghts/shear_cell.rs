@@ -72,7 +72,7 @@
 //! equal-mass templates; the numbers the deck carries between commands (bin means, the cut,
 //! the servo's speed) pass through its variables at 15 significant digits; and the forces the
 //! stresses are made of are those of the last step's force computation, as in mbgc, but
-//! evaluated by LIGGGHTS' own contact code. [`LAYER_SOLID`] is mbgc's private constant copied.
+//! evaluated by LIGGGHTS' own contact code. [`LAYER_SOLID`] is the engine cell's own constant.
 //!
 //! LIGGGHTS 3.8 traps the deck works around: an equal- or atom-style variable is redefined by
 //! deleting and appending it (and an exhausted loop variable is deleted), which moves every
@@ -99,7 +99,7 @@ use super::shear_box::{gran_model, GranModel};
 use super::shear_box_fill::prime_seed;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::experiments::shear_box::psd_classes;
-use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS, LAYER};
+use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS, LAYER, LAYER_SOLID};
 use crate::experiments::shear_test::{SERVO_GAIN, STEADY_TOLERANCE};
 use crate::experiments::ParamSet;
 use crate::psd::{default_range, Distribution, LogNormal};
@@ -119,10 +119,6 @@ pub const RESTART: &str = "preshear.restart";
 
 /// Particle templates of equal mass standing for a continuous PSD (as the shear-box backend).
 pub const CLASSES: usize = 5;
-
-/// Solid fraction at which the glued layers' thickness is counted: mbgc's `LAYER_SOLID`
-/// (private to [`crate::experiments::shear_cell`]), copied.
-pub const LAYER_SOLID: f64 = 0.55;
 
 /// Gap between a glued layer and the interior slab the bulk density is measured in, in d_max
 /// (mbgc's `interior_solid_fraction`).
