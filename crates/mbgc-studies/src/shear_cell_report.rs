@@ -184,10 +184,16 @@ fn origin_table(w: &mut String, rows: &[(&str, Vec<Run>)]) {
 /// `mbgc bench shear-cell`: the report from the tables under `--data`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let table = |name: &str| a.data.join(name);
-    let periodic = [(
-        "periodic, k = 12, eight replicates",
-        table("periodic/k12_noise.csv"),
-    )];
+    let periodic = [
+        (
+            "periodic, k = 12, eight, dead-load lid",
+            table("periodic/k12_noise.csv"),
+        ),
+        (
+            "periodic, k = 12, eight, servo lid",
+            table("periodic/servo/k12_noise.csv"),
+        ),
+    ];
     let split: [(&str, &str); 5] = [
         ("split box, k = 8, three", "k8_cohesionless.csv"),
         ("split box, k = 12, three", "k12_cohesionless.csv"),
@@ -209,7 +215,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         ("mbgc", table("periodic/liggghts/mbgc_k12.csv")),
         ("LIGGGHTS 3.8", table("periodic/liggghts/liggghts_k12.csv")),
     ];
-    let series = table("periodic/k12_cohesion_series.csv");
+    let series = table("periodic/servo/k12_cohesion_series.csv");
     let inputs: Vec<(&str, PathBuf)> = periodic
         .iter()
         .chain(&split)
@@ -230,7 +236,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
          The cell (`crates/mbgc/src/experiments/shear_cell.rs` gives the procedure and the \
          reasons): periodic in the shear direction and across it, k = 12 d_max in both, a bed \
          about k tall between a glued floor and a glued lid of the material's own grains, \
-         sheared without gravity under a servo-controlled normal stress. The material: \
+         sheared without gravity under a dead-load lid (a free body of its grains' mass pressed \
+         by the normal stress times the plan area; the tables under `periodic/servo/` and \
+         `periodic/liggghts/` were made with the servo-controlled lid that came before it, whose \
+         stress overshot on a stiff bed: the experiment's `run_loaded` gives the numbers). The \
+         material: \
          monosized spheres of 10 mm, E 5e7 Pa, nu 0.3, rho_p 2600 kg/m3, e 0.5, mu_pp 0.5, \
          rolling friction 0.1, class `hertz,mindlin,epsd2,sjkr`, pre-shear normal stress 5000 \
          Pa, failure at 0.25, 0.5 and 0.75 of it. Every row of a replicate table has the same \
@@ -260,7 +270,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     levels.dedup();
     let _ = writeln!(
         w,
-        "\n## Cohesion against the SJKR energy density (k = 12)\n\nThe estimate, to an order \
+        "\n## Cohesion against the SJKR energy density (k = 12, servo lid)\n\nThe estimate, to an order \
          of magnitude only: at half the pre-shear stress each contact carries the normal force \
          of a random packing (Rumpf's `sigma = phi k F / (pi d^2)` with phi {SOLID_FRACTION}, k \
          {COORDINATION}), its Hertz overlap sets the contact circle (pi R delta for two equal \
@@ -298,7 +308,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         .collect::<anyhow::Result<_>>()?;
     let _ = writeln!(
         w,
-        "\n## LIGGGHTS 3.8 against mbgc's engine\n\nThe same rows (k = 12, 6 kPa, cohesionless; \
+        "\n## LIGGGHTS 3.8 against mbgc's engine (servo lid)\n\nThe same rows (k = 12, 6 kPa, cohesionless; \
          `periodic/liggghts/README.md` gives the commands and each run), mean ± sd per engine, \
          and the difference of the means over its standard error from the two engines' own \
          scatter.\n"

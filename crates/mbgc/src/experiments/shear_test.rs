@@ -14,11 +14,6 @@ pub const STEADY_TOLERANCE: f64 = 0.12;
 /// warning (the k = 12 cell broke down beyond about 15 %).
 pub const TRAVEL_SHARE: f64 = 0.15;
 
-/// Gain of the lid's servo: full speed at a relative stress error of 1 / SERVO_GAIN. The
-/// dilation at a failure peak lifts the lid at about a third of the shear speed, which this
-/// follows within about 7 % of the target stress.
-pub const SERVO_GAIN: f64 = 5.0;
-
 /// Bins of travel, each the mean normal and shear stress of its samples.
 #[derive(Debug, Default)]
 pub struct Bins {

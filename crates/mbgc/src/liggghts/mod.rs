@@ -9,7 +9,7 @@
 //! - [`shear_box_fill`]: the shear box filling itself, mbgc's procedure in LIGGGHTS' own words;
 //!   [`fill_run`] reads such a run back; [`shear_box_experiment`] makes it the shear-box
 //!   experiment of `mbgc simulate --backend liggghts`.
-//! - [`shear_cell`]: the shear cell (pour, servo lid, pre-shear, three failure tests from a
+//! - [`shear_cell`]: the shear cell (pour, loaded lid, pre-shear, three failure tests from a
 //!   restart) as one deck; [`shear_cell_experiment`] makes it the shear-cell experiment of
 //!   `mbgc simulate --backend liggghts`.
 //! - [`mesh`]: STL walls; [`number`]: numbers as LIGGGHTS reads them; [`parse`]: logs, dumps.

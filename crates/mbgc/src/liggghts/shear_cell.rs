@@ -1,8 +1,8 @@
 //! The shear cell ([`crate::experiments::shear_cell`]) as a LIGGGHTS 3.8 deck that runs the
-//! whole procedure itself: pour, glue the floor and lid layers, servo-lid consolidation,
+//! whole procedure itself: pour, glue the floor and lid layers, consolidation under a loaded lid,
 //! pre-shear until steady, and three failure tests from copies of the pre-sheared state.
 //! [`cell_deck`] takes every number from mbgc's own layout and schedule (period, column, time
-//! step, sample interval, shear and servo speeds, step counts, travels), so that the two codes
+//! step, sample interval, shear speed, step counts, travels), so that the two codes
 //! do the same things at the same steps; [`CellRun`] reads a finished run back for
 //! [`super::shear_cell_experiment`] to measure with mbgc's definitions.
 //!
@@ -40,9 +40,11 @@
 //! - Stresses, after each sample of `sample` steps, as mbgc's `stress`: the lid's contact force
 //!   per plan area (period x period), normal = `fcm(lid,z)` / area, shear = -`fcm(lid,x)` /
 //!   area (the forces of the sample's last step, as mbgc's).
-//! - Servo: after each sample the lid's vertical speed for the next one is mbgc's `drive_lid`,
-//!   -v_servo clamp(SERVO_GAIN (target - normal) / target, -1, 1); its horizontal speed is 0 in
-//!   consolidation and relaxation, the shear speed in pre-shear and failure.
+//! - Load: the lid is mbgc's dead load (`run_loaded`): every step its vertical speed changes by
+//!   dt (`fcm(lid,z)` - target x area) / `mass(lid)`, from its speed `vcm(lid,z)` of the step
+//!   before (the equal-style variable `fix move` evaluates each step, with the forces of the
+//!   last force computation, as mbgc's); its horizontal speed is 0 in consolidation and
+//!   relaxation, the shear speed in pre-shear and failure.
 //! - Consolidation (mbgc's step count, in samples), then the pre-shear in 0.1 d50 bins of
 //!   travel: at every fifth finished bin from
 //!   [`PRESHEAR_TRAVEL`](crate::experiments::shear_cell::PRESHEAR_TRAVEL) - 0.5 bin on, mbgc's
@@ -59,8 +61,9 @@
 //!   through the lid.
 //! - The three failure points: mbgc clones its simulation; the deck writes a restart file after
 //!   the pre-shear and starts each failure test with `clear` / `read_restart` (atoms, groups,
-//!   contact histories). Relaxation at the failure stress at rest (the servo answering the new
-//!   target from the pre-sheared stress, as mbgc's), then shear until mbgc's peak criterion
+//!   contact histories, velocities: the lid's speed). Relaxation at rest under the failure
+//!   load (the lid answering the new load from the pre-sheared state, as mbgc's), then shear
+//!   until mbgc's peak criterion
 //!   (running mean of three 0.1 d50 bins of the shear stress falling 5 % below its peak after
 //!   0.5 d50) or 2 d50, computed in the deck; the responses are computed afterwards in Rust
 //!   from every sample the deck printed, with mbgc's definitions (a test without a drop that
@@ -70,7 +73,7 @@
 //! (the same number, mbgc's column); a failure test restarts from a file (neighbour lists and
 //! forces computed afresh, the only perturbation) instead of a clone in memory; a PSD is five
 //! equal-mass templates; the numbers the deck carries between commands (bin means, the cut,
-//! the servo's speed) pass through its variables at 15 significant digits; and the forces the
+//! the load) pass through its variables at 15 significant digits; and the forces the
 //! stresses are made of are those of the last step's force computation, as in mbgc, but
 //! evaluated by LIGGGHTS' own contact code. [`LAYER_SOLID`] is the engine cell's own constant.
 //!
@@ -100,7 +103,7 @@ use super::shear_box_fill::prime_seed;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::experiments::shear_box::psd_classes;
 use crate::experiments::shear_cell::{ShearCell, FAILURE_FRACTIONS, LAYER, LAYER_SOLID};
-use crate::experiments::shear_test::{SERVO_GAIN, STEADY_TOLERANCE};
+use crate::experiments::shear_test::STEADY_TOLERANCE;
 use crate::experiments::ParamSet;
 use crate::psd::{default_range, Distribution, LogNormal};
 use mbgc_dem::contact::{ModelClass, Pair};
@@ -169,9 +172,7 @@ pub struct CellDeck {
     pub sigma: f64,
     /// Speed of the lid, m/s.
     pub v_shear: f64,
-    /// Top vertical speed of the lid, m/s.
-    pub v_servo: f64,
-    /// Steps per sample (and servo update).
+    /// Steps per sample.
     pub sample: u64,
     /// Travel per averaging bin, m.
     pub bin: f64,
@@ -281,7 +282,6 @@ pub fn cell_deck(cell: &ShearCell, p: &ParamSet, seed: u64) -> Result<CellDeck> 
         d_max: lay.d_max,
         sigma,
         v_shear: sch.v_shear,
-        v_servo: sch.v_servo,
         sample: sch.sample,
         bin: sch.bin,
         consolidate_samples: sch.consolidate_steps.div_ceil(sch.sample),
@@ -398,14 +398,13 @@ fn cell_fixes(s: &mut String) {
     );
 }
 
-/// One sample: run, measure, print, set the servo's speed for the next one.
+/// One sample: run, measure, print.
 fn sample(s: &mut String, d: &CellDeck, phase: &str) {
     let _ = writeln!(
         s,
         "run {} pre ${{pre}} post no\nvariable pre string no\n\
          variable snow equal ${{sn}}\nvariable ssnow equal ${{ss}}\n\
-         print \"SAMPLE {phase} ${{st}} ${{snow}} ${{ssnow}} ${{fm}} ${{lm}} ${{sv}}\"\n\
-         variable vzset equal ${{vzs}}",
+         print \"SAMPLE {phase} ${{st}} ${{snow}} ${{ssnow}} ${{fm}} ${{lm}} ${{sv}}\"",
         d.sample
     );
 }
@@ -426,11 +425,11 @@ fn failure(
     );
     physics(s, p, d, law)?;
     cell_fixes(s);
-    // mbgc's clone starts with the servo's answer to the new target on the pre-sheared stress.
+    // mbgc's clone carries the lid's speed; the restart carries the atoms' velocities.
     let _ = writeln!(
         s,
         "variable pre string yes\nvariable target equal {}\nvariable snow equal ${{snowp}}\n\
-         variable vxset equal 0\nvariable vzset equal ${{vzs}}\n\
+         variable vxset equal 0\n\
          variable r{k} loop {}\nlabel relax{k}",
         num(fraction * d.sigma),
         d.relax_samples
@@ -532,29 +531,29 @@ pub fn write_cell_deck(dir: &Path, p: &ParamSet, d: &CellDeck) -> Result<()> {
          newton off\nprocessors 1 * 1"
     );
     // The variables that `fix move` and `compute reduce` read by index come first and are
-    // never redefined (module documentation); they read everything else by name.
+    // never redefined (module documentation); they read everything else by name. The lid's
+    // vertical speed is mbgc's dead load: each step it changes by the lid's net force (the
+    // bed's contact force of the last force computation minus the load) over its mass.
     let _ = writeln!(
         s,
-        "variable vx equal v_vxset\nvariable zero equal 0\nvariable vz equal v_vzset\n\
+        "variable vx equal v_vxset\nvariable zero equal 0\n\
+         variable vz equal vcm(lid,z)+{dt}*(fcm(lid,z)-v_target*{area})/mass(lid)\n\
          variable v2a atom vx*vx+vy*vy+vz*vz\n\
          variable sa atom v_za-z+r\nvariable ca atom v_sa*(v_sa>0)-(v_sa-2*r)*(v_sa>2*r)\n\
          variable sb atom v_zb-z+r\nvariable cb atom v_sb*(v_sb>0)-(v_sb-2*r)*(v_sb>2*r)\n\
-         variable slice atom PI*(v_cb*v_cb*(3*r-v_cb)-v_ca*v_ca*(3*r-v_ca))/3"
+         variable slice atom PI*(v_cb*v_cb*(3*r-v_cb)-v_ca*v_ca*(3*r-v_ca))/3",
+        dt = num(d.dt),
     );
-    // mbgc's interior slab, stresses and servo, read by name.
+    // mbgc's interior slab, stresses and load, read by name.
     let _ = writeln!(
         s,
         "variable za equal c_zfl+{gap}\nvariable zb equal c_zli-{gap}\n\
          variable sn equal fcm(lid,z)/{area}\nvariable ss equal -fcm(lid,x)/{area}\n\
          variable fm equal c_zfl\nvariable lm equal c_zli\nvariable sv equal c_slab\n\
-         variable err equal {gain}*(v_target-v_snow)/v_target\n\
-         variable vzs equal -{vs}*(v_err*(abs(v_err)<=1)+(v_err>1)-(v_err<-1))\n\
          variable st equal step\nvariable na equal count(all)\nvariable mall equal mass(all)\n\
-         variable vxset equal 0\nvariable vzset equal 0\nvariable target equal {sigma}\n\
+         variable vxset equal 0\nvariable target equal {sigma}\n\
          variable snow equal 0\nvariable pre string yes",
         gap = num(d.interior_gap()),
-        gain = num(SERVO_GAIN),
-        vs = num(d.v_servo),
         sigma = num(d.sigma),
     );
     let _ = writeln!(
@@ -1015,10 +1014,7 @@ mod tests {
             ([0.0, 0.0, -0.04], [0.12, 0.12, sch.column_top + 0.05])
         );
         assert_eq!((d.dt, d.sample, d.chunk), (sch.dt, sch.sample, sch.chunk));
-        assert_eq!(
-            (d.v_shear, d.v_servo, d.bin),
-            (sch.v_shear, sch.v_servo, sch.bin)
-        );
+        assert_eq!((d.v_shear, d.bin), (sch.v_shear, sch.bin));
         assert_eq!((d.preshear, d.max_preshear), (0.02, 0.06));
         assert_eq!(
             d.consolidate_samples,
@@ -1069,14 +1065,16 @@ mod tests {
             "unfix integrate\nunfix gravity\n".into(),
             "neigh_modify exclude group glued glued\nfix integrate free nve/sphere\n".into(),
             "fix movelid lid move variable NULL NULL NULL v_vx v_zero v_vz\n".into(),
-            // mbgc's stresses, slab and servo.
+            // mbgc's stresses, slab and dead load.
             "compute zfl floor reduce ave z\ncompute zli lid reduce ave z\n".into(),
             "compute slab all reduce sum v_slice\n".into(),
             format!("variable sn equal fcm(lid,z)/{area}\n"),
             format!("variable ss equal -fcm(lid,x)/{area}\n"),
             "variable za equal c_zfl+1.75e-2\nvariable zb equal c_zli-1.75e-2\n".into(),
-            "variable err equal 5e0*(v_target-v_snow)/v_target\n".into(),
-            format!("variable vzs equal -{}*(", num(sch.v_servo)),
+            format!(
+                "variable vz equal vcm(lid,z)+{}*(fcm(lid,z)-v_target*{area})/mass(lid)\n",
+                num(sch.dt)
+            ),
             "thermo_style custom step atoms c_zfl c_zli c_slab\nthermo 0\n".into(),
             format!("run {} pre ${{pre}} post no\n", sch.sample),
             format!("variable c loop {}\n", d.consolidate_samples),

@@ -1,6 +1,6 @@
 //! The shear-cell experiment run by LIGGGHTS 3.8 instead of mbgc's engine: the backend of
 //! `mbgc simulate --experiment shear-cell --backend liggghts`. Each run writes the deck of
-//! [`super::shear_cell`] (mbgc's periodic cell, glued layers, schedule, servo and stop rules in
+//! [`super::shear_cell`] (mbgc's periodic cell, glued layers, schedule, dead load and stop rules in
 //! LIGGGHTS' words), runs it, and measures what it printed with the definitions of
 //! [`crate::experiments::shear_cell`] and [`crate::experiments::shear_test`], so that the table
 //! has the same columns and its numbers mean the same things:
@@ -662,7 +662,7 @@ mod tests {
         assert_eq!(run.glued.floor, (deck.layer_mass / grain).ceil() as usize);
         assert_eq!(run.glued.lid, run.glued.floor);
         assert_eq!(run.atoms, run.inserted);
-        // The servo held the consolidation and pre-shear near their target on average.
+        // The load held the consolidation and pre-shear near their target on average.
         let mean = |s: &[Sample]| s.iter().map(|s| s.normal).sum::<f64>() / s.len() as f64;
         let last = &run.preshear[run.preshear.len() * 3 / 4..];
         assert!((mean(last) / 2000.0 - 1.0).abs() < 0.1, "{}", mean(last));
