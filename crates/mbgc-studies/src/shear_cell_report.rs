@@ -238,7 +238,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
          about k tall between a glued floor and a glued lid of the material's own grains, \
          sheared without gravity under a dead-load lid (a free body of its grains' mass pressed \
          by the normal stress times the plan area; the tables under `periodic/servo/` and \
-         `periodic/liggghts/` were made with the servo-controlled lid that came before it, whose \
+         `periodic/liggghts/servo/` were made with the servo-controlled lid that came before it, whose \
          stress overshot on a stiff bed: the experiment's `run_loaded` gives the numbers). The \
          material: \
          monosized spheres of 10 mm, E 5e7 Pa, nu 0.3, rho_p 2600 kg/m3, e 0.5, mu_pp 0.5, \
@@ -308,7 +308,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         .collect::<anyhow::Result<_>>()?;
     let _ = writeln!(
         w,
-        "\n## LIGGGHTS 3.8 against mbgc's engine (servo lid)\n\nThe same rows (k = 12, 6 kPa, cohesionless; \
+        "\n## LIGGGHTS 3.8 against mbgc's engine\n\nThe same six rows (k = 12, 6 kPa, cohesionless, dead-load lid; \
          `periodic/liggghts/README.md` gives the commands and each run), mean ± sd per engine, \
          and the difference of the means over its standard error from the two engines' own \
          scatter.\n"
