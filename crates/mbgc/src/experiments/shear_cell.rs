@@ -834,7 +834,9 @@ mod tests {
     }
 
     /// Without gravity in the shear, the failure points sit at the normal stresses asked for,
-    /// however low (the split box had refused a lowest point below its upper half's weight).
+    /// however low (the split box had refused a lowest point below its upper half's weight),
+    /// and the dead load holds them there while the bed dilates at its peak (the servo it
+    /// replaced let them drift up to 27 % above their targets).
     #[test]
     fn the_failure_points_sit_at_their_normal_stresses() {
         let sigma = 300.0;
@@ -862,7 +864,7 @@ mod tests {
         assert_eq!(normals.len(), FAILURE_FRACTIONS.len(), "{w}");
         for (n, f) in normals.iter().zip(FAILURE_FRACTIONS) {
             assert!(
-                (n / (f * sigma) - 1.0).abs() < 0.1,
+                (n / (f * sigma) - 1.0).abs() < 0.005,
                 "{n} against {} ({w})",
                 f * sigma
             );
