@@ -3,9 +3,10 @@
 use clap::{Args, Subcommand};
 
 use mbgc_studies::{
-    cohesive_metamodel_report, dem_throughput, diagnose_report, gp_vs_gplearn, liggghts_backend,
-    metamodel_benchmark, metamodel_report, restitution, sampling_quality, sensitivity_report,
-    shear_box_check, shear_box_vs_liggghts, shear_cell_report,
+    cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
+    gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, restitution,
+    sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
+    shear_cell_report,
 };
 
 #[derive(Debug, Args)]
@@ -32,6 +33,9 @@ pub enum BenchCommand {
     /// locus against the origin, its cohesion intercept against the SJKR energy density and an
     /// order-of-magnitude estimate, and its cost, from the tables under docs/data/shear_cell.
     ShearCell(shear_cell_report::Args),
+    /// docs/metamodel_shear_cell.md: the shear-cell metamodel: its space, the cost of its
+    /// runs, each response's validation RMSE against the replicate noise, its equations.
+    CellMetamodel(cell_metamodel_report::Args),
     /// Symbolic regression against gplearn on Feynman equations (data and gplearn results from
     /// `benches/gp/`): test R^2, exact recovery, size, wall time, node-evaluations per second.
     Gp(gp_vs_gplearn::Args),
@@ -68,6 +72,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::ShearBox(b) => shear_box_vs_liggghts::run(b),
         BenchCommand::ShearBoxCheck(b) => shear_box_check::run(b),
         BenchCommand::ShearCell(c) => shear_cell_report::run(c),
+        BenchCommand::CellMetamodel(c) => cell_metamodel_report::run(c),
         BenchCommand::Gp(g) => gp_vs_gplearn::run(g),
         BenchCommand::Metamodel(m) => metamodel_report::run(m),
         BenchCommand::CohesiveMetamodel(m) => cohesive_metamodel_report::run(m),

@@ -6,10 +6,12 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use mbgc::calibrate::report;
 use mbgc::calibrate::session::{self, Session, SessionOptions};
 use mbgc::error::write_atomic;
 use mbgc::material::PsdSpec;
-use mbgc_output::outln;
+use mbgc::shipped;
+use mbgc_output::{out, outln};
 
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
@@ -52,7 +54,10 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
-    let mut material = crate::builtin::material(&a.material)?;
+    let (mut material, note) = shipped::material(&a.material)?;
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
     // Files reached through the material are inputs too (its sieve analysis).
     let sieve = format!("the sieve analysis of {}", a.material.display());
     let mut inputs: Vec<(&str, &Path)> = vec![("--material", &a.material)];
@@ -70,22 +75,7 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             }
         }
     }
-    for name in &a.free {
-        let before = material.fixed.len();
-        material.fixed.retain(|(n, _)| n != name);
-        if material.fixed.len() == before {
-            anyhow::bail!(
-                "--free {name}: {} does not fix {name} (it fixes: {})",
-                a.material.display(),
-                material
-                    .fixed
-                    .iter()
-                    .map(|(n, _)| n.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-    }
+    material.free(&a.free)?;
     let opts = SessionOptions {
         starts: a.starts,
         seed: a.seed,
@@ -95,7 +85,7 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     };
     opts.check()?;
     let mut sessions = Vec::new();
-    let models = crate::builtin::models(&a.model)?;
+    let models = shipped::files_or_models(&a.model, shipped::CALIBRATION_MODELS)?;
     for (i, (model, label)) in models.iter().enumerate() {
         if i > 0 && !a.json {
             outln!()?;
@@ -110,7 +100,7 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             written.extend(plot(dir, Path::new(label), &s)?);
         }
         if !a.json {
-            print_text(&s)?;
+            out!("{}", report::text(&s, "--json"))?;
             for f in &written {
                 outln!("wrote {}", f.display())?;
             }
@@ -143,10 +133,13 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The models' names as the session records them (the built-in one's when none is given).
+/// The models' names as the session records them (the shipped ones' when none is given).
 fn model_labels(models: &[PathBuf]) -> Vec<PathBuf> {
     if models.is_empty() {
-        vec![PathBuf::from(crate::builtin::SHEAR_BOX_MODEL)]
+        shipped::CALIBRATION_MODELS
+            .iter()
+            .map(PathBuf::from)
+            .collect()
     } else {
         models.to_vec()
     }
@@ -186,129 +179,4 @@ fn plot(dir: &Path, model: &Path, s: &Session) -> anyhow::Result<Vec<PathBuf>> {
         figures.push(path);
     }
     Ok(figures)
-}
-
-fn print_text(s: &Session) -> anyhow::Result<()> {
-    let cal = &s.calibration;
-    let names = &s.free;
-    outln!("{} ({}) with {}", s.material, s.source, s.model)?;
-    for n in &s.notes {
-        outln!("  {n}")?;
-    }
-    for (n, v) in &s.fixed {
-        outln!("  {n} = {v} fixed")?;
-    }
-    let meas: Vec<String> = s
-        .measured
-        .iter()
-        .map(|t| format!("{} {} +- {}", t.name, t.value, t.sd))
-        .collect();
-    outln!("  measured: {}", meas.join(", "))?;
-    let fitting = s.fitting().len();
-    let others = cal.optima.len() - fitting;
-    outln!(
-        "{fitting} of {} distinct optima from {} starts in {:.3} s fit the measurements (chi2 <= \
-         {:.2}, the 95 % level for {} measurement{}):",
-        cal.optima.len(),
-        cal.starts,
-        cal.seconds,
-        s.fit_threshold(),
-        s.measured.len(),
-        if s.measured.len() == 1 { "" } else { "s" }
-    )?;
-    for (i, o) in cal.optima.iter().enumerate().take(10) {
-        if i == fitting && others > 0 {
-            outln!("  local minima that do not fit:")?;
-        }
-        let params: Vec<String> = names
-            .iter()
-            .zip(&o.x)
-            .map(|(n, v)| format!("{n} = {v:.4}"))
-            .collect();
-        let fits: Vec<String> = s
-            .measured
-            .iter()
-            .zip(o.predictions.iter().zip(&o.residuals))
-            .map(|(t, (p, r))| format!("{} {p:.4} ({r:+.2} sd)", t.name))
-            .collect();
-        outln!(
-            "  #{} chi2 {:.3e} ({} starts): {}\n      predicted {}",
-            i + 1,
-            o.chi2,
-            o.starts,
-            params.join(", "),
-            fits.join(", ")
-        )?;
-    }
-    if cal.optima.len() > 10 {
-        outln!("  ... {} more (see --json)", cal.optima.len() - 10)?;
-    }
-    if !s.unused.is_empty() {
-        outln!(
-            "Not in any equation of the measured responses (any value in range fits equally): {}",
-            s.unused.join(", ")
-        )?;
-    }
-    if cal.excess_parameters > 0 {
-        let equal = s.equally_good().len();
-        if equal > 1 {
-            outln!(
-                "{equal} of the optima are equally good points of one continuous solution set, \
-                 not separate answers."
-            )?;
-        }
-        outln!(
-            "{} free parameters but {} measurements: the data fix at most {} combinations; the \
-             solutions form a set of dimension >= {}.",
-            names.len(),
-            s.measured.len(),
-            s.measured.len(),
-            cal.excess_parameters
-        )?;
-    }
-    if !cal.flat_directions.is_empty() {
-        outln!("Directions at the best optimum along which the predictions do not change (unit-box steps):")?;
-        for d in &cal.flat_directions {
-            let comp: Vec<String> = names
-                .iter()
-                .zip(&d.components)
-                .filter(|(_, c)| c.abs() >= 0.05)
-                .map(|(n, c)| format!("{c:+.2} {n}"))
-                .collect();
-            outln!(
-                "  {}  (singular value {:.1e})",
-                comp.join(" "),
-                d.singular_value
-            )?;
-        }
-        outln!(
-            "Range of each parameter over the equally good optima (chi2 within 1 of the best):"
-        )?;
-        for r in &cal.solution_ranges {
-            outln!("  {} in [{:.4}, {:.4}]", r.name, r.min, r.max)?;
-        }
-    }
-    if let Some(post) = &s.posterior {
-        outln!(
-            "Posterior (TMCMC, {} samples, {} stages): log evidence {:.3}",
-            post.samples,
-            post.stages,
-            post.ln_evidence
-        )?;
-        for p in &post.parameters {
-            outln!(
-                "  {:>12}: mean {:.4}, COV {:.3}, 5 % {:.4}, 95 % {:.4}",
-                p.name,
-                p.mean,
-                p.cov,
-                p.q05,
-                p.q95
-            )?;
-        }
-        outln!("Posterior-robust predictions (mean +- sd over the posterior):")?;
-        for r in &post.responses {
-            outln!("  {:>12}: {:.4} +- {:.4}", r.name, r.mean, r.sd)?;
-        }
-    }
-    Ok(())
 }

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use mbgc::diagnose::build::{self, BuildOptions};
-use mbgc::diagnose::report::{figures, markdown};
-use mbgc::diagnose::{diagnose, Diagnosis, MeasurementSet, Options, Surrogate};
+use mbgc::diagnose::report::{figures, json, markdown};
+use mbgc::diagnose::{diagnose, MeasurementSet, Options, Surrogate};
+use mbgc::shipped;
 use mbgc_output::say;
 use mbgc_output::Output;
 
@@ -65,20 +66,13 @@ const BUDGET_RUNS: usize = 60;
 const BUILD_DIR: &str = "diagnose_models";
 
 pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
-    if !(a.alpha > 0.0 && a.alpha < 1.0) {
-        anyhow::bail!("--alpha: expected a level between 0 and 1, got {}", a.alpha);
-    }
-    let max = mbgc::calibrate::tmcmc::MAX_SAMPLES;
-    if !(100..=max).contains(&a.samples) {
-        anyhow::bail!(
-            "--samples: expected 100 to {max} TMCMC samples per stage, got {}",
-            a.samples
-        );
-    }
-    let max_starts = mbgc::calibrate::session::MAX_STARTS;
-    if a.starts == 0 || a.starts > max_starts {
-        anyhow::bail!("--starts {}: expected 1 to {max_starts}", a.starts);
-    }
+    let opts = Options {
+        starts: a.starts,
+        samples: a.samples,
+        seed: a.seed,
+        alpha: a.alpha,
+    };
+    opts.check()?;
     if a.build.is_none() {
         for (given, flag) in [
             (a.budget_runs.is_some(), "--budget-runs"),
@@ -97,7 +91,7 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     };
     let out = Output::new(a.json);
     let mut set = MeasurementSet::from_file(&a.measurements)?;
-    let mut models = crate::builtin::diagnosis_models(&a.model)?
+    let mut models = shipped::files_or_models(&a.model, shipped::DIAGNOSIS_MODELS)?
         .into_iter()
         .map(|(m, label)| Surrogate::from_model(m, &label))
         .collect::<mbgc::error::Result<Vec<_>>>()?;
@@ -193,12 +187,6 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
             }));
         }
     }
-    let opts = Options {
-        starts: a.starts,
-        samples: a.samples,
-        seed: a.seed,
-        alpha: a.alpha,
-    };
     let d = match diagnose(&set, &models, &opts) {
         Ok(d) => d,
         Err(e) if a.build.is_none() => match build::plan(&set, &models, &[]) {
@@ -290,22 +278,4 @@ fn plan_text(p: &build::LocalPlan, o: &BuildOptions) -> String {
         o.validation(),
         o.dir.display()
     )
-}
-
-/// The JSON report: the keys first (`chi2_dof`, `residuals`, `ranking`), then the rest.
-pub fn json(d: &Diagnosis) -> serde_json::Value {
-    serde_json::json!({
-        "set": d.set,
-        "class": d.class,
-        "chi2_dof": d.chi2_dof,
-        "p_value": d.p_value,
-        "residuals": d.base.residuals,
-        "structure": d.base.structure,
-        "ranking": d.ranking,
-        "unavailable": d.unavailable,
-        "verdict": d.verdict,
-        "base": d.base,
-        "extended": d.extended,
-        "settings": d.settings,
-    })
 }

@@ -10,7 +10,6 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
-pub mod builtin;
 pub mod calibrate;
 pub mod campaign;
 pub mod campaign_progress;

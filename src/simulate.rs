@@ -12,8 +12,8 @@ use mbgc::dem::contact::ModelClass;
 
 use mbgc::campaign::decks::write_decks;
 use mbgc::campaign::{
-    experiment_by_name, parse_set, run_campaign, Backend, CampaignOptions, ExperimentSettings,
-    Plan, Shard,
+    experiment_by_name, parse_set, run_campaign, worker_threads, Backend, CampaignOptions,
+    ExperimentSettings, Plan, Shard,
 };
 
 #[derive(Debug, Args)]
@@ -167,14 +167,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         .iter()
         .map(|s| parse_set(s))
         .collect::<Result<Vec<_>, _>>()?;
-    let threads = match a.threads {
-        Some(0) => anyhow::bail!("--threads: expected at least 1"),
-        Some(n) => n,
-        // Each LIGGGHTS run takes --mpi cores.
-        None => (std::thread::available_parallelism().map_or(1, |n| n.get())
-            / a.mpi.unwrap_or(1).max(1))
-        .max(1),
-    };
+    let threads = worker_threads(a.threads, a.mpi)?;
     let plan = Plan::new(
         experiment.as_ref(),
         &a.design,
@@ -277,25 +270,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             s.retried
         );
     }
-    out.object(&serde_json::json!({
-        "out": a_out,
-        "experiment": plan.experiment,
-        "model_class": plan.model_class.map(|c| c.to_string()),
-        "backend": plan.settings.backend.label(),
-        "design": a.design,
-        "design_rows": plan.rows.len(),
-        "shard": shard.map(|k| k.to_string()),
-        "planned": s.planned,
-        "skipped": s.skipped,
-        "done": s.done,
-        "no_value": s.no_value,
-        "failed": s.failed,
-        "failed_before": s.failed_before,
-        "retried": s.retried,
-        "truncated_bytes": s.truncated_bytes,
-        "threads": s.threads,
-        "elapsed_s": s.elapsed_s,
-    }))?;
+    out.object(&s.json(&plan, a_out))?;
     // A cluster job array must see failures in the exit code, including those of an earlier
     // attempt that this resume skipped.
     let failed = s.failed + s.failed_before;

@@ -5,18 +5,19 @@
 
 use pyo3::prelude::*;
 
+use mbgc::calibrate::report;
 use mbgc::calibrate::session::{self, SessionOptions};
 use mbgc::material::Material;
+use mbgc::shipped;
 
-use crate::builtin;
 use crate::documents::Document;
-use crate::errors::{invalid, to_py, OrRaise};
+use crate::errors::{to_py, OrRaise};
 use crate::model::NativeModel;
 
-/// One model's session: its JSON (`session`: what `--json` prints; beside it what the text
-/// report shows: the material file, its fixed values and measurements, the free parameters,
-/// their search box and those no equation reads), its calibrated TOML, the names of the posterior's axes and
-/// the draws (one row per draw; empty without a posterior).
+/// One model's session: its JSON (`session`: what `--json` prints; beside it the material
+/// file, its fixed values and measurements, the free parameters, their search box, those no
+/// equation reads, and `report`: the text `mbgc calibrate` prints), its calibrated TOML, the
+/// names of the posterior's axes and the draws (one row per draw; empty without a posterior).
 type SessionResult = (String, String, Vec<String>, Vec<Vec<f64>>);
 
 /// Calibrates the material (a file, or a dict's JSON) against each model (the shipped
@@ -40,7 +41,7 @@ pub fn calibrate(
 ) -> PyResult<(Vec<SessionResult>, Option<Vec<f64>>)> {
     let mut material = match Document::new(py, material_path, material_json, material_label)? {
         Document::File(path) => {
-            let (m, note) = builtin::material(&path).or_raise(py)?;
+            let (m, note) = shipped::material(&path).or_raise(py)?;
             if let Some(note) = note {
                 let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
                 let text = std::ffi::CString::new(note).unwrap_or_default();
@@ -50,25 +51,7 @@ pub fn calibrate(
         }
         Document::Text { toml, label } => Material::from_toml_str(&toml, &label).or_raise(py)?,
     };
-    for name in &free {
-        let before = material.fixed.len();
-        material.fixed.retain(|(n, _)| n != name);
-        if material.fixed.len() == before {
-            return Err(invalid(
-                py,
-                format!(
-                    "--free {name}: {} does not fix {name} (it fixes: {})",
-                    material.source,
-                    material
-                        .fixed
-                        .iter()
-                        .map(|(n, _)| n.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ));
-        }
-    }
+    material.free(&free).or_raise(py)?;
     let opts = SessionOptions {
         starts,
         seed,
@@ -77,10 +60,14 @@ pub fn calibrate(
         sigma_max,
     };
     opts.check().or_raise(py)?;
-    let shipped;
+    let defaults: Vec<NativeModel>;
     let models: Vec<&NativeModel> = if models.is_empty() {
-        shipped = NativeModel::shipped_default(py)?;
-        vec![&shipped]
+        defaults = shipped::models(shipped::CALIBRATION_MODELS)
+            .or_raise(py)?
+            .into_iter()
+            .map(|(m, label)| NativeModel::new(m, label))
+            .collect();
+        defaults.iter().collect()
     } else {
         models.iter().map(Py::get).collect()
     };
@@ -112,6 +99,7 @@ pub fn calibrate(
                 "free": s.free,
                 "bounds": s.bounds,
                 "unused": s.unused,
+                "report": report::text(s, ".solutions"),
             });
             (record.to_string(), s.calibrated_toml(), names, draws)
         })

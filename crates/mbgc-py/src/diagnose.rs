@@ -5,12 +5,12 @@
 
 use pyo3::prelude::*;
 
-use mbgc::diagnose::report::markdown;
+use mbgc::diagnose::report::{json, markdown};
 use mbgc::diagnose::{diagnose as run, MeasurementSet, Options, Surrogate};
+use mbgc::shipped;
 
-use crate::builtin;
 use crate::documents::Document;
-use crate::errors::{invalid, to_py, OrRaise};
+use crate::errors::{to_py, OrRaise};
 use crate::model::NativeModel;
 
 /// Diagnoses the measurement set (a file, or a dict's JSON) with the models; returns the JSON
@@ -29,36 +29,25 @@ pub fn diagnose(
     seed: u64,
     alpha: f64,
 ) -> PyResult<(String, String)> {
-    if !(alpha > 0.0 && alpha < 1.0) {
-        return Err(invalid(
-            py,
-            format!("--alpha: expected a level between 0 and 1, got {alpha}"),
-        ));
-    }
-    let max = mbgc::calibrate::tmcmc::MAX_SAMPLES;
-    if !(100..=max).contains(&samples) {
-        return Err(invalid(
-            py,
-            format!("--samples: expected 100 to {max} TMCMC samples per stage, got {samples}"),
-        ));
-    }
-    let max_starts = mbgc::calibrate::session::MAX_STARTS;
-    if starts == 0 || starts > max_starts {
-        return Err(invalid(
-            py,
-            format!("--starts {starts}: expected 1 to {max_starts}"),
-        ));
-    }
+    let opts = Options {
+        starts,
+        samples,
+        seed,
+        alpha,
+    };
+    opts.check().or_raise(py)?;
     let set = match Document::new(py, measurements_path, measurements_json, measurements_label)? {
         Document::File(path) => MeasurementSet::from_file(&path),
         Document::Text { toml, label } => MeasurementSet::from_toml_str(&toml, &label),
     }
     .or_raise(py)?;
     let surrogates = if models.is_empty() {
-        [builtin::SHEAR_BOX_MODEL, builtin::SHEAR_BOX_SJKR_MODEL]
-            .iter()
-            .map(|name| builtin::model(name).and_then(|(m, l)| Surrogate::from_model(m, &l)))
-            .collect::<mbgc::Result<Vec<_>>>()
+        shipped::models(shipped::DIAGNOSIS_MODELS).and_then(|models| {
+            models
+                .into_iter()
+                .map(|(m, label)| Surrogate::from_model(m, &label))
+                .collect::<mbgc::Result<Vec<_>>>()
+        })
     } else {
         models
             .iter()
@@ -69,33 +58,8 @@ pub fn diagnose(
             .collect()
     }
     .or_raise(py)?;
-    let opts = Options {
-        starts,
-        samples,
-        seed,
-        alpha,
-    };
     let d = py
         .detach(|| run(&set, &surrogates, &opts))
         .map_err(|e| to_py(py, e))?;
     Ok((json(&d).to_string(), markdown(&d).trim_end().to_string()))
-}
-
-/// The JSON report of `mbgc diagnose --json` (src/diagnose.rs's `json`), without `built`:
-/// the keys first, then the rest.
-fn json(d: &mbgc::diagnose::Diagnosis) -> serde_json::Value {
-    serde_json::json!({
-        "set": d.set,
-        "class": d.class,
-        "chi2_dof": d.chi2_dof,
-        "p_value": d.p_value,
-        "residuals": d.base.residuals,
-        "structure": d.base.structure,
-        "ranking": d.ranking,
-        "unavailable": d.unavailable,
-        "verdict": d.verdict,
-        "base": d.base,
-        "extended": d.extended,
-        "settings": d.settings,
-    })
 }

@@ -5,7 +5,6 @@
 
 use pyo3::prelude::*;
 
-mod builtin;
 mod calibrate;
 mod convert;
 mod diagnose;

@@ -8,8 +8,8 @@ use pyo3::types::PyBytes;
 
 use mbgc::export::{export, sympy, Format};
 use mbgc::metamodel::Metamodel;
+use mbgc::shipped;
 
-use crate::builtin;
 use crate::convert::{bytes_of, floats};
 use crate::errors::{invalid, OrRaise};
 
@@ -23,12 +23,6 @@ pub struct NativeModel {
 impl NativeModel {
     pub fn new(model: Metamodel, label: String) -> Self {
         NativeModel { model, label }
-    }
-
-    /// The default model of a calibration: the shipped shear-box model.
-    pub fn shipped_default(py: Python<'_>) -> PyResult<Self> {
-        let (model, label) = builtin::model(builtin::SHEAR_BOX_MODEL).or_raise(py)?;
-        Ok(NativeModel::new(model, label))
     }
 }
 
@@ -48,11 +42,11 @@ impl NativeModel {
         Ok(NativeModel::new(model, label.to_string()))
     }
 
-    /// A model shipped with mbgc: `shear_box` (the default of a calibration) or
-    /// `shear_box_sjkr`.
+    /// A model shipped with mbgc, by its short name or path: `shear_box` (the default of a
+    /// calibration) or another of `mbgc::shipped::names()`.
     #[staticmethod]
     fn shipped(py: Python<'_>, name: &str) -> PyResult<Self> {
-        let (model, label) = builtin::model(name).or_raise(py)?;
+        let (model, label) = shipped::model(name).or_raise(py)?;
         Ok(NativeModel::new(model, label))
     }
 

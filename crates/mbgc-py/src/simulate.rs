@@ -10,8 +10,8 @@ use std::sync::{Arc, Mutex};
 use pyo3::prelude::*;
 
 use mbgc::campaign::{
-    experiment_by_name, parse_set, run_campaign, Backend, CampaignOptions, ExperimentSettings,
-    Observer, ObserverHandle, Plan, Shard,
+    experiment_by_name, parse_set, run_campaign, worker_threads, Backend, CampaignOptions,
+    ExperimentSettings, Observer, ObserverHandle, Plan, Shard,
 };
 use mbgc::dem::contact::ModelClass;
 
@@ -134,13 +134,7 @@ pub fn simulate(
         .map(|(k, v)| parse_set(&format!("{k}={v:?}")))
         .collect::<mbgc::Result<Vec<_>>>()
         .or_raise(py)?;
-    let threads = match threads {
-        Some(0) => return Err(invalid(py, "--threads: expected at least 1")),
-        Some(n) => n,
-        None => (std::thread::available_parallelism().map_or(1, |n| n.get())
-            / mpi.unwrap_or(1).max(1))
-        .max(1),
-    };
+    let threads = worker_threads(threads, mpi).or_raise(py)?;
     let plan =
         Plan::new(experiment.as_ref(), &design, &set, seed, &settings, shard).or_raise(py)?;
     let callback = progress.map(|p| {
@@ -165,24 +159,5 @@ pub fn simulate(
     if let Some(e) = callback.and_then(|c| c.error.lock().ok().and_then(|mut e| e.take())) {
         return Err(e);
     }
-    Ok(serde_json::json!({
-        "out": out,
-        "experiment": plan.experiment,
-        "model_class": plan.model_class.map(|c| c.to_string()),
-        "backend": plan.settings.backend.label(),
-        "design": design,
-        "design_rows": plan.rows.len(),
-        "shard": shard.map(|k| k.to_string()),
-        "planned": s.planned,
-        "skipped": s.skipped,
-        "done": s.done,
-        "no_value": s.no_value,
-        "failed": s.failed,
-        "failed_before": s.failed_before,
-        "retried": s.retried,
-        "truncated_bytes": s.truncated_bytes,
-        "threads": s.threads,
-        "elapsed_s": s.elapsed_s,
-    })
-    .to_string())
+    Ok(s.json(&plan, &out).to_string())
 }

@@ -14,7 +14,8 @@ use mbgc::metamodel::Metamodel;
 use mbgc::space::Space;
 use mbgc::train::{TrainPaths, TrainRecord};
 
-use crate::metamodel_report::{equation_section, parameter_table};
+use crate::campaign_runs::{cost_section, read_runs, read_runs_if_any, Run};
+use crate::metamodel_report::{box_groups_note, equation_section, parameter_table};
 use crate::noise_floor::{replicate_noise, NoiseFloor};
 
 /// The issue's budget of new runs, core-hours.
@@ -42,72 +43,14 @@ pub struct Args {
     pub json: bool,
 }
 
-/// One run of a campaign table, as the report needs it.
-struct Run {
-    copied: bool,
-    done: bool,
-    settled: bool,
-    wall_s: f64,
-    /// Inputs by name (every numeric column before the responses).
-    values: Vec<(String, f64)>,
-    angle: f64,
-    bulk: f64,
+/// A cohesion is on in the run.
+fn cohesive(r: &Run) -> bool {
+    r.get("ced_pp") > 0.0 || r.get("ced_pw") > 0.0
 }
 
-impl Run {
-    fn get(&self, name: &str) -> f64 {
-        self.values
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(f64::NAN, |(_, v)| *v)
-    }
-
-    fn cohesive(&self) -> bool {
-        self.get("ced_pp") > 0.0 || self.get("ced_pw") > 0.0
-    }
-
-    fn measured(&self) -> bool {
-        self.done && self.settled && self.angle.is_finite() && self.bulk.is_finite()
-    }
-}
-
-fn read_runs(path: &Path) -> anyhow::Result<Vec<Run>> {
-    let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
-    let header = r.headers()?.clone();
-    let col = |name: &str| {
-        header
-            .iter()
-            .position(|c| c == name)
-            .with_context(|| format!("{}: no column {name}", path.display()))
-    };
-    let (first, angle, bulk) = (
-        col("model_class")? + 1,
-        col("shear_angle")?,
-        col("bulk_density")?,
-    );
-    let (status, settled, wall, warnings) = (
-        col("status")?,
-        col("settled")?,
-        col("wall_time_s")?,
-        col("warnings")?,
-    );
-    let num = |rec: &csv::StringRecord, i: usize| rec[i].parse().unwrap_or(f64::NAN);
-    let mut out = Vec::new();
-    for rec in r.records() {
-        let rec = rec.with_context(|| path.display().to_string())?;
-        out.push(Run {
-            copied: rec[warnings].contains("copied from ") && rec[warnings].contains(", run by "),
-            done: &rec[status] == "done",
-            settled: &rec[settled] == "true",
-            wall_s: num(&rec, wall),
-            values: (first..angle)
-                .map(|i| (header[i].to_string(), num(&rec, i)))
-                .collect(),
-            angle: num(&rec, angle),
-            bulk: num(&rec, bulk),
-        });
-    }
-    Ok(out)
+/// The run measured both responses at rest.
+fn measured(r: &Run) -> bool {
+    r.done && r.settled && r.get("shear_angle").is_finite() && r.get("bulk_density").is_finite()
 }
 
 pub fn run(a: &Args) -> anyhow::Result<()> {
@@ -133,19 +76,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let model = Metamodel::load(&paths.model)?;
     let space = Space::from_file(&dir.join(&record.space))?;
     let train = read_runs(&paths.table)?;
-    let valid = if paths.validation_table.exists() {
-        read_runs(&paths.validation_table)?
-    } else {
-        Vec::new()
-    };
+    let valid = read_runs_if_any(&paths.validation_table)?;
     let replicate_table = paths
         .validation_table
         .with_file_name(format!("{}_replicates.csv", a.name));
-    let replicates = if replicate_table.exists() {
-        read_runs(&replicate_table)?
-    } else {
-        Vec::new()
-    };
+    let replicates = read_runs_if_any(&replicate_table)?;
     let base = record.extends.as_ref().map(|e| e.from.clone());
     let correction = record.extends.as_ref().is_some_and(|e| e.correction);
 
@@ -195,11 +130,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     space_section(&mut w, &space, &record, &train);
     cost_section(
         &mut w,
-        &paths,
-        &train,
-        &valid,
-        &replicate_table,
-        &replicates,
+        &[
+            (paths.table.as_path(), &train),
+            (paths.validation_table.as_path(), &valid),
+            (replicate_table.as_path(), &replicates),
+        ],
+        ("without a usable angle", &|r: &Run| {
+            !(r.done && r.settled && r.get("shear_angle").is_finite())
+        }),
+        BUDGET_CORE_H,
     );
     validation_section(
         &mut w,
@@ -211,6 +150,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         base.as_deref(),
     )?;
     equation_section(&mut w, &model);
+    box_groups_note(&mut w);
 
     crate::write_report(
         a.json,
@@ -251,7 +191,7 @@ fn space_section(w: &mut String, space: &Space, record: &TrainRecord, train: &[R
     for b in RATIO_BINS.windows(2) {
         let runs: Vec<&Run> = train
             .iter()
-            .filter(|r| !r.copied && r.cohesive())
+            .filter(|r| !r.copied && cohesive(r))
             .filter(|r| {
                 let q = r.get("ced_pp") / r.get("E_p");
                 q >= b[0] && q < b[1]
@@ -259,7 +199,7 @@ fn space_section(w: &mut String, space: &Space, record: &TrainRecord, train: &[R
             .collect();
         let bad = runs
             .iter()
-            .filter(|r| !(r.done && r.settled && r.angle.is_finite()))
+            .filter(|r| !(r.done && r.settled && r.get("shear_angle").is_finite()))
             .count();
         let _ = writeln!(
             w,
@@ -281,61 +221,6 @@ fn space_section(w: &mut String, space: &Space, record: &TrainRecord, train: &[R
     }
 }
 
-fn cost_section(
-    w: &mut String,
-    paths: &TrainPaths,
-    train: &[Run],
-    valid: &[Run],
-    replicate_table: &Path,
-    replicates: &[Run],
-) {
-    let _ = writeln!(
-        w,
-        "\n## Cost\n\nWall time of each new run as the campaign table records it (one run per \
-         core, two at a time on a 2-core machine, other work beside them: an upper bound of the \
-         cost alone). Copied rows cost nothing here.\n\n\
-         | table | copied | new runs | failed | without a usable angle | core-hours | median s | \
-         max s |\n|---|---|---|---|---|---|---|---|"
-    );
-    let mut total = 0.0;
-    for (path, runs) in [
-        (paths.table.as_path(), train),
-        (paths.validation_table.as_path(), valid),
-        (replicate_table, replicates),
-    ] {
-        if runs.is_empty() {
-            continue;
-        }
-        let new: Vec<&Run> = runs.iter().filter(|r| !r.copied).collect();
-        let wall: Vec<f64> = new
-            .iter()
-            .map(|r| r.wall_s)
-            .filter(|v| v.is_finite())
-            .collect();
-        let hours = wall.iter().sum::<f64>() / 3600.0;
-        total += hours;
-        let _ = writeln!(
-            w,
-            "| `{}` | {} | {} | {} | {} | {:.2} | {:.0} | {:.0} |",
-            path.display(),
-            runs.len() - new.len(),
-            new.len(),
-            new.iter().filter(|r| !r.done).count(),
-            new.iter()
-                .filter(|r| !(r.done && r.settled && r.angle.is_finite()))
-                .count(),
-            hours,
-            mbgc::numeric::quantile(&wall, 0.5),
-            mbgc::numeric::quantile(&wall, 1.0),
-        );
-    }
-    let _ = writeln!(
-        w,
-        "\nTogether {total:.2} core-hours of new runs, of the budget of {BUDGET_CORE_H} ({:.0} %).",
-        100.0 * total / BUDGET_CORE_H
-    );
-}
-
 /// RMSE of `model`'s response `k` over `runs` (NaN without rows), and the rows.
 fn rmse(model: &Metamodel, k: usize, runs: &[&Run]) -> (f64, usize) {
     let names = model.input_names();
@@ -343,11 +228,7 @@ fn rmse(model: &Metamodel, k: usize, runs: &[&Run]) -> (f64, usize) {
     let mut n = 0;
     for r in runs {
         let x: Vec<f64> = names.iter().map(|nm| r.get(nm)).collect();
-        let y = if model.responses[k].name == "shear_angle" {
-            r.angle
-        } else {
-            r.bulk
-        };
+        let y = r.get(&model.responses[k].name);
         let p = model.predict_point(&model.responses[k], &x);
         if p.is_finite() {
             s += (p - y).powi(2);
@@ -382,11 +263,11 @@ fn validation_section(
     }
     let inside = |r: &&Run| {
         let x: Vec<f64> = space.names().iter().map(|n| r.get(n)).collect();
-        r.measured() && space.violated(&x).is_none()
+        measured(r) && space.violated(&x).is_none()
     };
     let rows: Vec<&Run> = valid.iter().filter(inside).collect();
-    let face: Vec<&Run> = rows.iter().copied().filter(|r| !r.cohesive()).collect();
-    let cohesive: Vec<&Run> = rows.iter().copied().filter(|r| r.cohesive()).collect();
+    let face: Vec<&Run> = rows.iter().copied().filter(|r| !cohesive(r)).collect();
+    let cohesive: Vec<&Run> = rows.iter().copied().filter(|r| cohesive(r)).collect();
     let gripping: Vec<&Run> = cohesive
         .iter()
         .copied()
@@ -445,7 +326,8 @@ fn validation_section(
         "\n| rows | response | n | RMSE | noise sd | RMSE / noise | base model's RMSE |\n\
          |---|---|---|---|---|---|---|"
     );
-    let mean_bulk = |runs: &[&Run]| runs.iter().map(|r| r.bulk).sum::<f64>() / runs.len() as f64;
+    let mean_bulk =
+        |runs: &[&Run]| runs.iter().map(|r| r.get("bulk_density")).sum::<f64>() / runs.len() as f64;
     for (label, runs, noise) in [
         (
             "cohesion off",
@@ -516,7 +398,7 @@ fn validation_section(
                 r.get("mu_pw"),
                 r.get("ced_pp") / r.get("E_p"),
                 r.get("ced_pw") / r.get("ced_pp"),
-                r.angle,
+                r.get("shear_angle"),
                 model.predict_point(&model.responses[k], &x)
             );
         }

@@ -21,12 +21,16 @@
 //! - [`liggghts_backend`]: the shear box as a campaign on mbgc, LIGGGHTS and LIGGGHTS under MPI
 //!   (docs/liggghts_backend.md).
 //! - [`shear_cell_report`]: the shear cell's noise, cohesionless locus, cohesion and cost from
-//!   its campaign tables (docs/shear_cell.md).
+//!   its campaign tables (docs/shear_cell.md); [`cell_metamodel_report`]: the shear-cell
+//!   metamodel's space, cost and validation against its replicate noise
+//!   (docs/metamodel_shear_cell.md).
 //! - [`reference`](mod@reference): the reference codes (`--vs`).
 
 // The options' doc comments are `mbgc bench --help`'s text, written for the terminal (`<dir>`).
 #![allow(rustdoc::invalid_html_tags)]
 
+mod campaign_runs;
+pub mod cell_metamodel_report;
 pub mod cohesive_metamodel_report;
 pub mod dem_scene;
 pub mod dem_throughput;

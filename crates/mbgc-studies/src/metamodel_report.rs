@@ -181,6 +181,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         &space,
     )?;
     equation_section(&mut w, &model);
+    box_groups_note(&mut w);
     partial_dependence_section(&mut w, a, &model, &paths.table)?;
     gravel_section(&mut w, a, &paths, &record)?;
 
@@ -712,6 +713,10 @@ pub(crate) fn equation_section(w: &mut String, model: &Metamodel) {
             r.selection_rule
         );
     }
+}
+
+/// What seed 004 found about the shear angle's inputs, beside what the box models' groups allow.
+pub(crate) fn box_groups_note(w: &mut String) {
     let _ = writeln!(
         w,
         "\nSeed 004 found that its shear angle does not depend on d50, E, nu or rho_p. Here the \

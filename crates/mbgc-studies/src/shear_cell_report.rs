@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
+use crate::campaign_runs::{read_runs_if_any, Run};
 
 /// The responses of the shear cell, in report order, with units.
 const RESPONSES: [(&str, &str); 5] = [
@@ -40,54 +40,12 @@ pub struct Args {
     pub json: bool,
 }
 
-/// One finished run of a campaign table.
-#[derive(Clone, Debug)]
-struct Run {
-    values: Vec<(String, f64)>,
-}
-
-impl Run {
-    fn get(&self, name: &str) -> f64 {
-        self.values
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(f64::NAN, |(_, v)| *v)
-    }
-}
-
 /// The done runs of a campaign table (an absent table gives none).
 fn runs(path: &Path) -> anyhow::Result<Vec<Run>> {
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
-    let header = r.headers()?.clone();
-    let status = header
-        .iter()
-        .position(|c| c == "status")
-        .with_context(|| format!("{}: no column status", path.display()))?;
-    let mut out = Vec::new();
-    for rec in r.records() {
-        let rec = rec.with_context(|| path.display().to_string())?;
-        if &rec[status] != "done" {
-            continue;
-        }
-        let values = header
-            .iter()
-            .zip(rec.iter())
-            .filter_map(|(h, v)| {
-                // `settled` is a boolean column: 1 for true, 0 for false.
-                let x = match v {
-                    "true" => Some(1.0),
-                    "false" => Some(0.0),
-                    _ => v.parse::<f64>().ok(),
-                };
-                x.map(|x| (h.to_string(), x))
-            })
-            .collect();
-        out.push(Run { values });
-    }
-    Ok(out)
+    Ok(read_runs_if_any(path)?
+        .into_iter()
+        .filter(|r| r.done)
+        .collect())
 }
 
 /// Mean and sample sd of the finite values (sd NaN below two).
@@ -384,14 +342,14 @@ mod tests {
     /// it is linear in ced.
     #[test]
     fn the_sjkr_estimate_is_linear_in_ced_and_of_the_expected_size() {
-        let run = |ced: f64| Run {
-            values: vec![
+        let run = |ced: f64| {
+            Run::with_values(vec![
                 ("E_p".into(), 5e7),
                 ("nu_p".into(), 0.3),
                 ("d50".into(), 10.0),
                 ("normal_stress".into(), 5000.0),
                 ("ced_pp".into(), ced),
-            ],
+            ])
         };
         let a = sjkr_estimate(&run(1e5));
         let b = sjkr_estimate(&run(3e5));

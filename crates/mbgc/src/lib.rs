@@ -29,7 +29,8 @@
 //!    missing; [`sensitivity`]: which inputs matter for which response.
 //!
 //! [`train`] runs stages 2, 5 and 6 as one resumable command (`mbgc train`); [`export`] writes the
-//! equations as Rust, LaTeX or sympy; [`plot`] draws the figures.
+//! equations as Rust, LaTeX or sympy; [`plot`] draws the figures; [`shipped`] holds the models
+//! and the example material that mbgc carries with it.
 //!
 //! Functions take and return data: a [`metamodel::TrainingTable`] built in memory fits like one
 //! read from a campaign table, and a [`calibrate::session::Session`] is plain data. Files are read
@@ -115,6 +116,7 @@ pub mod plot;
 pub mod psd;
 pub mod sampling;
 pub mod sensitivity;
+pub mod shipped;
 pub mod similarity;
 pub mod space;
 pub mod train;

@@ -358,6 +358,27 @@ impl Material {
     pub fn psd_parameters(&self) -> Result<Option<(f64, f64)>> {
         self.psd.as_ref().map(PsdSpec::parameters).transpose()
     }
+
+    /// Searches the fixed parameters `names` instead of fixing them (`--free`): to see what the
+    /// measurements alone can and cannot decide. A name the material does not fix is refused.
+    pub fn free(&mut self, names: &[String]) -> Result<()> {
+        for name in names {
+            let before = self.fixed.len();
+            self.fixed.retain(|(n, _)| n != name);
+            if self.fixed.len() == before {
+                return Err(Error::invalid(format!(
+                    "--free {name}: {} does not fix {name} (it fixes: {})",
+                    self.source,
+                    self.fixed
+                        .iter()
+                        .map(|(n, _)| n.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl PsdSpec {

@@ -8,7 +8,6 @@ import os
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
 
-import numpy as np
 import pandas as pd
 
 from mbgc import _mbgc
@@ -20,17 +19,6 @@ __all__ = ["Calibration", "calibrate"]
 ModelArg = Union[None, PathLike, Model]
 
 
-def _display(v: float) -> str:
-    """A number as Rust's `{}` prints it: the shortest digits that read back, never an exponent."""
-    return str(np.format_float_positional(v, trim="-"))
-
-
-def _exp(v: float, digits: int) -> str:
-    """A number as Rust's `{:.Ne}` prints it: `2.887e2`, not Python's `2.887e+02`."""
-    mantissa, exponent = f"{v:.{digits}e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
-
-
 @dataclass(frozen=True)
 class Calibration:
     """One calibration of a material against one model: what ``mbgc calibrate`` reports.
@@ -40,7 +28,8 @@ class Calibration:
     measurements (chi^2 within the 95 % level) and how many starts reached it. Optima that do
     not fit are local minima (:attr:`local_minima`); several that fit mean the answer is not
     unique. With ``bayes=True``, :attr:`posterior` holds the TMCMC draws and
-    :attr:`log_evidence` the model class's log evidence.
+    :attr:`log_evidence` the model class's log evidence. ``json`` is the ``--json`` report,
+    ``report`` the text one (also ``str()``, with the class probability when there is one).
     """
 
     material: str
@@ -64,6 +53,7 @@ class Calibration:
     class_probability: Optional[float]
     json: Dict[str, Any] = field(repr=False)
     calibrated_toml: str = field(repr=False)
+    report: str = field(repr=False)
 
     @property
     def best(self) -> Dict[str, float]:
@@ -98,77 +88,13 @@ class Calibration:
             f.write(self.calibrated_toml)
 
     def __str__(self) -> str:
-        """The report ``mbgc calibrate`` prints."""
-        cal = self.json["calibration"]
-        lines = [f"{self.material} ({self.source}) with {self.model}"]
-        lines += [f"  {n}" for n in self.notes]
-        lines += [f"  {n} = {_display(v)} fixed" for n, v in self.fixed.items()]
-        measured = zip(self.measured["name"], self.measured["value"].tolist(), self.measured["sd"].tolist())
-        lines.append("  measured: " + ", ".join(f"{n} {_display(v)} +- {_display(sd)}" for n, v, sd in measured))
-        n_meas = len(self.measured)
-        optima = cal["optima"]
-        fitting = len(self.fitting)
-        lines.append(
-            f"{fitting} of {len(optima)} distinct optima from {cal['starts']} starts in "
-            f"{cal['seconds']:.3f} s fit the measurements (chi2 <= {self.fit_threshold:.2f}, the "
-            f"95 % level for {n_meas} measurement{'' if n_meas == 1 else 's'}):"
+        """The report ``mbgc calibrate`` prints, and the model class's probability."""
+        if self.class_probability is None:
+            return self.report
+        return (
+            f"{self.report}\nP(model class | data) = {self.class_probability:.4f} (equal prior "
+            "probabilities)"
         )
-        names = list(self.measured["name"])
-        for i, o in enumerate(optima[:10]):
-            if i == fitting and len(optima) > fitting:
-                lines.append("  local minima that do not fit:")
-            params = ", ".join(f"{n} = {v:.4f}" for n, v in zip(self.free, o["x"]))
-            fits = ", ".join(
-                f"{n} {p:.4f} ({r:+.2f} sd)" for n, p, r in zip(names, o["predictions"], o["residuals"])
-            )
-            lines.append(f"  #{i + 1} chi2 {_exp(o['chi2'], 3)} ({o['starts']} starts): {params}")
-            lines.append(f"      predicted {fits}")
-        if len(optima) > 10:
-            lines.append(f"  ... {len(optima) - 10} more (see .solutions)")
-        if self.unused:
-            lines.append(
-                "Not in any equation of the measured responses (any value in range fits equally): "
-                + ", ".join(self.unused)
-            )
-        if cal["excess_parameters"] > 0:
-            equal = sum(1 for o in optima if o["chi2"] <= optima[0]["chi2"] + 1.0)
-            if equal > 1:
-                lines.append(
-                    f"{equal} of the optima are equally good points of one continuous solution set, "
-                    "not separate answers."
-                )
-            lines.append(
-                f"{len(self.free)} free parameters but {n_meas} measurements: the data fix at most "
-                f"{n_meas} combinations; the solutions form a set of dimension >= "
-                f"{cal['excess_parameters']}."
-            )
-        if len(self.flat_directions):
-            lines.append(
-                "Directions at the best optimum along which the predictions do not change (unit-box steps):"
-            )
-            for d in cal["flat_directions"]:
-                comp = " ".join(f"{c:+.2f} {n}" for n, c in zip(self.free, d["components"]) if abs(c) >= 0.05)
-                lines.append(f"  {comp}  (singular value {_exp(d['singular_value'], 1)})")
-            lines.append("Range of each parameter over the equally good optima (chi2 within 1 of the best):")
-            for r in cal["solution_ranges"]:
-                lines.append(f"  {r['name']} in [{r['min']:.4f}, {r['max']:.4f}]")
-        details = self.json.get("posterior_details")
-        if details:
-            lines.append(
-                f"Posterior (TMCMC, {details['samples']} samples, {details['stages']} stages): "
-                f"log evidence {details['ln_evidence']:.3f}"
-            )
-            for p in details["parameters"]:
-                lines.append(
-                    f"  {p['name']:>12}: mean {p['mean']:.4f}, COV {p['cov']:.3f}, 5 % {p['q05']:.4f}, "
-                    f"95 % {p['q95']:.4f}"
-                )
-            lines.append("Posterior-robust predictions (mean +- sd over the posterior):")
-            for r in details["responses"]:
-                lines.append(f"  {r['name']:>12}: {r['mean']:.4f} +- {r['sd']:.4f}")
-        if self.class_probability is not None:
-            lines.append(f"P(model class | data) = {self.class_probability:.4f} (equal prior probabilities)")
-        return "\n".join(lines)
 
     def __repr__(self) -> str:
         best = ", ".join(f"{n} = {self.solutions.iloc[0][n]:.4g}" for n in self.free)
@@ -229,6 +155,7 @@ def _calibration(record: str, toml: str, names: List[str], draws: List[List[floa
         class_probability=probability,
         json=s,
         calibrated_toml=toml,
+        report=r["report"].rstrip("\n"),
     )
 
 

@@ -31,6 +31,6 @@ pub use merge::{merge, merge_tables, MergeSummary};
 pub use observer::{Observer, ObserverHandle};
 pub use plan::{parse_set, Plan, PlannedRun, Shard};
 pub use registry::{experiment_by_name, experiment_names, ExperimentSettings};
-pub use runner::{run_campaign, CampaignOptions, Summary};
+pub use runner::{run_campaign, worker_threads, CampaignOptions, Summary};
 pub use status::{meta_path, status, Meta, Status};
 pub use table::{read_table, Table};

@@ -85,6 +85,44 @@ pub struct Summary {
     pub elapsed_s: f64,
 }
 
+impl Summary {
+    /// The summary as `mbgc simulate --json` prints it: the table `out`, what `plan` ran it
+    /// with, and the counts.
+    pub fn json(&self, plan: &Plan, out: &Path) -> serde_json::Value {
+        serde_json::json!({
+            "out": out,
+            "experiment": plan.experiment,
+            "model_class": plan.model_class.map(|c| c.to_string()),
+            "backend": plan.settings.backend.label(),
+            "design": plan.design,
+            "design_rows": plan.rows.len(),
+            "shard": plan.shard.map(|k| k.to_string()),
+            "planned": self.planned,
+            "skipped": self.skipped,
+            "done": self.done,
+            "no_value": self.no_value,
+            "failed": self.failed,
+            "failed_before": self.failed_before,
+            "retried": self.retried,
+            "truncated_bytes": self.truncated_bytes,
+            "threads": self.threads,
+            "elapsed_s": self.elapsed_s,
+        })
+    }
+}
+
+/// The worker threads of a campaign: `given` (`--threads`, at least 1), else one per core
+/// divided among the `mpi` processes each LIGGGHTS run takes.
+pub fn worker_threads(given: Option<usize>, mpi: Option<usize>) -> Result<usize> {
+    match given {
+        Some(0) => Err(Error::invalid("--threads: expected at least 1")),
+        Some(n) => Ok(n),
+        None => Ok((std::thread::available_parallelism().map_or(1, |n| n.get())
+            / mpi.unwrap_or(1).max(1))
+        .max(1)),
+    }
+}
+
 /// Runs every row of the plan's shard that the table does not hold yet.
 pub fn run_campaign(
     experiment: &dyn Experiment,

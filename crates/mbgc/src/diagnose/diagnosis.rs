@@ -36,6 +36,33 @@ impl Default for Options {
     }
 }
 
+impl Options {
+    /// Refuses settings a diagnosis cannot run with, naming the option and what it takes.
+    pub fn check(&self) -> Result<()> {
+        if !(self.alpha > 0.0 && self.alpha < 1.0) {
+            return Err(Error::invalid(format!(
+                "--alpha: expected a level between 0 and 1, got {}",
+                self.alpha
+            )));
+        }
+        let max = crate::calibrate::tmcmc::MAX_SAMPLES;
+        if !(100..=max).contains(&self.samples) {
+            return Err(Error::invalid(format!(
+                "--samples: expected 100 to {max} TMCMC samples per stage, got {}",
+                self.samples
+            )));
+        }
+        let max_starts = crate::calibrate::session::MAX_STARTS;
+        if self.starts == 0 || self.starts > max_starts {
+            return Err(Error::invalid(format!(
+                "--starts {}: expected 1 to {max_starts}",
+                self.starts
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// ln 10: a Bayes factor of 10, "strong" evidence on Jeffreys' scale.
 pub const STRONG: f64 = std::f64::consts::LN_10;
 

@@ -1,5 +1,5 @@
 //! The diagnosis as a Markdown report (tables of the fit, the residuals, their structure, the
-//! ranked candidates and the error ladder) and its figures.
+//! ranked candidates and the error ladder), as JSON, and its figures.
 
 use std::path::{Path, PathBuf};
 
@@ -175,6 +175,26 @@ pub fn markdown(d: &Diagnosis) -> String {
     }
     line!(out, "\nVerdict: {}", d.verdict);
     out
+}
+
+/// The report as JSON (what `mbgc diagnose --json` prints, less what the command adds about the
+/// models it built): the keys an issue asks about first (`chi2_dof`, `residuals`, `ranking`),
+/// then the rest.
+pub fn json(d: &Diagnosis) -> serde_json::Value {
+    serde_json::json!({
+        "set": d.set,
+        "class": d.class,
+        "chi2_dof": d.chi2_dof,
+        "p_value": d.p_value,
+        "residuals": d.base.residuals,
+        "structure": d.base.structure,
+        "ranking": d.ranking,
+        "unavailable": d.unavailable,
+        "verdict": d.verdict,
+        "base": d.base,
+        "extended": d.extended,
+        "settings": d.settings,
+    })
 }
 
 /// Parity per response, residuals against d50 per response, the ladder; base and the best
