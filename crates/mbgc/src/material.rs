@@ -351,6 +351,21 @@ impl Material {
     /// A material from the text of a material file; `source` names it in errors and gives the
     /// default name. A sieve path stays as written.
     pub fn from_toml_str(text: &str, source: &str) -> Result<Material> {
+        // A measurement set's samples may come from several experiments, each with its own
+        // model: one material's single prediction per response cannot hold them, so point to
+        // the command whose first step is their joint calibration instead of "unknown key".
+        if let Ok(t) = text.parse::<toml::Table>() {
+            if t.contains_key("sample") {
+                return Err(Error::input(
+                    source,
+                    "sample",
+                    "a material file (one [psd] and one [measured] table); this is a \
+                     measurement set of [[sample]]s: calibrate all its samples jointly, on \
+                     each sample's experiment's model, with `mbgc diagnose --measurements \
+                     FILE --model MODEL ...` (its first step is that joint calibration)",
+                ));
+            }
+        }
         from_toml::<MaterialFile>(text, source)?.validate(source)
     }
 
@@ -417,6 +432,23 @@ rho_p = [2000, 3000]
 [constraints]
 expr = ["e_pw <= e_pp", "mu_pp + 0.5*mu_r_pp >= 0.2"]
 "#;
+
+    #[test]
+    fn a_measurement_set_is_pointed_to_diagnose() {
+        let set = r#"
+name = "two experiments"
+[[sample]]
+name = "box"
+experiment = "shear-box"
+psd = { d50_mm = 8, sigma_ln = 0.1 }
+measured.shear_angle = { value = 36.8, sd = 0.6 }
+"#;
+        let e = Material::from_toml_str(set, "set.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("set.toml") && e.contains("sample"), "{e}");
+        assert!(e.contains("mbgc diagnose --measurements"), "{e}");
+    }
 
     #[test]
     fn the_model_table_names_a_class_and_refuses_parameters_of_other_effects() {
