@@ -1,12 +1,15 @@
 //! `simulate`: a calibration experiment for every row of a design, into a campaign table that a
 //! repeated call resumes, as `mbgc simulate --out` runs it (src/simulate.rs): the same checks,
 //! plan, table and sidecar, so the command line can resume what Python started and the other
-//! way round. The DEM runs without the GIL; progress is reported to a Python callable.
+//! way round. The DEM runs without the GIL; progress is reported to a Python callable; a Ctrl-C
+//! (KeyboardInterrupt) stops it after the runs in flight, which are recorded for the next call.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
+use pyo3::exceptions::PyKeyboardInterrupt;
 use pyo3::prelude::*;
 
 use mbgc::campaign::{
@@ -17,28 +20,50 @@ use mbgc::dem::contact::ModelClass;
 
 use crate::errors::{invalid, to_py, OrRaise};
 
-/// Tells a Python callable `progress(done, total)` of each run recorded, from the thread that
-/// writes the table; the first exception it raises is kept and raised after the campaign (the
-/// campaign itself goes on: its runs are worth keeping).
+/// Counts the runs for a Python callable `progress(done, total)`. The campaign's thread only
+/// queues the counts; the calling thread, which polls for signals anyway, makes the calls with
+/// the GIL, in order. The first exception the callable raises is kept and raised after the
+/// campaign (the campaign itself goes on: its runs are worth keeping).
 struct Callback {
     progress: Py<PyAny>,
     total: AtomicUsize,
     done: AtomicUsize,
+    queued: Mutex<Vec<(usize, usize)>>,
     error: Mutex<Option<PyErr>>,
 }
 
 impl Callback {
-    fn call(&self) {
-        let (done, total) = (
+    fn queue(&self) {
+        let counts = (
             self.done.load(Ordering::SeqCst),
             self.total.load(Ordering::SeqCst),
         );
+        self.queued
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(counts);
+    }
+
+    /// The callable raised a KeyboardInterrupt.
+    fn interrupted(&self, py: Python<'_>) -> bool {
+        self.error
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .as_ref()
+            .is_some_and(|e| e.is_instance_of::<PyKeyboardInterrupt>(py))
+    }
+
+    /// Calls the callable with every queued count; the caller holds the GIL.
+    fn call_queued(&self, py: Python<'_>) {
+        let queued = std::mem::take(&mut *self.queued.lock().unwrap_or_else(|e| e.into_inner()));
         let mut error = self.error.lock().unwrap_or_else(|e| e.into_inner());
-        if error.is_some() {
-            return;
-        }
-        if let Err(e) = Python::attach(|py| self.progress.call1(py, (done, total)).map(drop)) {
-            *error = Some(e);
+        for (done, total) in queued {
+            if error.is_some() {
+                return;
+            }
+            if let Err(e) = self.progress.call1(py, (done, total)) {
+                *error = Some(e);
+            }
         }
     }
 }
@@ -46,12 +71,12 @@ impl Callback {
 impl Observer for Callback {
     fn started(&self, to_run: usize, _already_done: usize) {
         self.total.store(to_run, Ordering::SeqCst);
-        self.call();
+        self.queue();
     }
 
     fn run_recorded(&self, _failed: bool) {
         self.done.fetch_add(1, Ordering::SeqCst);
-        self.call();
+        self.queue();
     }
 }
 
@@ -142,6 +167,7 @@ pub fn simulate(
             progress: p,
             total: AtomicUsize::new(0),
             done: AtomicUsize::new(0),
+            queued: Mutex::new(Vec::new()),
             error: Mutex::new(None),
         })
     });
@@ -151,11 +177,47 @@ pub fn simulate(
             .as_ref()
             .map(|c| ObserverHandle::new(Shared(Arc::clone(c)))),
         retry_failed,
+        cancel: Some(Arc::new(AtomicBool::new(false))),
         ..CampaignOptions::new(out.clone(), threads)
     };
-    let s = py
-        .detach(|| run_campaign(experiment.as_ref(), &plan, &opts))
-        .map_err(|e| to_py(py, e))?;
+    // The campaign runs on its own thread while this one wakes every 50 ms to call `progress`
+    // and to let Python handle signals: a Ctrl-C stops the campaign after the runs in flight,
+    // which are recorded.
+    let cancel = Arc::clone(opts.cancel.as_ref().expect("set above"));
+    let outcome = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| run_campaign(experiment.as_ref(), &plan, &opts));
+        let mut interrupted = None;
+        loop {
+            let finished = worker.is_finished();
+            if let Some(c) = &callback {
+                c.call_queued(py);
+                // A Ctrl-C that lands while the callable runs is raised there: it stops the
+                // campaign all the same.
+                if c.interrupted(py) {
+                    cancel.store(true, Ordering::SeqCst);
+                }
+            }
+            if finished {
+                break;
+            }
+            py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+            if interrupted.is_none() {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::SeqCst);
+                    interrupted = Some(e);
+                }
+            }
+        }
+        let result = worker.join();
+        (result, interrupted)
+    });
+    if let (_, Some(e)) = outcome {
+        return Err(e);
+    }
+    let s = match outcome.0 {
+        Ok(r) => r.map_err(|e| to_py(py, e))?,
+        Err(panic) => std::panic::resume_unwind(panic),
+    };
     if let Some(e) = callback.and_then(|c| c.error.lock().ok().and_then(|mut e| e.take())) {
         return Err(e);
     }

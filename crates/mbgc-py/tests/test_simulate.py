@@ -86,3 +86,23 @@ def test_a_failing_callback_is_raised_after_the_campaign(tmp_path: Path) -> None
         mbgc.simulate(design(), "wall-impact", out, set=SET, model_class="hertz,mindlin", threads=1, progress=progress)
     # The runs were kept: nothing is left to run.
     assert mbgc.simulate(design(), "wall-impact", out, set=SET, model_class="hertz,mindlin").attrs["summary"]["done"] == 0
+
+
+def test_ctrl_c_stops_the_campaign_and_keeps_its_runs(tmp_path: Path) -> None:
+    import _thread
+
+    out = tmp_path / "wall.csv"
+    many = pd.concat([design()] * 2500, ignore_index=True)
+    many["impact_angle"] += 1e-4 * many.index  # distinct rows
+    timer = threading.Timer(0.3, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            mbgc.simulate(many, "wall-impact", out, set=SET, model_class="hertz,mindlin", threads=1)
+    finally:
+        timer.cancel()
+    kept = pd.read_csv(out)
+    # Stopped early, and every run that finished before the stop is in the table, whole.
+    assert 0 < len(kept) < len(many)
+    assert (kept["status"] == "done").all()
+    assert kept["row"].is_unique

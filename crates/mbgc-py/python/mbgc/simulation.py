@@ -92,7 +92,9 @@ def simulate(
     rows. The DEM runs on ``threads`` threads (default: all cores) without holding the GIL;
     ``progress(done, total)`` is called with the GIL at the start and after each run.
     ``df.attrs["summary"]`` holds the counts ``--json`` prints; failed runs are in the table
-    (``status`` ``failed``, their reason in ``error``) and are warned of.
+    (``status`` ``failed``, their reason in ``error``) and are warned of. A Ctrl-C
+    (``KeyboardInterrupt``) stops the campaign after the runs in flight, which are kept in the
+    table: call again to go on.
     """
     with tempfile.TemporaryDirectory(prefix="mbgc-simulate-") as scratch:
         table = os.path.join(scratch, "campaign.csv") if out is None else os.fspath(out)

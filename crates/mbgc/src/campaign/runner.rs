@@ -9,7 +9,7 @@ use std::io::Write;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::{mpsc, Arc};
 use std::time::Instant;
 
 use super::columns::{
@@ -41,6 +41,9 @@ pub struct CampaignOptions {
     /// Run only these run ids of the shard (`campaign import`: the decks that have results);
     /// the others are left for a later invocation, neither run nor recorded.
     pub only: Option<HashSet<String>>,
+    /// Set by the caller to stop the campaign: no run starts after it is set, the runs in
+    /// flight finish and are recorded (a caller's Ctrl-C, without losing finished work).
+    pub cancel: Option<Arc<AtomicBool>>,
 }
 
 impl CampaignOptions {
@@ -54,6 +57,7 @@ impl CampaignOptions {
             retry_failed: false,
             work_dir: None,
             only: None,
+            cancel: None,
         }
     }
 }
@@ -211,7 +215,12 @@ pub fn run_campaign(
             let tx = tx.clone();
             let (next, stop, todo) = (&next, &stop, &todo);
             s.spawn(move || {
-                while !stop.load(Ordering::Relaxed) {
+                let cancelled = || {
+                    opts.cancel
+                        .as_ref()
+                        .is_some_and(|c| c.load(Ordering::Relaxed))
+                };
+                while !stop.load(Ordering::Relaxed) && !cancelled() {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(run) = todo.get(i) else { break };
                     let (failed, no_value, line) = execute(experiment, plan, run, opts);
