@@ -93,8 +93,9 @@ pub struct Travels {
 
 /// The yield locus through the failure points (normal, shear stress): (cohesion in Pa, angle of
 /// internal friction in radians), NaN below two points. Pushes the warnings of a cell too short
-/// for its travel and of failure tests with neither a peak nor a plateau (`failed_peaks` of
-/// `tests`), and says whether the run stays valid on both counts.
+/// for its travel, of failure tests with neither a peak nor a plateau (`failed_peaks` of
+/// `tests`) and of failure points whose shear stress does not rise with the normal stress, and
+/// says whether the run stays valid on all three counts.
 pub fn yield_locus(
     locus: &[(f64, f64)],
     t: Travels,
@@ -120,12 +121,33 @@ pub fn yield_locus(
             t.max_failure
         ));
     }
+    // A material's strength rises with the normal stress; a run whose failure points fall (one
+    // campaign run of nearly equal spheres, whose pre-shear ratio wandered between 0.01 and 0.11
+    // with mu_pp 0.86, gave 4.5, 5.6 and 2.0 kPa at 8, 16 and 25 kPa) holds no yield locus.
+    let mut sorted = locus.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let rising = sorted.windows(2).all(|w| w[1].1 > w[0].1);
+    if !rising {
+        warnings.push(format!(
+            "the shear stress at failure does not rise with the normal stress ({}): no yield \
+             locus",
+            sorted
+                .iter()
+                .map(|(n, t)| format!("{t:.4e} Pa at {n:.4e} Pa"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     let (cohesion, slope) = if locus.len() >= 2 {
         line(locus)
     } else {
         (f64::NAN, f64::NAN)
     };
-    (cohesion, slope.atan(), !short && failed_peaks == 0)
+    (
+        cohesion,
+        slope.atan(),
+        !short && failed_peaks == 0 && rising,
+    )
 }
 
 /// A cell run's responses in the table's order (the shear cell's `RESPONSES`): the locus's
@@ -201,6 +223,36 @@ mod tests {
     fn a_line_through_points_on_a_line_is_that_line() {
         let (a, b) = line(&[(1.0, 3.0), (2.0, 5.0), (4.0, 9.0)]);
         assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn failure_points_that_fall_with_the_normal_stress_make_no_valid_locus() {
+        let t = Travels {
+            preshear: 2.0,
+            longest_failure: 1.0,
+            max_failure: 2.0,
+            length: 1000.0,
+        };
+        let mut warnings = Vec::new();
+        let (_, phi, valid) = yield_locus(
+            &[(2000.0, 1200.0), (4000.0, 2400.0), (6000.0, 3500.0)],
+            t,
+            0,
+            3,
+            &mut warnings,
+        );
+        assert!(valid && warnings.is_empty(), "{warnings:?}");
+        assert!(phi > 0.0);
+        // The campaign run that fell: 4.5, 5.6 and 2.0 kPa at 8, 16 and 25 kPa.
+        let (_, _, valid) = yield_locus(
+            &[(8422.7, 4469.8), (16389.0, 5602.9), (25208.0, 1963.3)],
+            t,
+            0,
+            3,
+            &mut warnings,
+        );
+        assert!(!valid);
+        assert!(warnings[0].contains("does not rise"), "{warnings:?}");
     }
 
     #[test]
