@@ -15,6 +15,8 @@ use crate::psd::SieveData;
 pub const SHEAR_BOX: &str = "models/shear_box.json";
 /// The shipped cohesive shear-box model (class hertz,mindlin,epsd2,sjkr).
 pub const SHEAR_BOX_SJKR: &str = "models/shear_box_sjkr.json";
+/// The shipped shear-cell model (class hertz,mindlin,epsd2).
+pub const SHEAR_CELL: &str = "models/shear_cell.json";
 
 /// A file of the repository built in: `(its path, its text)`. A macro because `include_str!`
 /// takes only a literal, and one entry a line keeps adding a model one line.
@@ -29,13 +31,15 @@ macro_rules! built_in {
 const MODELS: &[(&str, &str)] = &[
     built_in!("models/shear_box.json"),
     built_in!("models/shear_box_sjkr.json"),
+    built_in!("models/shear_cell.json"),
 ];
 
 /// The models a calibration uses when none is given.
 pub const CALIBRATION_MODELS: &[&str] = &[SHEAR_BOX];
-/// The models a diagnosis uses when none is given: the base class and its cohesive extension
-/// (the candidate sjkr's model).
-pub const DIAGNOSIS_MODELS: &[&str] = &[SHEAR_BOX, SHEAR_BOX_SJKR];
+/// The models a diagnosis uses when none is given: the shear box's base class and its cohesive
+/// extension (the candidate sjkr's model), and the shear cell's base class (for a set with
+/// shear-cell samples: each sample is served by its experiment's models).
+pub const DIAGNOSIS_MODELS: &[&str] = &[SHEAR_BOX, SHEAR_BOX_SJKR, SHEAR_CELL];
 
 /// The example material's path in the repository.
 pub const GRAVEL: &str = "examples/gravel.toml";
@@ -160,7 +164,7 @@ mod tests {
                 );
             }
         }
-        assert_eq!(names(), ["shear_box", "shear_box_sjkr"]);
+        assert_eq!(names(), ["shear_box", "shear_box_sjkr", "shear_cell"]);
         for defaults in [CALIBRATION_MODELS, DIAGNOSIS_MODELS] {
             let labels: Vec<String> = models(defaults).unwrap().into_iter().map(|m| m.1).collect();
             assert_eq!(labels, defaults);
@@ -172,7 +176,7 @@ mod tests {
         let e = model("shear_cube").unwrap_err().to_string();
         assert_eq!(
             e,
-            "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr"
+            "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr, shear_cell"
         );
     }
 

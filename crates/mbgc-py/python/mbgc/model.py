@@ -42,8 +42,8 @@ class Model:
 
     @classmethod
     def shipped(cls, name: str = "shear_box") -> "Model":
-        """A model shipped with mbgc: ``shear_box`` (the default of :func:`mbgc.calibrate`) or
-        ``shear_box_sjkr`` (with cohesion)."""
+        """A model shipped with mbgc: ``shear_box`` (the default of :func:`mbgc.calibrate`),
+        ``shear_box_sjkr`` (with cohesion) or ``shear_cell`` (the shear cell's yield locus)."""
         return cls(_mbgc.NativeModel.shipped(name))
 
     @classmethod
