@@ -106,3 +106,34 @@ def test_ctrl_c_stops_the_campaign_and_keeps_its_runs(tmp_path: Path) -> None:
     assert 0 < len(kept) < len(many)
     assert (kept["status"] == "done").all()
     assert kept["row"].is_unique
+
+
+def test_without_a_callback_a_tqdm_bar_shows_the_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+    import types
+
+    bars: list = []
+
+    class Bar:
+        def __init__(self, **kwargs: object) -> None:
+            self.total, self.n, self.closed, self.seen = None, 0, False, []
+            bars.append(self)
+
+        def refresh(self) -> None:
+            self.seen.append((self.n, self.total))
+
+        def close(self) -> None:
+            self.closed = True
+
+    auto = types.ModuleType("tqdm.auto")
+    auto.tqdm = Bar  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "tqdm", types.ModuleType("tqdm"))
+    monkeypatch.setitem(sys.modules, "tqdm.auto", auto)
+    mbgc.simulate(design(), "wall-impact", tmp_path / "a.csv", set=SET, model_class="hertz,mindlin")
+    assert len(bars) == 1 and bars[0].closed
+    assert bars[0].seen[0] == (0, 4) and bars[0].seen[-1] == (4, 4)
+    # False: no bar; anything else that is not a callable is refused.
+    mbgc.simulate(design(), "wall-impact", tmp_path / "b.csv", set=SET, model_class="hertz,mindlin", progress=False)
+    assert len(bars) == 1
+    with pytest.raises(mbgc.InvalidRequestError, match="progress=True"):
+        mbgc.simulate(design(), "wall-impact", tmp_path / "c.csv", set=SET, model_class="hertz,mindlin", progress=True)

@@ -18,6 +18,22 @@ __all__ = ["simulate", "experiments", "design_path"]
 Progress = Callable[[int, int], object]
 
 
+def _tqdm_progress(experiment: str):
+    """A ``progress`` callable drawing a tqdm bar, and the bar; ``(None, None)`` without tqdm."""
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None, None
+    bar = tqdm(desc=f"mbgc simulate {experiment}", unit="run")
+
+    def progress(done: int, total: int) -> None:
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    return progress, bar
+
+
 def experiments() -> List[str]:
     """The experiments ``simulate`` runs, by the names ``mbgc simulate --experiment`` takes."""
     return list(_mbgc.experiment_names())
@@ -77,7 +93,7 @@ def simulate(
     mpi: Optional[int] = None,
     retry_failed: bool = False,
     vtk: Optional[PathLike] = None,
-    progress: Optional[Progress] = None,
+    progress: Union[Progress, None, bool] = None,
 ) -> pd.DataFrame:
     """Runs ``experiment`` (one of :func:`experiments`) on every row of ``design``, as
     ``mbgc simulate --out`` does, and returns the campaign table as a DataFrame.
@@ -90,7 +106,8 @@ def simulate(
     ``set`` holds parameters constant for every row (``--set``); ``model_class`` names the
     contact law's effects (e.g. ``"hertz,mindlin"``); ``shard="K/N"`` runs one slice of the
     rows. The DEM runs on ``threads`` threads (default: all cores) without holding the GIL;
-    ``progress(done, total)`` is called with the GIL at the start and after each run.
+    ``progress(done, total)`` is called with the GIL at the start and after each run; without
+    it a tqdm bar shows the runs when tqdm is installed (``progress=False``: nothing).
     ``df.attrs["summary"]`` holds the counts ``--json`` prints; failed runs are in the table
     (``status`` ``failed``, their reason in ``error``) and are warned of. A Ctrl-C
     (``KeyboardInterrupt``) stops the campaign after the runs in flight, which are kept in the
@@ -104,8 +121,18 @@ def simulate(
         else:
             path = os.fspath(design)
         pairs = [(str(k), float(v)) for k, v in (set or {}).items()]
-        info = summary(
-            _mbgc.simulate(
+        bar = None
+        if progress is None:
+            progress, bar = _tqdm_progress(experiment)
+        elif progress is False:
+            progress = None
+        elif not callable(progress):
+            raise InvalidRequestError(
+                f"progress={progress!r}: expected a callable progress(done, total), None (a tqdm "
+                "bar when tqdm is installed) or False (nothing)"
+            )
+        try:
+            native = _mbgc.simulate(
                 path,
                 experiment,
                 table,
@@ -121,7 +148,10 @@ def simulate(
                 None if vtk is None else os.fspath(vtk),
                 progress,
             )
-        )
+        finally:
+            if bar is not None:
+                bar.close()
+        info = summary(native)
         # round_trip: pandas' default parser can be one bit off the float64 the table holds.
         frame = pd.read_csv(table, float_precision="round_trip").sort_values("row", kind="stable").reset_index(drop=True)
     if out is None:

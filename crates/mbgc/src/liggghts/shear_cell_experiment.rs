@@ -517,15 +517,16 @@ mod tests {
         assert_eq!(o.diagnostics.warnings.len(), 1, "{o:?}");
         assert!(o.diagnostics.warnings[0]
             .starts_with("pre-shear travel 2.00 d50 (stress ratio per 0.5 d50 of it: 0.800, "));
-        // A test without a drop that levelled off fails at its plateau, as mbgc's.
+        // A test without a drop that levelled off fails at its plateau, as mbgc's (on the
+        // locus: 200 + 0.7 x 3000 Pa).
         let mut flat = synthetic(&d);
         for s in &mut flat.failures[1].samples {
-            s.shear = 1000.0;
+            s.shear = 2300.0;
         }
         let o = measure(&d, &flat, 2600.0).unwrap();
         assert!(o.diagnostics.settled, "{o:?}");
         assert!(
-            o.diagnostics.warnings[0].contains("(3.0000e3, 1.0000e3)"),
+            o.diagnostics.warnings[0].contains("(3.0000e3, 2.3000e3)"),
             "{o:?}"
         );
         // A test still rising is named; a moving pre-shear too, and the deck's stop where
