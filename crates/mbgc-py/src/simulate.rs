@@ -211,13 +211,15 @@ pub fn simulate(
         let result = worker.join();
         (result, interrupted)
     });
-    if let (_, Some(e)) = outcome {
-        return Err(e);
-    }
-    let s = match outcome.0 {
+    let (result, interrupted) = outcome;
+    // The campaign's own error says more than the interrupt that came while it failed.
+    let s = match result {
         Ok(r) => r.map_err(|e| to_py(py, e))?,
         Err(panic) => std::panic::resume_unwind(panic),
     };
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
     if let Some(e) = callback.and_then(|c| c.error.lock().ok().and_then(|mut e| e.take())) {
         return Err(e);
     }

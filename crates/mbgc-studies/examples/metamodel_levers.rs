@@ -60,7 +60,7 @@ fn log_friction(p: &mut mbgc::metamodel::RegressionProblem, name: &str) -> anyho
 
 fn main() -> anyhow::Result<()> {
     let paths = TrainPaths::new(Path::new(""), "shear_box");
-    let record: TrainRecord = serde_json::from_str(&std::fs::read_to_string(&paths.record)?)?;
+    let record = TrainRecord::load(&paths.record)?;
     let space = Space::from_file(&PathBuf::from(&record.space))?;
     let class = record
         .model_class

@@ -8,8 +8,6 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
-
 use mbgc::metamodel::Metamodel;
 use mbgc::space::Space;
 use mbgc::train::{TrainPaths, TrainRecord};
@@ -68,11 +66,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             ("the training table", &paths.table),
         ],
     )?;
-    let record: TrainRecord = serde_json::from_str(
-        &std::fs::read_to_string(&paths.record)
-            .with_context(|| paths.record.display().to_string())?,
-    )
-    .with_context(|| paths.record.display().to_string())?;
+    let record = TrainRecord::load(&paths.record)?;
     let model = Metamodel::load(&paths.model)?;
     let space = Space::from_file(&dir.join(&record.space))?;
     let train = read_runs(&paths.table)?;

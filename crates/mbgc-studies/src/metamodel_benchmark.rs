@@ -192,11 +192,7 @@ pub struct ResponseResults {
 
 /// The fitting settings of the shipped train (inputs, space, similarity, validation table).
 fn settings(dir: &Path, paths: &TrainPaths) -> anyhow::Result<(TrainingTable, FitSettings)> {
-    let record: TrainRecord = serde_json::from_str(
-        &std::fs::read_to_string(&paths.record)
-            .with_context(|| paths.record.display().to_string())?,
-    )
-    .with_context(|| paths.record.display().to_string())?;
+    let record = TrainRecord::load(&paths.record)?;
     let space = Space::from_file(&dir.join(&record.space))?;
     let class = record
         .model_class

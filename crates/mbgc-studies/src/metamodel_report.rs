@@ -102,11 +102,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         a.dir.clone()
     };
     let paths = TrainPaths::new(&dir, &a.name);
-    let record: TrainRecord = serde_json::from_str(
-        &std::fs::read_to_string(&paths.record)
-            .with_context(|| paths.record.display().to_string())?,
-    )
-    .with_context(|| paths.record.display().to_string())?;
+    let record = TrainRecord::load(&paths.record)?;
     let model = Metamodel::load(&paths.model)?;
     let space = Space::from_file(&dir.join(&record.space))?;
     let train = TableSummary::read(&paths.table)?;

@@ -111,7 +111,9 @@ def simulate(
     ``df.attrs["summary"]`` holds the counts ``--json`` prints; failed runs are in the table
     (``status`` ``failed``, their reason in ``error``) and are warned of. A Ctrl-C
     (``KeyboardInterrupt``) stops the campaign after the runs in flight, which are kept in the
-    table: call again to go on.
+    table ``out`` (without ``out`` they go with the temporary table): call again to go on. On
+    the LIGGGHTS backend a terminal's Ctrl-C also reaches the solver processes, so their runs in
+    flight are recorded as failed (``retry_failed=True`` runs them again).
     """
     with tempfile.TemporaryDirectory(prefix="mbgc-simulate-") as scratch:
         table = os.path.join(scratch, "campaign.csv") if out is None else os.fspath(out)

@@ -124,9 +124,15 @@ pub fn yield_locus(
     // A material's strength rises with the normal stress; a run whose failure points fall (one
     // campaign run of nearly equal spheres, whose pre-shear ratio wandered between 0.01 and 0.11
     // with mu_pp 0.86, gave 4.5, 5.6 and 2.0 kPa at 8, 16 and 25 kPa) holds no yield locus.
+    let finite = locus.iter().all(|(n, t)| n.is_finite() && t.is_finite());
+    if !finite {
+        warnings.push("a failure point's stress is not a finite number: no yield locus".into());
+    }
     let mut sorted = locus.to_vec();
     sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let rising = sorted.windows(2).all(|w| w[1].1 > w[0].1);
+    // Strictly: over the campaign spaces (friction above 14 deg) neighbouring points differ by
+    // at least 6 % of the pre-shear stress, their noise by 1-2 %.
+    let rising = !finite || sorted.windows(2).all(|w| w[1].1 > w[0].1);
     if !rising {
         warnings.push(format!(
             "the shear stress at failure does not rise with the normal stress ({}): no yield \

@@ -621,14 +621,7 @@ fn refuse_another_space(paths: &TrainPaths, space: &Space, file: &Path) -> Resul
     if !paths.record.exists() {
         return Ok(());
     }
-    let text = read_to_string(&paths.record)?;
-    let record: TrainRecord = serde_json::from_str(&text).map_err(|e| {
-        Error::input(
-            paths.record.display(),
-            "JSON",
-            format!("a train record ({e})"),
-        )
-    })?;
+    let record = TrainRecord::load(&paths.record)?;
     let Some(before) = record.space_parameters else {
         return Ok(());
     };
@@ -687,13 +680,7 @@ fn prepare_extension(
             old.record.display()
         ))
     })?;
-    let record: TrainRecord = serde_json::from_str(&text).map_err(|e| {
-        Error::input(
-            old.record.display(),
-            "JSON",
-            format!("a train record ({e})"),
-        )
-    })?;
+    let record = TrainRecord::from_json(&text, &old.record)?;
     if record.experiment != req.experiment {
         return Err(Error::invalid(format!(
             "--extends {from}: {from} was trained on {}, not {}",

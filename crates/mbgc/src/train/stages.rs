@@ -166,6 +166,20 @@ pub struct TrainRecord {
     pub space_parameters: Option<Vec<String>>,
 }
 
+impl TrainRecord {
+    /// The record a train wrote (`TrainPaths::record`).
+    pub fn load(path: &Path) -> Result<TrainRecord> {
+        let text = crate::error::read_to_string(path)?;
+        TrainRecord::from_json(&text, path)
+    }
+
+    /// A record from its JSON text; `path` names it in errors.
+    pub fn from_json(text: &str, path: &Path) -> Result<TrainRecord> {
+        serde_json::from_str(text)
+            .map_err(|e| Error::input(path.display(), "JSON", format!("a train record ({e})")))
+    }
+}
+
 /// The parameters of a space as a train record keeps them.
 pub fn space_parameters(space: &Space) -> Vec<String> {
     space
