@@ -1,5 +1,5 @@
 //! One shear-box run with a side-view picture:
-//! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png]
+//! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png] [trace.csv] [seed]
 use mbgc::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
 
 fn main() {
@@ -28,7 +28,7 @@ fn main() {
         threads: 1,
         ..Default::default()
     };
-    let (o, rec) = sb.run_recorded(&p, 1, &opts).expect("run");
+    let (o, rec) = sb.run_recorded(&p, a.get(8).map_or(1, |s| s.parse().expect("seed")), &opts).expect("run");
     println!("{:?}\n{:?}", o.responses, o.diagnostics);
     // Where a whole run's time goes: the fill (creation, fall, rest, strike-off) and the outflow.
     println!(
@@ -42,4 +42,14 @@ fn main() {
         rec.flow_seconds,
         rec.dt
     );
+    if let Some(path) = a.get(7) {
+        let mut out = String::from("phase,step,time,rms_speed,max_speed,max_step,removed,response\n");
+        for c in &rec.trace {
+            out += &format!(
+                "{:?},{},{:.6},{:.6e},{:.6e},{:.6e},{},{:.6}\n",
+                c.phase, c.step, c.time, c.rms_speed, c.max_speed, c.max_step, c.removed, c.response
+            );
+        }
+        std::fs::write(path, out).expect("writing the trace");
+    }
 }

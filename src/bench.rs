@@ -4,7 +4,7 @@ use clap::{Args, Subcommand};
 
 use mbgc_studies::{
     cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
-    gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, restitution,
+    gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection, restitution,
     sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
     shear_cell_report,
 };
@@ -50,6 +50,9 @@ pub enum BenchCommand {
     /// same limits, a Gaussian process and a quadratic surface, on the shipped campaign's
     /// columns; validation RMSE against the replicate noise, equation length, fit time.
     Metamodels(metamodel_benchmark::Args),
+    /// docs/rest_detection.md: shear-box runs of a campaign table rerun with their seeds, their
+    /// per-chunk traces, and the steps each rest rule saves against the response shift it costs.
+    Rest(rest_detection::Args),
     /// Seed 003 Table 4 on DEM impacts: TMCMC of the three normal-force classes (Tsuji,
     /// Kuwabara-Kono, free exponent) on measured restitution of steel; posteriors, evidences.
     Restitution(restitution::Args),
@@ -77,6 +80,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Metamodel(m) => metamodel_report::run(m),
         BenchCommand::CohesiveMetamodel(m) => cohesive_metamodel_report::run(m),
         BenchCommand::Metamodels(m) => metamodel_benchmark::run(m),
+        BenchCommand::Rest(r) => rest_detection::run(r),
         BenchCommand::Restitution(r) => restitution::run(r),
         BenchCommand::Diagnose(d) => diagnose_report::run(d),
         BenchCommand::Sensitivity(s) => sensitivity_report::run(s),

@@ -41,6 +41,7 @@ pub mod metamodel_benchmark;
 pub mod metamodel_report;
 pub mod noise_floor;
 pub mod reference;
+pub mod rest_detection;
 pub mod restitution;
 pub mod sampling_quality;
 pub mod sensitivity_report;

@@ -13,7 +13,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 
 use super::shear_box_fill::{fill_deck, mean_se, run_liggghts, run_mbgc};
-use mbgc::experiments::shear_box::{ShearBox, FILL_FRACTION, SKIN};
+use mbgc::experiments::shear_box::{RestRule, ShearBox, FILL_FRACTION, SKIN};
 use mbgc::experiments::ParamSet;
 
 /// Seed 004's validation run at the Gravel 8/16 parameters (Sec. 4).
@@ -194,6 +194,8 @@ fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
         box_scale: j.k,
         skin: j.skin,
         psd_classes: if j.point.ends_with("-5cls") { 5 } else { 0 },
+        // The LIGGGHTS deck's rule, so that both codes run one procedure.
+        rest: RestRule::Kinetic,
         ..Default::default()
     };
     let t = Instant::now();

@@ -3,7 +3,7 @@
 use super::backend::Backend;
 use crate::error::{Error, Result};
 use crate::experiments::hopper::Hopper;
-use crate::experiments::shear_box::ShearBox;
+use crate::experiments::shear_box::{RestRule, ShearBox};
 use crate::experiments::shear_cell::ShearCell;
 use crate::experiments::wall_impact::WallImpact;
 use crate::experiments::Experiment;
@@ -63,6 +63,7 @@ fn liggghts_experiment(
             ShearBox {
                 box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),
                 class: s.model_class.unwrap_or_default(),
+                rest: RestRule::Kinetic,
                 ..ShearBox::default()
             },
             mode,

@@ -8,6 +8,7 @@
 
 pub mod hopper;
 pub mod shear_box;
+pub mod shear_box_rest;
 pub mod shear_cell;
 pub mod shear_test;
 pub mod wall_impact;

@@ -18,6 +18,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+pub use super::shear_box_rest::{ChunkState, Phase, RestRule, Thresholds};
 use super::{
     materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
     RHO_RANGE,
@@ -108,6 +109,8 @@ pub struct ShearBox {
     /// pouring column fall many steps between list builds, while the few extra pairs it lists in
     /// the settled bed are cheap to reject (docs/shear_box.md, cost section).
     pub skin: f64,
+    /// When the fill and the outflow count as at rest.
+    pub rest: RestRule,
 }
 
 /// Interval of the rest checks (and the relaxation after the strike-off) in units of the box's
@@ -133,6 +136,7 @@ impl Default for ShearBox {
             class: ModelClass::default(),
             psd_classes: 0,
             skin: SKIN,
+            rest: RestRule::default(),
         }
     }
 }
@@ -261,6 +265,18 @@ pub struct Schedule {
     pub domain: (V3, V3),
 }
 
+impl Schedule {
+    /// The thresholds the rest rules read.
+    pub fn thresholds(&self) -> Thresholds {
+        Thresholds {
+            v_rest: self.v_rest,
+            v_move: self.v_move,
+            fall: self.fall,
+            min_flow_time: self.min_flow_time,
+        }
+    }
+}
+
 impl ShearBox {
     /// The schedule for the drawn layout, particle density `rho`, modulus `e` and Poisson `nu`.
     pub fn schedule(&self, lay: &Layout, rho: f64, e: f64, nu: f64) -> Schedule {
@@ -355,6 +371,9 @@ pub struct RunRecord {
     pub flow_seconds: f64,
     /// Particles created, and left in the box after the strike-off.
     pub created: usize,
+    /// The state after every chunk of steps, fill and outflow: what the rest criteria saw, and
+    /// the response measured as if the run had stopped there.
+    pub trace: Vec<ChunkState>,
 }
 
 /// The flank profile and its fits.
@@ -498,6 +517,46 @@ fn quadratic_gap(pts: &[(f64, f64)], slope: f64, intercept: f64) -> f64 {
         })
         .fold(0.0, f64::max)
         / height
+}
+
+/// Positions by particle id at the previous check, to measure how far particles moved since.
+struct Moves(Vec<V3>);
+
+impl Moves {
+    fn new(p: &Particles) -> Self {
+        let n = p.id.iter().map(|&i| i as usize + 1).max().unwrap_or(0);
+        let mut x = vec![[f64::NAN; 3]; n];
+        for (k, &i) in p.id.iter().enumerate() {
+            x[i as usize] = p.x[k];
+        }
+        Moves(x)
+    }
+
+    /// The largest displacement since the previous call of a particle in the box (x <= l);
+    /// remembers the current positions.
+    fn advance(&mut self, p: &Particles, l: f64) -> f64 {
+        let mut most = 0.0f64;
+        for (k, &i) in p.id.iter().enumerate() {
+            let prev = &mut self.0[i as usize];
+            if p.x[k][0] <= l {
+                let d = mbgc_dem::vec3::norm2(mbgc_dem::vec3::sub(p.x[k], *prev));
+                if d.is_finite() {
+                    most = most.max(d);
+                }
+            }
+            *prev = p.x[k];
+        }
+        most.sqrt()
+    }
+}
+
+/// Largest x-z speed of a particle in the box (x <= l): the outflow's motion, without the
+/// particles already past the flap.
+fn max_xz_speed(p: &Particles, l: f64) -> f64 {
+    (0..p.len())
+        .filter(|&i| p.x[i][0] <= l)
+        .map(|i| (p.v[i][0].powi(2) + p.v[i][2].powi(2)).sqrt())
+        .fold(0.0, f64::max)
 }
 
 /// Translational rms speed of the particles.
@@ -662,12 +721,29 @@ impl ShearBox {
 
         // Fill: let the column fall and come to rest (translational speed; EPSD2 keeps particles
         // rocking, so rotational energy is no rest criterion).
-        let (v_rest, chunk, fall, max_fill) =
-            (sched.v_rest, sched.chunk, sched.fall, sched.max_fill_steps);
+        let (chunk, max_fill) = (sched.chunk, sched.max_fill_steps);
+        let limits = sched.thresholds();
         let mut filled = false;
+        let mut trace = Vec::new();
+        let mut last = Moves::new(&sim.particles);
         while sim.step < max_fill {
             sim.run(chunk).map_err(blew)?;
-            if sim.time > fall && rms_speed(&sim.particles) < v_rest {
+            let rms = rms_speed(&sim.particles);
+            let struck = (0..sim.particles.len())
+                .filter(|&i| sim.particles.x[i][2] <= h)
+                .map(|i| (sim.particles.r[i], sim.particles.x[i]));
+            trace.push(ChunkState {
+                phase: Phase::Fill,
+                step: sim.step,
+                time: sim.time,
+                seconds: clock.elapsed().as_secs_f64(),
+                rms_speed: rms,
+                max_speed: max_xz_speed(&sim.particles, l),
+                max_step: last.advance(&sim.particles, l),
+                removed: 0,
+                response: box_bulk_density(struck, rho, lay.size),
+            });
+            if self.rest.fill_done(&trace, &limits) {
                 filled = true;
                 break;
             }
@@ -711,7 +787,7 @@ impl ShearBox {
         let open_step = sim.step;
         let open_time = sim.time;
         let max_flow = sim.step + sched.max_flow_steps;
-        let mut quiet = 0;
+        let flow_start = trace.len();
         let mut stopped = false;
         let mut left = 0;
         let mut left_mass = 0.0;
@@ -729,18 +805,25 @@ impl ShearBox {
                 .sum::<f64>();
             let removed = sim.remove_particles(&gone);
             left += removed;
-            let in_motion = sim
-                .particles
-                .x
-                .iter()
-                .zip(&sim.particles.v)
-                .any(|(x, v)| x[0] <= l && (v[0].powi(2) + v[2].powi(2)).sqrt() > sched.v_move);
-            quiet = if removed == 0 && !in_motion && rms_speed(&sim.particles) < v_rest {
-                quiet + 1
-            } else {
-                0
-            };
-            if sim.time - open_time > sched.min_flow_time && quiet >= 5 {
+            let max_speed = max_xz_speed(&sim.particles, l);
+            let rms = rms_speed(&sim.particles);
+            trace.push(ChunkState {
+                phase: Phase::Outflow,
+                step: sim.step,
+                time: sim.time,
+                seconds: clock.elapsed().as_secs_f64(),
+                rms_speed: rms,
+                max_speed,
+                max_step: last.advance(&sim.particles, l),
+                removed,
+                response: (-measure_flank(&sim.particles, lay.size, lay.d_max).slope)
+                    .atan()
+                    .to_degrees(),
+            });
+            if self
+                .rest
+                .outflow_done(&trace[flow_start..], open_time, &limits)
+            {
                 stopped = true;
                 break;
             }
@@ -800,6 +883,7 @@ impl ShearBox {
             fill_seconds,
             flow_seconds: clock.elapsed().as_secs_f64() - fill_seconds,
             created: initial_positions_len,
+            trace,
         };
         let outcome = Outcome {
             responses: Responses {

@@ -298,6 +298,7 @@ mod tests {
             relax_steps: 10,
             flow_steps: 95,
             chunk: 10,
+            trace: vec![],
             removal_height: -0.01,
             domain: ([-0.1; 3], [0.1; 3]),
             fill_seconds: 0.0,

@@ -25,7 +25,7 @@ use super::shear_box_fill::{
 };
 use crate::error::{read_to_string, Error, Result};
 use crate::experiments::shear_box::{
-    box_bulk_density, measure_flank, outflow_fraction, Responses, ShearBox,
+    box_bulk_density, measure_flank, outflow_fraction, Responses, RestRule, ShearBox,
 };
 use crate::experiments::{Diagnostics, Experiment, Outcome, ParamSet, RunOptions};
 use mbgc_dem::contact::ModelClass;
@@ -58,9 +58,17 @@ pub struct LiggghtsShearBox {
 }
 
 impl LiggghtsShearBox {
-    /// Refuses a model class with an effect LIGGGHTS 3.8 lacks (naming it) and zero ranks.
+    /// Refuses a model class with an effect LIGGGHTS 3.8 lacks (naming it), zero ranks, and a
+    /// rest rule other than the kinetic one, the only one the deck applies.
     pub fn new(shear_box: ShearBox, mode: DeckMode) -> Result<Self> {
         gran_model(&shear_box.class)?;
+        if shear_box.rest != RestRule::Kinetic {
+            return Err(Error::invalid(format!(
+                "rest rule {:?}: the LIGGGHTS deck ends the fill and the outflow by the kinetic \
+                 rule only (rms and largest speed), so it would be ignored",
+                shear_box.rest
+            )));
+        }
         if matches!(
             mode,
             DeckMode::Run { ranks: 0 } | DeckMode::Import { ranks: 0 }
