@@ -806,40 +806,50 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
     f: &mut [V3],
     t: &mut [V3],
 ) {
+    // Every per-particle slice cut to the same length n, and each partner index tested once
+    // against it: the compiler then drops the bounds checks of the many loads and stores by j.
+    let n = p.x.len();
+    let (x, r, m, inv_m, mat) = (&p.x[..n], &p.r[..n], &p.m[..n], &p.inv_m[..n], &p.mat[..n]);
+    let (v, w) = (&p.v[..n], &p.w[..n]);
+    let (f, t) = (&mut f[..n], &mut t[..n]);
     for i in rows {
-        let (xi, ri, mi, mati) = (p.x[i], p.r[i], p.m[i], p.mat[i]);
-        let driven_i = p.inv_m[i] == 0.0;
+        let (xi, ri, mi, mati) = (x[i], r[i], m[i], mat[i]);
+        let driven_i = inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
-        for e in start[i] as usize..start[i + 1] as usize {
-            let j = nb[e] as usize;
+        let (e0, e1) = (start[i] as usize, start[i + 1] as usize);
+        let row = nb[e0..e1]
+            .iter()
+            .zip(&mut hist[e0 - base..e1 - base])
+            .zip(&mut live[e0 - base..e1 - base]);
+        for ((&j, h), lv) in row {
+            let j = j as usize;
             // A half list: the team's buffers are cleared only from a member's first row on.
-            debug_assert!(j > i, "entry {e}: {i} -> {j} is not a half-list entry");
-            let mut d = sub(xi, p.x[j]);
+            debug_assert!(j > i, "{i} -> {j} is not a half-list entry");
+            assert!(j < n, "list entry {i} -> {j} beyond the {n} particles");
+            let mut d = sub(xi, x[j]);
             if PERIODIC {
                 d = pbox.min_image(d);
             }
-            let rsum = ri + p.r[j];
+            let rsum = ri + r[j];
             let dist2 = norm2(d);
-            let lv = &mut live[e - base];
             // A glued layer of driven particles exerts nothing on itself; the test costs a load
             // only for touching pairs.
-            if dist2 >= rsum * rsum || (driven_i && p.inv_m[j] == 0.0) {
+            if dist2 >= rsum * rsum || (driven_i && inv_m[j] == 0.0) {
                 // Most separated pairs have no history: skip them without loading it.
                 if *lv != 0 {
-                    hist[e - base] = History::default();
+                    *h = History::default();
                     *lv = 0;
                 }
                 continue;
             }
             *lv = 1;
-            let h = &mut hist[e - base];
-            let rj = p.r[j];
+            let rj = r[j];
             let dist = dist2.sqrt();
             let inv = 1.0 / dist;
             let n = scale(d, inv);
             let overlap = rsum - dist;
             let r_eff = ri * rj / rsum;
-            let m_eff = mi * p.m[j] / (mi + p.m[j]);
+            let m_eff = mi * m[j] / (mi + m[j]);
             let area = if L::NEEDS_AREA {
                 // Area of the intersection circle of the two spheres.
                 let q = (dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) * (dist + ri + rj);
@@ -852,14 +862,14 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
                 overlap,
                 r_eff,
                 m_eff,
-                sub(p.v[i], p.v[j]),
-                p.w[i],
-                p.w[j],
+                sub(v[i], v[j]),
+                w[i],
+                w[j],
                 ri - 0.5 * overlap,
                 rj - 0.5 * overlap,
                 area,
             );
-            let pc = materials.pair(mati, p.mat[j]);
+            let pc = materials.pair(mati, mat[j]);
             let out = law.force(&c, pc, h, dt);
             add_assign(&mut f[i], out.force);
             sub_assign(&mut f[j], out.force);
