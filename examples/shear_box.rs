@@ -28,7 +28,9 @@ fn main() {
         threads: 1,
         ..Default::default()
     };
-    let (o, rec) = sb.run_recorded(&p, a.get(8).map_or(1, |s| s.parse().expect("seed")), &opts).expect("run");
+    let (o, rec) = sb
+        .run_recorded(&p, a.get(8).map_or(1, |s| s.parse().expect("seed")), &opts)
+        .expect("run");
     println!("{:?}\n{:?}", o.responses, o.diagnostics);
     // Where a whole run's time goes: the fill (creation, fall, rest, strike-off) and the outflow.
     println!(
@@ -43,11 +45,19 @@ fn main() {
         rec.dt
     );
     if let Some(path) = a.get(7) {
-        let mut out = String::from("phase,step,time,rms_speed,max_speed,max_step,removed,response\n");
+        let mut out =
+            String::from("phase,step,time,rms_speed,max_speed,max_step,removed,response\n");
         for c in &rec.trace {
             out += &format!(
                 "{:?},{},{:.6},{:.6e},{:.6e},{:.6e},{},{:.6}\n",
-                c.phase, c.step, c.time, c.rms_speed, c.max_speed, c.max_step, c.removed, c.response
+                c.phase,
+                c.step,
+                c.time,
+                c.rms_speed,
+                c.max_speed,
+                c.max_step,
+                c.removed,
+                c.response
             );
         }
         std::fs::write(path, out).expect("writing the trace");

@@ -4,8 +4,8 @@ use clap::{Args, Subcommand};
 
 use mbgc_studies::{
     cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
-    gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection, restitution,
-    sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
+    gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection,
+    restitution, sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
     shear_cell_report,
 };
 

@@ -116,7 +116,8 @@ struct RunRow {
 
 const RUN_HEADER: &str = "row\tv_rest\tv_move\tfall\tmin_flow_time\topen_time\trecorded_angle\trecorded_density\tshear_angle\tbulk_density\tseconds\tsteps";
 const CHECK_HEADER: &str = "row\tseed\trule\tshear_angle\tbulk_density\tsteps\tseconds";
-const TRACE_HEADER: &str = "row\tphase\tstep\ttime\tseconds\trms_speed\tmax_speed\tmax_step\tremoved\tresponse";
+const TRACE_HEADER: &str =
+    "row\tphase\tstep\ttime\tseconds\trms_speed\tmax_speed\tmax_step\tremoved\tresponse";
 
 /// The design rows by `row`: seed, parameters and the recorded responses.
 fn design_rows(
@@ -271,7 +272,10 @@ fn load(args: &Args) -> anyhow::Result<Vec<(RunRow, Vec<ChunkState>)>> {
         })
         .collect();
     let mut traces: BTreeMap<u64, Vec<ChunkState>> = BTreeMap::new();
-    for c in read_tsv(&args.traces)?.into_iter().filter(|c| c.len() == 10) {
+    for c in read_tsv(&args.traces)?
+        .into_iter()
+        .filter(|c| c.len() == 10)
+    {
         let row: u64 = c[0].parse().unwrap_or(u64::MAX);
         traces.entry(row).or_default().push(ChunkState {
             phase: if c[1] == "fill" {
@@ -418,16 +422,25 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let checked = read_tsv(&args.check)?;
     for &row in &args.rows {
         for seed in 1..=args.seeds {
-            for (name, rule) in [("kinetic", RestRule::Kinetic), ("default", RestRule::default())] {
+            for (name, rule) in [
+                ("kinetic", RestRule::Kinetic),
+                ("default", RestRule::default()),
+            ] {
                 let key = [row.to_string(), seed.to_string(), name.to_string()];
                 if checked.iter().any(|c| c.len() >= 3 && c[..3] == key) {
                     continue;
                 }
                 let (_, p, _) = design.get(&row).with_context(|| {
-                    format!("--rows {row}: {} has no finished run with that row", args.design.display())
+                    format!(
+                        "--rows {row}: {} has no finished run with that row",
+                        args.design.display()
+                    )
                 })?;
                 eprintln!("check: design row {row}, seed {seed}, {name} rule");
-                let b = ShearBox { rest: rule, ..ShearBox::default() };
+                let b = ShearBox {
+                    rest: rule,
+                    ..ShearBox::default()
+                };
                 let o = b
                     .run(p, seed, &RunOptions::default())
                     .with_context(|| format!("design row {row}, seed {seed}"))?;
@@ -597,7 +610,9 @@ fn check_report(rows: &[Vec<String>], noise: Option<&super::noise_floor::NoiseFl
     for row in &rows_seen {
         let sel: Vec<_> = both.iter().filter(|((r, _), _, _)| r == row).collect();
         let col = |i: usize, k: bool| -> Vec<f64> {
-            sel.iter().map(|(_, a, b)| if k { a[i] } else { b[i] }).collect()
+            sel.iter()
+                .map(|(_, a, b)| if k { a[i] } else { b[i] })
+                .collect()
         };
         let da: Vec<f64> = sel.iter().map(|(_, a, b)| b[0] - a[0]).collect();
         let dd: Vec<f64> = sel.iter().map(|(_, a, b)| b[1] - a[1]).collect();

@@ -87,6 +87,9 @@ pub struct Summary {
     pub threads: usize,
     /// Wall-clock time of the invocation, s.
     pub elapsed_s: f64,
+    /// Rows of this shard neither in the table before nor run now: left for a later
+    /// invocation because `cancel` stopped this one (0 when it ran to the end).
+    pub cancelled: usize,
 }
 
 impl Summary {
@@ -111,6 +114,7 @@ impl Summary {
             "truncated_bytes": self.truncated_bytes,
             "threads": self.threads,
             "elapsed_s": self.elapsed_s,
+            "cancelled": self.cancelled,
         })
     }
 }
@@ -190,6 +194,7 @@ pub fn run_campaign(
         truncated_bytes,
         threads,
         elapsed_s: 0.0,
+        cancelled: 0,
     };
     if todo.is_empty() {
         summary.elapsed_s = t0.elapsed().as_secs_f64();
@@ -259,6 +264,7 @@ pub fn run_campaign(
     if let Some(o) = observer {
         o.ended(true);
     }
+    summary.cancelled = todo.len() - summary.done - summary.failed;
     summary.elapsed_s = t0.elapsed().as_secs_f64();
     Ok(summary)
 }
@@ -636,6 +642,18 @@ mod tests {
         let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
         assert_eq!((s.truncated_bytes, s.skipped, s.done), (7, 2, 1));
         assert_eq!(std::fs::read(&opts.out).unwrap(), full);
+    }
+
+    #[test]
+    fn a_cancelled_campaign_counts_the_rows_it_left() {
+        let (_dir, plan, mut opts) = setup("x,y\n1,1\n2,1\n3,1\n", None);
+        opts.cancel = Some(Arc::new(AtomicBool::new(true)));
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.planned, s.done, s.cancelled), (3, 0, 3));
+        assert_eq!(s.json(&plan, &opts.out)["cancelled"], 3);
+        opts.cancel = None;
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!((s.done, s.cancelled), (3, 0));
     }
 
     #[test]

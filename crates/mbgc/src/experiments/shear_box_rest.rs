@@ -244,7 +244,10 @@ mod tests {
             .map(|(k, &d)| chunk(Phase::Fill, 0.3 + 0.01 * k as f64, 0.03, 0.7, 0, d))
             .collect();
         assert!(!RestRule::Kinetic.fill_done(&fill, &T));
-        assert!(!RESPONSE.fill_done(&fill[..4], &T), "1590..1595.4 is 0.34 %");
+        assert!(
+            !RESPONSE.fill_done(&fill[..4], &T),
+            "1590..1595.4 is 0.34 %"
+        );
         assert!(RESPONSE.fill_done(&fill, &T));
         // Inside the fall, nothing is at rest, however still.
         let early: Vec<_> = (0..4)
@@ -259,14 +262,20 @@ mod tests {
         let mut flow: Vec<_> = (0..8)
             .map(|k| chunk(Phase::Outflow, 1.0 + 0.01 * k as f64, 0.02, 0.3, 0, 30.0))
             .collect();
-        assert!(!RESPONSE.outflow_done(&flow, 0.6, &T), "before the minimum time");
+        assert!(
+            !RESPONSE.outflow_done(&flow, 0.6, &T),
+            "before the minimum time"
+        );
         assert!(RESPONSE.outflow_done(&flow, 0.4, &T));
         assert!(!RestRule::Kinetic.outflow_done(&flow, 0.4, &T));
         flow[6].removed = 1;
         assert!(!RESPONSE.outflow_done(&flow, 0.4, &T), "a particle left");
         flow[6].removed = 0;
         flow[7].response = 30.06;
-        assert!(!RESPONSE.outflow_done(&flow, 0.4, &T), "the angle moved 0.06 deg");
+        assert!(
+            !RESPONSE.outflow_done(&flow, 0.4, &T),
+            "the angle moved 0.06 deg"
+        );
         flow[7].response = f64::NAN;
         assert!(!RESPONSE.outflow_done(&flow, 0.4, &T), "no flank");
     }
@@ -274,7 +283,16 @@ mod tests {
     #[test]
     fn the_kinetic_outflow_needs_five_quiet_chunks() {
         let mut flow: Vec<_> = (0..5)
-            .map(|k| chunk(Phase::Outflow, 1.0 + 0.01 * k as f64, 0.001, 0.01, 0, f64::NAN))
+            .map(|k| {
+                chunk(
+                    Phase::Outflow,
+                    1.0 + 0.01 * k as f64,
+                    0.001,
+                    0.01,
+                    0,
+                    f64::NAN,
+                )
+            })
             .collect();
         assert!(RestRule::Kinetic.outflow_done(&flow, 0.4, &T));
         flow[0].max_speed = 0.02;

@@ -178,6 +178,49 @@ impl TrainRecord {
         serde_json::from_str(text)
             .map_err(|e| Error::input(path.display(), "JSON", format!("a train record ({e})")))
     }
+
+    /// The `mbgc train` command that made the model `name` of this record with the fit
+    /// settings `gp`, into `out_dir` (the default directory when `None`); `partial` when the
+    /// fit ran on part of the training table.
+    pub fn command(
+        &self,
+        name: &str,
+        out_dir: Option<&Path>,
+        gp: &mbgc_sr::Config,
+        partial: bool,
+    ) -> String {
+        let mut c = format!(
+            "mbgc train --space {} --experiment {} --name {name}",
+            self.space, self.experiment
+        );
+        if let Some(e) = &self.extends {
+            c += &format!(" --extends {}", e.from);
+            if e.correction {
+                c += " --correction";
+            }
+        }
+        c += &format!(
+            " --n {} --validation {} --seed {}",
+            self.n, self.validation, self.seed
+        );
+        if let Some(d) = out_dir {
+            c += &format!(" --out-dir {}", d.display());
+        }
+        c += &format!(
+            " --population {} --generations {} --parsimony {} --max-length {} --restarts {} \
+             --select {}",
+            gp.population,
+            gp.generations,
+            gp.parsimony,
+            gp.max_length,
+            gp.restarts,
+            gp.selection.flag()
+        );
+        if partial {
+            c += " --partial";
+        }
+        c
+    }
 }
 
 /// The parameters of a space as a train record keeps them.
