@@ -15,6 +15,8 @@
 //! - [`metamodel_benchmark`]: mbgc's GP against PyOperon, a Gaussian process and a quadratic
 //!   surface on the shipped campaign (docs/metamodel_benchmark.md); [`noise_floor`]: the
 //!   replicate noise both metamodel studies judge errors by.
+//! - [`rest_detection`]: when a shear-box run is at rest: rest rules replayed on the traces of
+//!   rerun campaign rows, and whole runs under two rules (docs/rest_detection.md).
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
 //! - [`sensitivity_report`]: seed 000's three-level sensitivity analysis on the hopper
 //!   (docs/sensitivity.md).

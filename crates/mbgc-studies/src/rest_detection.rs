@@ -54,7 +54,7 @@ pub struct Args {
     )]
     pub runs: PathBuf,
     /// Seeds per row (1..=seeds) of the check: each row run under the kinetic rule and under
-    /// the default rule with the same seed; 0 skips the check.
+    /// the candidate response rule with the same seed; 0 skips the check.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 3))]
     pub seeds: u64,
     /// The check's runs, one row per run.
@@ -589,16 +589,18 @@ fn check_report(rows: &[Vec<String>], noise: Option<&super::noise_floor::NoiseFl
     let _ = writeln!(
         s,
         "\n## The check: whole runs under both rules\n\nEach row run with seeds 1, 2, ... under \
-         the kinetic rule and under the default rule ({}), one run after the other. The same seed \
-         gives both the same trajectory up to the default rule's earlier stop, so the \
-         differences are paired; SE is the standard error of the mean difference over the \
-         seeds. Cost: the default rule's steps and wall seconds over the kinetic rule's.\n",
-        rule_name(&RestRule::default())
+         the kinetic rule and under the candidate response rule ({}), one run after the other. The \
+         same seed gives both the same trajectory up to the candidate's earlier stop of the fill; \
+         the outflow after it diverges like another seed's, so a difference has about the \
+         spread of two independent runs. SE is the standard error of the mean difference over \
+         the seeds. Cost: the candidate's steps and wall seconds over the kinetic rule's \
+         (wall seconds only as steady as the machine was).\n",
+        rule_name(&RestRule::CANDIDATE)
     );
     let _ = writeln!(
         s,
-        "| row | seeds | angle kinetic / default, deg | difference +- SE | density kinetic / \
-         default | difference +- SE | steps | seconds |\n|---|---|---|---|---|---|---|---|"
+        "| row | seeds | angle kinetic / response, deg | difference +- SE | density kinetic / \
+         response | difference +- SE | steps | seconds |\n|---|---|---|---|---|---|---|---|"
     );
     let rows_seen: Vec<u64> = {
         let mut v: Vec<u64> = both.iter().map(|((r, _), _, _)| *r).collect();
@@ -652,8 +654,8 @@ fn check_report(rows: &[Vec<String>], noise: Option<&super::noise_floor::NoiseFl
         "\n- At {within} of {} rows both seed means moved by less than one standard error of a \
          seed mean (the replicate noise, {na:.3} deg and {:.3} % of the density, over the root \
          of the seeds).\n- Over all {} pairs: angle {:+.3} deg (largest {:.3}), density {:+.4} % \
-         (largest {:.4} %).\n- The default rule took {:.2} of the kinetic rule's steps and {:.2} of \
-         its wall seconds.",
+         (largest {:.4} %).\n- The candidate took {:.2} of the kinetic rule's steps and {:.2} of its \
+         wall seconds.",
         rows_seen.len(),
         nb * 100.0,
         all_da.len(),

@@ -981,9 +981,8 @@ part inside).\n\
 5. Outflow: the flap (the +x side wall) is removed; particles that fall 2 d_max below the floor \
 over its edge are deleted. Rest: at least 4 sqrt(h/g) after opening and 5 checks in a row with no \
 removal, no particle in the box faster than 0.05 sqrt(g d_max) in x-z, rms below the rest speed. \
-(These are the kinetic rule of every run in this report and of the LIGGGHTS deck; since issue 38 \
-a campaign run also ends a phase once its response has stood still for 5 checks: \
-docs/rest_detection.md.)\n\
+(The kinetic rule: every campaign's and the LIGGGHTS deck's. A rule that also ends a phase \
+once its response has stood still is studied in docs/rest_detection.md.)\n\
 6. Shear angle: a line fitted through the top of the flank.\n\n\
 The LIGGGHTS deck (`crates/mbgc/src/liggghts/shear_box_fill.rs`) runs the same schedule with `fix insert/pack` \
 into the same column and `particledistribution/discrete` templates; the time step is 0.25 \
