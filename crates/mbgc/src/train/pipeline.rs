@@ -786,7 +786,9 @@ fn extended(dir: &Path, from: &str) -> Result<(PathBuf, String)> {
     let models = path.parent().unwrap_or(Path::new(""));
     if name.is_empty() || models.file_name().is_none_or(|n| n != "models") {
         return Err(Error::invalid(format!(
-            "--extends {from}: expected a trained model's name or its model file              <dir>/models/<name>.json (the record and tables of a train lie beside models/, in              <dir>/training_data/)"
+            "--extends {from}: expected a trained model's name or its model file \
+             <dir>/models/<name>.json (the record and tables of a train lie beside models/, in \
+             <dir>/training_data/)"
         )));
     }
     let root = models.parent().unwrap_or(Path::new("")).to_path_buf();
