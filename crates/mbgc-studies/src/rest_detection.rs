@@ -119,11 +119,11 @@ const CHECK_HEADER: &str = "row\tseed\trule\tshear_angle\tbulk_density\tsteps\ts
 const TRACE_HEADER: &str =
     "row\tphase\tstep\ttime\tseconds\trms_speed\tmax_speed\tmax_step\tremoved\tresponse";
 
-/// The design rows by `row`: seed, parameters and the recorded responses.
-fn design_rows(
-    path: &Path,
-    sb: &ShearBox,
-) -> anyhow::Result<BTreeMap<u64, (u64, ParamSet, (f64, f64))>> {
+/// A design row: its seed, its parameters and the recorded (angle, density).
+type DesignRow = (u64, ParamSet, (f64, f64));
+
+/// The design rows by `row`.
+fn design_rows(path: &Path, sb: &ShearBox) -> anyhow::Result<BTreeMap<u64, DesignRow>> {
     let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
     let header = r.headers()?.clone();
     let col = |n: &str| {
@@ -547,7 +547,7 @@ fn report(
         let end = flow.last().map_or(f64::NAN, |c| c.response);
         let settled_from = flow
             .iter()
-            .rposition(|c| !((c.response - end).abs() <= 0.3))
+            .rposition(|c| (c.response - end).abs().is_nan() || (c.response - end).abs() > 0.3)
             .map_or(0, |k| k + 1);
         let _ = writeln!(
             s,
@@ -620,7 +620,8 @@ fn check_report(rows: &[Vec<String>], noise: Option<&super::noise_floor::NoiseFl
         let k = usize::from(c[2] != "kinetic");
         pairs.entry((row, seed)).or_default()[k] = Some([f(&c[3]), f(&c[4]), f(&c[5]), f(&c[6])]);
     }
-    let both: Vec<((u64, u64), [f64; 4], [f64; 4])> = pairs
+    type Pair = ((u64, u64), [f64; 4], [f64; 4]);
+    let both: Vec<Pair> = pairs
         .into_iter()
         .filter_map(|(k, [a, b])| Some((k, a?, b?)))
         .collect();
