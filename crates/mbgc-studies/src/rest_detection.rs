@@ -424,7 +424,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         for seed in 1..=args.seeds {
             for (name, rule) in [
                 ("kinetic", RestRule::Kinetic),
-                ("default", RestRule::default()),
+                ("response", RestRule::CANDIDATE),
             ] {
                 let key = [row.to_string(), seed.to_string(), name.to_string()];
                 if checked.iter().any(|c| c.len() >= 3 && c[..3] == key) {
