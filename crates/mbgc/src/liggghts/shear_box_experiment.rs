@@ -271,3 +271,22 @@ impl Experiment for LiggghtsShearBox {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rest_rule_the_deck_cannot_apply_is_refused_by_name() {
+        let sb = ShearBox {
+            rest: RestRule::CANDIDATE,
+            ..ShearBox::default()
+        };
+        let e = LiggghtsShearBox::new(sb, DeckMode::Run { ranks: 1 })
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(e.contains("rest rule") && e.contains("kinetic"), "{e}");
+        assert!(LiggghtsShearBox::new(ShearBox::default(), DeckMode::Run { ranks: 1 }).is_ok());
+    }
+}
