@@ -282,10 +282,10 @@ mod tests {
             rest: RestRule::CANDIDATE,
             ..ShearBox::default()
         };
-        let e = LiggghtsShearBox::new(sb, DeckMode::Run { ranks: 1 })
-            .err()
-            .expect("refused")
-            .to_string();
+        let Err(e) = LiggghtsShearBox::new(sb, DeckMode::Run { ranks: 1 }) else {
+            panic!("a response rule was accepted");
+        };
+        let e = e.to_string();
         assert!(e.contains("rest rule") && e.contains("kinetic"), "{e}");
         assert!(LiggghtsShearBox::new(ShearBox::default(), DeckMode::Run { ranks: 1 }).is_ok());
     }
