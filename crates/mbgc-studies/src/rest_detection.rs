@@ -235,17 +235,30 @@ fn append(path: &Path, header: &str, lines: &[String]) -> anyhow::Result<()> {
         .with_context(|| path.display().to_string())
 }
 
-fn read_tsv(path: &Path) -> anyhow::Result<Vec<Vec<String>>> {
+/// The rows of a table this study wrote, each with `columns` fields; a row of another width
+/// (a hand edit, a file of another study) is an error naming the file and the line.
+fn read_tsv(path: &Path, columns: usize) -> anyhow::Result<Vec<Vec<String>>> {
     if !path.exists() {
         return Ok(Vec::new());
     }
     let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
-    Ok(text
-        .lines()
-        .skip(1)
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split('\t').map(String::from).collect())
-        .collect())
+    let mut rows = Vec::new();
+    for (k, l) in text.lines().enumerate().skip(1) {
+        if l.trim().is_empty() {
+            continue;
+        }
+        let c: Vec<String> = l.split('\t').map(String::from).collect();
+        if c.len() != columns {
+            anyhow::bail!(
+                "{}: line {}: expected {columns} tab-separated fields, found {}",
+                path.display(),
+                k + 1,
+                c.len()
+            );
+        }
+        rows.push(c);
+    }
+    Ok(rows)
 }
 
 fn f(s: &str) -> f64 {
@@ -253,9 +266,8 @@ fn f(s: &str) -> f64 {
 }
 
 fn load(args: &Args) -> anyhow::Result<Vec<(RunRow, Vec<ChunkState>)>> {
-    let runs: Vec<RunRow> = read_tsv(&args.runs)?
+    let runs: Vec<RunRow> = read_tsv(&args.runs, 12)?
         .into_iter()
-        .filter(|c| c.len() == 12)
         .map(|c| RunRow {
             row: c[0].parse().unwrap_or(u64::MAX),
             limits: Thresholds {
@@ -272,10 +284,7 @@ fn load(args: &Args) -> anyhow::Result<Vec<(RunRow, Vec<ChunkState>)>> {
         })
         .collect();
     let mut traces: BTreeMap<u64, Vec<ChunkState>> = BTreeMap::new();
-    for c in read_tsv(&args.traces)?
-        .into_iter()
-        .filter(|c| c.len() == 10)
-    {
+    for c in read_tsv(&args.traces, 10)? {
         let row: u64 = c[0].parse().unwrap_or(u64::MAX);
         traces.entry(row).or_default().push(ChunkState {
             phase: if c[1] == "fill" {
@@ -419,7 +428,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let runs = load(args)?;
     // The check: both rules, the same seeds, whole runs.
-    let checked = read_tsv(&args.check)?;
+    let checked = read_tsv(&args.check, 7)?;
     for &row in &args.rows {
         for seed in 1..=args.seeds {
             for (name, rule) in [
@@ -458,7 +467,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             }
         }
     }
-    let checked = read_tsv(&args.check)?;
+    let checked = read_tsv(&args.check, 7)?;
     let noise = replicate_noise(&args.design, &args.replicates)?;
     let mut text = report(args, &runs, noise.as_ref());
     text.push_str(&check_report(&checked, noise.as_ref()));
@@ -613,7 +622,7 @@ fn check_report(rows: &[Vec<String>], noise: Option<&super::noise_floor::NoiseFl
     let mut s = String::new();
     // (row, seed) -> (kinetic, default): angle, density, steps, seconds.
     let mut pairs: BTreeMap<(u64, u64), [Option<[f64; 4]>; 2]> = BTreeMap::new();
-    for c in rows.iter().filter(|c| c.len() == 7) {
+    for c in rows {
         let (Ok(row), Ok(seed)) = (c[0].parse::<u64>(), c[1].parse::<u64>()) else {
             continue;
         };
