@@ -5,8 +5,8 @@ use clap::{Args, Subcommand};
 use mbgc_studies::{
     cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
     gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection,
-    restitution, sampling_quality, sensitivity_report, shear_box_check, shear_box_vs_liggghts,
-    shear_cell_report,
+    rest_validation, restitution, sampling_quality, sensitivity_report, shear_box_check,
+    shear_box_vs_liggghts, shear_cell_report,
 };
 
 #[derive(Debug, Args)]
@@ -53,6 +53,10 @@ pub enum BenchCommand {
     /// docs/rest_detection.md: shear-box runs of a campaign table rerun with their seeds, their
     /// per-chunk traces, and the steps each rest rule saves against the response shift it costs.
     Rest(rest_detection::Args),
+    /// docs/rest_validation.md: the shipped campaign's validation design rerun with its seeds
+    /// under the candidate rest rule: cost against the recorded runs, and the shipped model's
+    /// validation RMSE on both.
+    RestValidation(rest_validation::Args),
     /// Seed 003 Table 4 on DEM impacts: TMCMC of the three normal-force classes (Tsuji,
     /// Kuwabara-Kono, free exponent) on measured restitution of steel; posteriors, evidences.
     Restitution(restitution::Args),
@@ -81,6 +85,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::CohesiveMetamodel(m) => cohesive_metamodel_report::run(m),
         BenchCommand::Metamodels(m) => metamodel_benchmark::run(m),
         BenchCommand::Rest(r) => rest_detection::run(r),
+        BenchCommand::RestValidation(r) => rest_validation::run(r),
         BenchCommand::Restitution(r) => restitution::run(r),
         BenchCommand::Diagnose(d) => diagnose_report::run(d),
         BenchCommand::Sensitivity(s) => sensitivity_report::run(s),

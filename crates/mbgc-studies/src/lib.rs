@@ -16,7 +16,9 @@
 //!   surface on the shipped campaign (docs/metamodel_benchmark.md); [`noise_floor`]: the
 //!   replicate noise both metamodel studies judge errors by.
 //! - [`rest_detection`]: when a shear-box run is at rest: rest rules replayed on the traces of
-//!   rerun campaign rows, and whole runs under two rules (docs/rest_detection.md).
+//!   rerun campaign rows, and whole runs under two rules (docs/rest_detection.md);
+//!   [`rest_validation`]: the shipped validation design rerun under the candidate rule, its cost
+//!   and the shipped model's RMSE on it (docs/rest_validation.md).
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
 //! - [`sensitivity_report`]: seed 000's three-level sensitivity analysis on the hopper
 //!   (docs/sensitivity.md).
@@ -44,6 +46,8 @@ pub mod metamodel_report;
 pub mod noise_floor;
 pub mod reference;
 pub mod rest_detection;
+mod rest_tables;
+pub mod rest_validation;
 pub mod restitution;
 pub mod sampling_quality;
 pub mod sensitivity_report;

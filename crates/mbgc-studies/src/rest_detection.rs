@@ -12,12 +12,12 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context as _;
 
 use super::noise_floor::replicate_noise;
+use super::rest_tables::{append, design_rows, read_tsv};
 use mbgc::experiments::shear_box::{ChunkState, Phase, RestRule, ShearBox, Thresholds};
 use mbgc::experiments::{Experiment, ParamSet, RunOptions};
 
@@ -119,61 +119,6 @@ const CHECK_HEADER: &str = "row\tseed\trule\tshear_angle\tbulk_density\tsteps\ts
 const TRACE_HEADER: &str =
     "row\tphase\tstep\ttime\tseconds\trms_speed\tmax_speed\tmax_step\tremoved\tresponse";
 
-/// A design row: its seed, its parameters and the recorded (angle, density).
-type DesignRow = (u64, ParamSet, (f64, f64));
-
-/// The design rows by `row`.
-fn design_rows(path: &Path, sb: &ShearBox) -> anyhow::Result<BTreeMap<u64, DesignRow>> {
-    let mut r = csv::Reader::from_path(path).with_context(|| path.display().to_string())?;
-    let header = r.headers()?.clone();
-    let col = |n: &str| {
-        header
-            .iter()
-            .position(|c| c == n)
-            .with_context(|| format!("{}: no column {n}", path.display()))
-    };
-    let (c_row, c_seed, c_status) = (col("row")?, col("seed")?, col("status")?);
-    let (c_a, c_b) = (col("shear_angle")?, col("bulk_density")?);
-    let mut names: Vec<&str> = sb.parameters();
-    names.push("sigma_ln");
-    let mut out = BTreeMap::new();
-    for (k, rec) in r.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: record {}", path.display(), k + 1))?;
-        if &rec[c_status] != "done" {
-            continue;
-        }
-        let num = |c: usize, what: &str| -> anyhow::Result<f64> {
-            rec[c].parse().with_context(|| {
-                format!(
-                    "{}: record {}, column {what}: expected a number, found {:?}",
-                    path.display(),
-                    k + 1,
-                    &rec[c]
-                )
-            })
-        };
-        let row: u64 = rec[c_row]
-            .parse()
-            .with_context(|| format!("{}: record {}: row", path.display(), k + 1))?;
-        let seed: u64 = rec[c_seed]
-            .parse()
-            .with_context(|| format!("{}: record {}: seed", path.display(), k + 1))?;
-        let mut pairs = Vec::new();
-        for n in &names {
-            pairs.push((n.to_string(), num(col(n)?, n)?));
-        }
-        out.insert(
-            row,
-            (
-                seed,
-                ParamSet::from_pairs(&pairs),
-                (num(c_a, "shear_angle")?, num(c_b, "bulk_density")?),
-            ),
-        );
-    }
-    Ok(out)
-}
-
 /// Runs `row` under the kinetic rule; its summary and trace.
 fn rerun(
     sb: &ShearBox,
@@ -210,55 +155,6 @@ fn rerun(
         },
         rec.trace,
     ))
-}
-
-fn append(path: &Path, header: &str, lines: &[String]) -> anyhow::Result<()> {
-    let new = !path.exists();
-    if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(d).with_context(|| d.display().to_string())?;
-    }
-    let mut f = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .with_context(|| path.display().to_string())?;
-    let mut s = String::new();
-    if new {
-        s.push_str(header);
-        s.push('\n');
-    }
-    for l in lines {
-        s.push_str(l);
-        s.push('\n');
-    }
-    f.write_all(s.as_bytes())
-        .with_context(|| path.display().to_string())
-}
-
-/// The rows of a table this study wrote, each with `columns` fields; a row of another width
-/// (a hand edit, a file of another study) is an error naming the file and the line.
-fn read_tsv(path: &Path, columns: usize) -> anyhow::Result<Vec<Vec<String>>> {
-    if !path.exists() {
-        return Ok(Vec::new());
-    }
-    let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
-    let mut rows = Vec::new();
-    for (k, l) in text.lines().enumerate().skip(1) {
-        if l.trim().is_empty() {
-            continue;
-        }
-        let c: Vec<String> = l.split('\t').map(String::from).collect();
-        if c.len() != columns {
-            anyhow::bail!(
-                "{}: line {}: expected {columns} tab-separated fields, found {}",
-                path.display(),
-                k + 1,
-                c.len()
-            );
-        }
-        rows.push(c);
-    }
-    Ok(rows)
 }
 
 fn f(s: &str) -> f64 {

@@ -50,8 +50,13 @@ pub struct Args {
     pub cost_skins: Vec<f64>,
     /// Seeds of the cost part (1..=cost_seeds): the step count to rest varies by 10-20 % from
     /// seed to seed in either code, so one seed decides little.
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = 2))]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 3))]
     pub cost_seeds: u64,
+    /// Rest rules of mbgc's runs in the cost part: kinetic (LIGGGHTS' deck's rule, the same
+    /// procedure in both codes) and response (`RestRule::CANDIDATE`, which stops when the
+    /// responses no longer move). LIGGGHTS always runs its kinetic deck.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = ["kinetic".to_string(), "response".into()]))]
+    pub cost_rules: Vec<String>,
     /// Runs at a time (the cost part always runs alone, one run after the other).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 2))]
     pub jobs: usize,
@@ -133,7 +138,7 @@ const COMPARE_POINTS: [&str; 6] = ["a", "c", "b", "a2", "c2", "b2"];
 const SCALE_POINTS: [&str; 2] = ["c", "c2"];
 /// The cost is compared on equal particles: mbgc draws LIGGGHTS' 5 classes too.
 #[cfg(feature = "cli")]
-const COST_POINTS: [&str; 2] = ["a-5cls", "a2-5cls"];
+const COST_POINTS: [&str; 4] = ["a-5cls", "b-5cls", "a2-5cls", "b2-5cls"];
 /// Seed 004's point varied: (point, code, seeds). Stiffer particles (the time step, and with it
 /// the cost, grows as sqrt(E)) and the PSD as 5 classes.
 const CAUSE_RUNS: [(&str, &str, u64); 4] = [
@@ -194,12 +199,17 @@ fn run_job(j: &Job, work: &Path) -> anyhow::Result<String> {
         box_scale: j.k,
         skin: j.skin,
         psd_classes: if j.point.ends_with("-5cls") { 5 } else { 0 },
-        // The LIGGGHTS deck's rule, so that both codes run one procedure.
-        rest: RestRule::Kinetic,
+        // The LIGGGHTS deck's rule, so that both codes run one procedure, unless the job asks
+        // for the rule that stops when the responses no longer move.
+        rest: if j.code == MBGC_RESPONSE {
+            RestRule::CANDIDATE
+        } else {
+            RestRule::Kinetic
+        },
         ..Default::default()
     };
     let t = Instant::now();
-    let (m, fill_s, flow_s, steps) = if j.code == "mbgc" {
+    let (m, fill_s, flow_s, steps) = if j.code != "liggghts" {
         let (m, rec) = run_mbgc(&sb, &p, j.seed)?;
         let steps = rec.fill_steps + rec.relax_steps + rec.flow_steps;
         (m, rec.fill_seconds, rec.flow_seconds, steps)
@@ -257,7 +267,7 @@ fn read_rows(table: &Path) -> anyhow::Result<Vec<Row>> {
             .into_iter()
             .find(|p| *p == c[0])
             .with_context(bad)?;
-        let code = ["mbgc", "liggghts"]
+        let code = ["mbgc", MBGC_RESPONSE, "liggghts"]
             .into_iter()
             .find(|p| *p == c[1])
             .with_context(bad)?;
@@ -341,12 +351,25 @@ fn jobs(a: &Args) -> Vec<Job> {
     v
 }
 
-fn cost_jobs(points: &[String], skins: &[f64], seeds: u64) -> Vec<Job> {
+/// mbgc's code name for its runs under the response rule (cost part).
+const MBGC_RESPONSE: &str = "mbgc-response";
+
+/// The cost runs, the codes of one seed one after the other, so that a slow spell of the machine
+/// hits them alike.
+fn cost_jobs(points: &[String], skins: &[f64], seeds: u64, rules: &[String]) -> Vec<Job> {
+    let mut codes = Vec::new();
+    if rules.iter().any(|r| r == "kinetic") {
+        codes.push("mbgc");
+    }
+    if rules.iter().any(|r| r == "response") {
+        codes.push(MBGC_RESPONSE);
+    }
+    codes.push("liggghts");
     let mut v = Vec::new();
     for pt in points {
         for &skin in skins {
             for seed in 1..=seeds {
-                for code in ["mbgc", "liggghts"] {
+                for &code in &codes {
                     v.push(Job {
                         part: "cost",
                         code,
@@ -369,6 +392,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     if let Some(p) = a.cost_points.iter().find(|p| point(p).is_none()) {
         anyhow::bail!("--cost-points {p}: expected a point among a, c, b, a2, c2, b2, gravel");
+    }
+    if let Some(r) = a
+        .cost_rules
+        .iter()
+        .find(|r| !["kinetic", "response"].contains(&r.as_str()))
+    {
+        anyhow::bail!("--cost-rules {r}: expected kinetic or response");
     }
     if let Some(s) = a.cost_skins.iter().find(|s| !(**s > 0.0 && s.is_finite())) {
         anyhow::bail!("--cost-skins {s}: expected a positive skin in units of d_min");
@@ -424,7 +454,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     });
     if a.only.iter().any(|o| o == "cost") {
         // Alone on the machine, one after the other: the timings are compared.
-        for j in cost_jobs(&a.cost_points, &a.cost_skins, a.cost_seeds)
+        for j in cost_jobs(&a.cost_points, &a.cost_skins, a.cost_seeds, &a.cost_rules)
             .into_iter()
             .filter(|j| !done.contains(&j.key()))
         {
@@ -858,6 +888,7 @@ fn report(rows: &[Row], before: &[Row]) -> String {
          |---|---|---|---|---|---|---|---|---|---|---|"
     );
     cost_table(w, rows);
+    cost_ratios(w, rows);
     if !before.is_empty() {
         let _ = writeln!(
             w,
@@ -885,10 +916,10 @@ fn cost_table(w: &mut String, rows: &[Row]) {
             .or_default()
             .entry(r.job.seed)
             .or_default();
-        if r.job.code == "mbgc" {
-            e.0 = Some(r.clone());
-        } else {
-            e.1 = Some(r.clone());
+        match r.job.code {
+            "mbgc" => e.0 = Some(r.clone()),
+            "liggghts" => e.1 = Some(r.clone()),
+            _ => {}
         }
     }
     for ((pt, skin), seeds) in by {
@@ -938,6 +969,81 @@ fn cost_table(w: &mut String, rows: &[Row]) {
             l_wall / m_wall,
         );
     }
+}
+
+/// Per (point, skin): each seed's ratio of LIGGGHTS' whole-run time to mbgc's, under each of
+/// mbgc's rest rules; the median and range over the seeds, and the responses beside.
+fn cost_ratios(w: &mut String, rows: &[Row]) {
+    use std::fmt::Write as _;
+    let cost: Vec<&Row> = rows.iter().filter(|r| r.job.part == "cost").collect();
+    if !cost.iter().any(|r| r.job.code == MBGC_RESPONSE) {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "\nThe whole-run ratio seed by seed (LIGGGHTS' time over mbgc's for the same seed, \
+         median and range over the seeds), with mbgc under the kinetic rule of LIGGGHTS' deck and \
+         under the response rule (`RestRule::CANDIDATE`: a phase also ends when its response has \
+         stayed within 0.05 % or 0.05 deg for 5 chunks; `docs/rest_detection.md`). Angle and \
+         density are seed means of each code.\n\n\
+         | point | seeds | ratio, kinetic rule: median [min, max] | ratio, response rule: median \
+         [min, max] | angle kinetic / response / LIGGGHTS (deg) | density kinetic / response / \
+         LIGGGHTS (kg/m3) |\n|---|---|---|---|---|---|"
+    );
+    let mut points: Vec<(String, u64)> = cost
+        .iter()
+        .map(|r| (r.job.point.clone(), (r.job.skin * 100.0).round() as u64))
+        .collect();
+    points.sort();
+    points.dedup();
+    for (pt, skin) in points {
+        let of = |code: &str| -> BTreeMap<u64, &Row> {
+            cost.iter()
+                .filter(|r| {
+                    r.job.code == code
+                        && r.job.point == pt
+                        && (r.job.skin * 100.0).round() as u64 == skin
+                })
+                .map(|r| (r.job.seed, *r))
+                .collect()
+        };
+        let (kin, resp, lig) = (of("mbgc"), of(MBGC_RESPONSE), of("liggghts"));
+        let ratios = |m: &BTreeMap<u64, &Row>| -> Vec<f64> {
+            let mut v: Vec<f64> = m
+                .iter()
+                .filter_map(|(s, r)| lig.get(s).map(|l| l.wall_s / r.wall_s))
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v
+        };
+        let show = |v: &[f64]| match v.len() {
+            0 => "not run".to_string(),
+            n => format!("**{:.2}** [{:.2}, {:.2}]", v[n / 2], v[0], v[n - 1]),
+        };
+        let mean_of = |m: &BTreeMap<u64, &Row>, f: fn(&Row) -> f64| {
+            m.values().map(|r| f(r)).sum::<f64>() / m.len() as f64
+        };
+        let (rk, rr) = (ratios(&kin), ratios(&resp));
+        let _ = writeln!(
+            w,
+            "| {pt} ({}), skin {} | {} | {} | {} | {:.2} / {:.2} / {:.2} | {:.1} / {:.1} / {:.1} |",
+            describe(&pt),
+            skin as f64 / 100.0,
+            rk.len().max(rr.len()),
+            show(&rk),
+            show(&rr),
+            mean_of(&kin, |r| r.angle),
+            mean_of(&resp, |r| r.angle),
+            mean_of(&lig, |r| r.angle),
+            mean_of(&kin, |r| r.bulk),
+            mean_of(&resp, |r| r.bulk),
+            mean_of(&lig, |r| r.bulk),
+        );
+    }
+    let _ = writeln!(
+        w,
+        "\nThe median of an even number of seeds is the upper middle one."
+    );
 }
 
 /// Measurements of single runs that the study does not repeat (it measures whole runs only).
