@@ -6,7 +6,7 @@ use mbgc_studies::{
     cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
     gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection,
     rest_validation, restitution, sampling_quality, sensitivity_report, shear_box_check,
-    shear_box_vs_liggghts, shear_cell_report,
+    shear_box_vs_liggghts, shear_cell_report, stiffness_dependence,
 };
 
 #[derive(Debug, Args)]
@@ -70,6 +70,9 @@ pub enum BenchCommand {
     /// docs/liggghts_backend.md: the shear box of seed 004's size as a campaign on mbgc's
     /// engine, LIGGGHTS on 1 process and LIGGGHTS on 2 MPI processes; means and time per run.
     LiggghtsBackend(liggghts_backend::Args),
+    /// docs/stiffness.md: the shear box along lines of K_p = E_p / (rho_p g d50), with and
+    /// without cohesion, seed means, cost per run, and where each response stops changing.
+    Stiffness(stiffness_dependence::Args),
 }
 
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
@@ -90,5 +93,6 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Diagnose(d) => diagnose_report::run(d),
         BenchCommand::Sensitivity(s) => sensitivity_report::run(s),
         BenchCommand::LiggghtsBackend(l) => liggghts_backend::run(l),
+        BenchCommand::Stiffness(s) => stiffness_dependence::run(s),
     }
 }

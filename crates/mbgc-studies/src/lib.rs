@@ -28,6 +28,8 @@
 //!   its campaign tables (docs/shear_cell.md); [`cell_metamodel_report`]: the shear-cell
 //!   metamodel's space, cost and validation against its replicate noise
 //!   (docs/metamodel_shear_cell.md).
+//! - [`stiffness_dependence`]: the shear box's responses along lines of the particle stiffness
+//!   K_p, with and without cohesion, and where each stops changing (docs/stiffness.md).
 //! - [`reference`](mod@reference): the reference codes (`--vs`).
 
 // The options' doc comments are `mbgc bench --help`'s text, written for the terminal (`<dir>`).
@@ -55,6 +57,7 @@ pub mod shear_box_check;
 pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;
 pub mod shear_cell_report;
+pub mod stiffness_dependence;
 
 /// Writes a study's report atomically (its directory made first), then says where it went
 /// ([`report_written`]).

@@ -1,0 +1,451 @@
+//! Where do the shear box's responses stop depending on the particle stiffness (issue 40)? Runs
+//! lines of the dimensionless stiffness K_p = E_p / (rho_p g d50) (E_w = E_p, so K_w = K_p)
+//! through fixed points of the space, with and without cohesion (at a fixed cohesion group
+//! Bo = ced_pp / (rho_p g d50)), several seeds each, and states for each line and response the
+//! smallest K_p from which every stiffer point agrees with the stiffest within the noise. The
+//! cost of a run grows about as sqrt(K_p) (the time step falls as 1/sqrt(E)), so the lines are
+//! run cheapest first: a study cut short has its soft ends complete.
+//!
+//! `mbgc bench stiffness --report docs/stiffness.md`; every run is a row of `--table`, appended
+//! as it finishes, so a killed study resumes.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use anyhow::Context as _;
+
+use super::rest_tables::{append, read_tsv};
+use super::shear_box_check::point;
+use super::shear_box_fill::mean_se;
+use mbgc::dem::contact::ModelClass;
+use mbgc::experiments::shear_box::{RestRule, ShearBox};
+use mbgc::experiments::{Experiment, ParamSet, RunOptions};
+
+/// Standard gravity of the groups, as the metamodels' K_p (m/s^2).
+const G: f64 = 9.81;
+
+/// `mbgc bench stiffness`.
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct Args {
+    /// Values of K_p = E_p / (rho_p g d50) on every line (E_w = E_p).
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = vec![1e4, 3e4, 1e5, 3e5, 1e6, 3e6]))]
+    pub k: Vec<f64>,
+    /// Points the lines go through (`bench shear-box-check`'s: a low, c middle, b high
+    /// friction at sigma_ln 0.15; a2, c2, b2 at 0.25); d50 8 mm, rho_p 2600.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = ["a".to_string(), "b".into()]))]
+    pub points: Vec<String>,
+    /// Cohesion groups Bo = ced_pp / (rho_p g d50) of the lines (ced_pw = 0); 0: without
+    /// cohesion (class hertz,mindlin,epsd2), otherwise hertz,mindlin,epsd2,sjkr.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = vec![0.0, 1000.0]))]
+    pub bond: Vec<f64>,
+    /// Seeds per point of a line (1..=seeds).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 3))]
+    pub seeds: u64,
+    /// Runs at a time, one thread each.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
+    pub jobs: usize,
+    /// The runs, one row each (appended as they finish).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value = "docs/data/stiffness/runs.tsv")
+    )]
+    pub table: PathBuf,
+    /// Markdown report.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
+}
+
+const HEADER: &str =
+    "point\tbond\tk_p\tseed\tshear_angle\tbulk_density\tsettled\tsteps\tparticles\tseconds";
+const COLUMNS: usize = 10;
+
+/// One run of a line.
+#[derive(Clone, Debug, PartialEq)]
+struct Job {
+    point: String,
+    bond: f64,
+    k: f64,
+    seed: u64,
+}
+
+impl Job {
+    fn key(&self) -> (String, u64, u64, u64) {
+        (
+            self.point.clone(),
+            self.bond.to_bits(),
+            self.k.to_bits(),
+            self.seed,
+        )
+    }
+
+    /// The shear box and the parameters of this run.
+    fn scene(&self) -> anyhow::Result<(ShearBox, ParamSet)> {
+        let base = point(&self.point).with_context(|| {
+            format!(
+                "--points {}: expected a point among a, c, b, a2, c2, b2",
+                self.point
+            )
+        })?;
+        let get = |n: &str| base.get(n).with_context(|| format!("point without {n}"));
+        let (rho, d50_mm) = (get("rho_p")?, get("d50")?);
+        let weight = rho * G * d50_mm * 1e-3;
+        let e = self.k * weight;
+        let mut pairs: Vec<(String, f64)> = base
+            .iter()
+            .map(|(n, v)| (n.to_string(), v))
+            .filter(|(n, _)| n != "E_p" && n != "E_w")
+            .collect();
+        pairs.push(("E_p".into(), e));
+        pairs.push(("E_w".into(), e));
+        let class = if self.bond > 0.0 {
+            pairs.push(("ced_pp".into(), self.bond * weight));
+            pairs.push(("ced_pw".into(), 0.0));
+            ModelClass::parse("hertz,mindlin,epsd2,sjkr")?
+        } else {
+            ModelClass::default()
+        };
+        let sb = ShearBox {
+            class,
+            // The rule of every shipped campaign, so that the lines speak for their models.
+            rest: RestRule::Kinetic,
+            ..ShearBox::default()
+        };
+        Ok((sb, ParamSet::from_pairs(&pairs)))
+    }
+}
+
+/// A finished run.
+#[derive(Clone, Debug)]
+struct Row {
+    job: Job,
+    angle: f64,
+    density: f64,
+    settled: bool,
+    seconds: f64,
+}
+
+fn read_rows(path: &std::path::Path) -> anyhow::Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for (k, c) in read_tsv(path, COLUMNS)?.into_iter().enumerate() {
+        let num = |i: usize| -> anyhow::Result<f64> {
+            c[i].parse().with_context(|| {
+                format!(
+                    "{}: line {}, field {}: expected a number, found {:?}",
+                    path.display(),
+                    k + 2,
+                    i + 1,
+                    c[i]
+                )
+            })
+        };
+        rows.push(Row {
+            job: Job {
+                point: c[0].clone(),
+                bond: num(1)?,
+                k: num(2)?,
+                seed: num(3)? as u64,
+            },
+            angle: num(4)?,
+            density: num(5)?,
+            settled: c[6] == "1",
+            seconds: num(9)?,
+        });
+    }
+    Ok(rows)
+}
+
+/// Every run of the study, cheapest first: by K_p, then seed, then line.
+fn jobs(a: &Args) -> Vec<Job> {
+    let mut ks = a.k.clone();
+    ks.sort_by(f64::total_cmp);
+    let mut v = Vec::new();
+    for &k in &ks {
+        for seed in 1..=a.seeds {
+            for &bond in &a.bond {
+                for p in &a.points {
+                    v.push(Job {
+                        point: p.clone(),
+                        bond,
+                        k,
+                        seed,
+                    });
+                }
+            }
+        }
+    }
+    v
+}
+
+/// Runs the study.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    if let Some(k) = a.k.iter().find(|k| !(k.is_finite() && **k > 0.0)) {
+        anyhow::bail!("--k {k}: expected positive finite values of K_p");
+    }
+    if let Some(b) = a.bond.iter().find(|b| !(b.is_finite() && **b >= 0.0)) {
+        anyhow::bail!("--bond {b}: expected cohesion groups of at least 0");
+    }
+    if a.seeds == 0 || a.jobs == 0 {
+        anyhow::bail!("--seeds and --jobs: expected at least 1");
+    }
+    let todo: Vec<Job> = {
+        let done: Vec<_> = read_rows(&a.table)?.iter().map(|r| r.job.key()).collect();
+        jobs(a)
+            .into_iter()
+            .filter(|j| !done.contains(&j.key()))
+            .collect()
+    };
+    // Every scene is built before anything runs: a bad point fails at once.
+    for j in &todo {
+        j.scene()?;
+    }
+    eprintln!("stiffness: {} runs to do, {} at a time", todo.len(), a.jobs);
+    let queue = Mutex::new(todo.into_iter().rev().collect::<Vec<_>>());
+    let write = Mutex::new(());
+    let failures = Mutex::new(Vec::<String>::new());
+    std::thread::scope(|s| {
+        for _ in 0..a.jobs {
+            s.spawn(|| {
+                while let Some(j) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                    let result = j.scene().and_then(|(sb, p)| {
+                        let o = sb
+                            .run(&p, j.seed, &RunOptions::default())
+                            .with_context(|| format!("{j:?}"))?;
+                        let line = format!(
+                            "{}\t{}\t{}\t{}\t{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
+                            j.point,
+                            j.bond,
+                            j.k,
+                            j.seed,
+                            o.get("shear_angle").unwrap_or(f64::NAN),
+                            o.get("bulk_density").unwrap_or(f64::NAN),
+                            u8::from(o.diagnostics.settled),
+                            o.diagnostics.steps,
+                            o.diagnostics.particles,
+                            o.diagnostics.wall_time_s
+                        );
+                        let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
+                        eprintln!("{line}");
+                        append(&a.table, HEADER, &[line])
+                    });
+                    if let Err(e) = result {
+                        if let Ok(mut f) = failures.lock() {
+                            f.push(format!("{e:#}"));
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap_or_default();
+    for f in &failures {
+        eprintln!("failed: {f}");
+    }
+    let rows = read_rows(&a.table)?;
+    let text = report(a, &rows);
+    match &a.report {
+        Some(path) => crate::write_report(
+            a.json,
+            path,
+            &text,
+            serde_json::json!({ "runs": rows.len() }),
+        )?,
+        None => print!("{text}"),
+    }
+    if !failures.is_empty() {
+        anyhow::bail!("{} runs failed (listed above)", failures.len());
+    }
+    Ok(())
+}
+
+/// Per K_p of one line: (K_p, (mean, se) of the angle, of the density, mean seconds, runs,
+/// unsettled runs).
+type LinePoint = (f64, (f64, f64), (f64, f64), f64, usize, usize);
+
+fn line_points(rows: &[&Row]) -> Vec<LinePoint> {
+    let mut by: BTreeMap<u64, Vec<&Row>> = BTreeMap::new();
+    for r in rows {
+        by.entry(r.job.k.to_bits()).or_default().push(r);
+    }
+    let mut v: Vec<LinePoint> = by
+        .into_iter()
+        .map(|(k, rs)| {
+            let of = |f: fn(&Row) -> f64| {
+                let x: Vec<f64> = rs.iter().map(|r| f(r)).filter(|x| x.is_finite()).collect();
+                if x.len() < 2 {
+                    (x.first().copied().unwrap_or(f64::NAN), f64::NAN)
+                } else {
+                    mean_se(&x)
+                }
+            };
+            (
+                f64::from_bits(k),
+                of(|r| r.angle),
+                of(|r| r.density),
+                rs.iter().map(|r| r.seconds).sum::<f64>() / rs.len() as f64,
+                rs.len(),
+                rs.iter().filter(|r| !r.settled).count(),
+            )
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v
+}
+
+/// The smallest K_p from which every point up to the stiffest agrees with the stiffest within
+/// twice their combined standard error; `None` if only the stiffest does.
+fn plateau(pts: &[(f64, (f64, f64))]) -> Option<f64> {
+    let (_, (top, se_top)) = *pts.last()?;
+    let mut from = None;
+    for &(k, (m, se)) in pts.iter().rev().skip(1) {
+        let tol = 2.0 * (se * se + se_top * se_top).sqrt();
+        if (m - top).abs() <= tol {
+            from = Some(k);
+        } else {
+            break;
+        }
+    }
+    from
+}
+
+fn report(a: &Args, rows: &[Row]) -> String {
+    let mut w = String::new();
+    let _ = writeln!(
+        w,
+        "# How the shear box depends on the particle stiffness\n\nRegenerate with `cargo run \
+         --release -- bench stiffness --report docs/stiffness.md` (runs in `{}`, one row per \
+         run, appended as runs finish).\n",
+        a.table.display()
+    );
+    let _ = writeln!(
+        w,
+        "Without cohesion the shear box sees E_p, rho_p and d50 only through K_p = E_p / (rho_p \
+         g d50) (and K_w; here E_w = E_p, so K_w = K_p): every time of its schedule is a \
+         multiple of sqrt(d_max / g). Each line below holds a point of the space (d50 8 mm, rho_p \
+         2600 kg/m3, sigma_ln as named) and varies E_p = E_w. The cohesive lines hold Bo = \
+         ced_pp / (rho_p g d50) fixed (ced_pw = 0). Seed means with standard errors; the kinetic \
+         rest rule of the shipped campaigns.\n"
+    );
+    let mut lines: Vec<(String, u64)> = rows
+        .iter()
+        .map(|r| (r.job.point.clone(), r.job.bond.to_bits()))
+        .collect();
+    lines.sort();
+    lines.dedup();
+    let mut summary = Vec::new();
+    for (pt, bond_bits) in lines {
+        let bond = f64::from_bits(bond_bits);
+        let rs: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.job.point == pt && r.job.bond.to_bits() == bond_bits)
+            .collect();
+        let pts = line_points(&rs);
+        let what = point(&pt).map_or(String::new(), |p| {
+            let g = |k: &str| p.get(k).unwrap_or(f64::NAN);
+            format!(
+                "mu_pp {}, mu_r_pp {}, sigma_ln {}",
+                g("mu_pp"),
+                g("mu_r_pp"),
+                g("sigma_ln")
+            )
+        });
+        let _ = writeln!(
+            w,
+            "## Point {pt} ({what}), {}\n\n| K_p | E_p (Pa) | runs | angle (deg) | bulk density \
+             (kg/m3) | seconds per run |\n|---|---|---|---|---|---|",
+            if bond > 0.0 {
+                format!("cohesive, Bo = {bond}")
+            } else {
+                "without cohesion".into()
+            }
+        );
+        let weight = 2600.0 * G * 8e-3;
+        for (k, (am, ase), (dm, dse), secs, n, unsettled) in &pts {
+            let _ = writeln!(
+                w,
+                "| {k:.0e} | {:.3e} | {n}{} | {am:.2} +- {ase:.2} | {dm:.1} +- {dse:.1} | {secs:.0} |",
+                k * weight,
+                if *unsettled > 0 {
+                    format!(" ({unsettled} not settled)")
+                } else {
+                    String::new()
+                },
+            );
+        }
+        let angle: Vec<(f64, (f64, f64))> = pts.iter().map(|p| (p.0, p.1)).collect();
+        let density: Vec<(f64, (f64, f64))> = pts.iter().map(|p| (p.0, p.2)).collect();
+        let show =
+            |x: Option<f64>| x.map_or("only the stiffest point".into(), |k| format!("{k:.0e}"));
+        let top = pts.last().map_or(f64::NAN, |p| p.0);
+        let _ = writeln!(
+            w,
+            "\nAgrees with the stiffest point (K_p {top:.0e}) within twice the combined standard \
+             error from K_p = {} (angle) and {} (density) on.\n",
+            show(plateau(&angle)),
+            show(plateau(&density))
+        );
+        summary.push((pt, bond, plateau(&angle), plateau(&density), top));
+    }
+    if !summary.is_empty() {
+        let _ = writeln!(
+            w,
+            "## Summary\n\n| line | stiffest K_p run | angle stops changing from K_p | density \
+             stops changing from K_p |\n|---|---|---|---|"
+        );
+        for (pt, bond, a, d, top) in summary {
+            let f = |x: Option<f64>| x.map_or("-".into(), |k| format!("{k:.0e}"));
+            let _ = writeln!(w, "| {pt}, Bo {bond} | {top:.0e} | {} | {} |", f(a), f(d));
+        }
+        let _ = writeln!(
+            w,
+            "\n\"-\": the stiffest two points still differ beyond the noise. A plateau seen only \
+             within the run points is a lower bound on where the rigid limit begins."
+        );
+    }
+    w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_runs_stiffness_is_its_k_times_the_weight_group() {
+        let j = Job {
+            point: "a".into(),
+            bond: 500.0,
+            k: 1e5,
+            seed: 1,
+        };
+        let (sb, p) = j.scene().unwrap();
+        let weight = 2600.0 * G * 8e-3;
+        let k = p.get("E_p").unwrap() / weight;
+        assert!((k / 1e5 - 1.0).abs() < 1e-12, "K_p {k}");
+        assert_eq!(p.get("E_w"), p.get("E_p"));
+        assert!((p.get("ced_pp").unwrap() / weight / 500.0 - 1.0).abs() < 1e-12);
+        assert!(sb.class.label().contains("sjkr"));
+        let plain = Job { bond: 0.0, ..j };
+        let (sb, p) = plain.scene().unwrap();
+        assert!(p.get("ced_pp").is_none());
+        assert!(!sb.class.label().contains("sjkr"));
+    }
+
+    #[test]
+    fn the_plateau_starts_where_the_points_join_the_stiffest() {
+        let pts = [
+            (1e4, (30.0, 0.2)),
+            (1e5, (31.0, 0.2)),
+            (1e6, (31.9, 0.2)),
+            (1e7, (32.0, 0.2)),
+        ];
+        assert_eq!(plateau(&pts), Some(1e6));
+        let moving = [(1e4, (30.0, 0.1)), (1e5, (31.0, 0.1))];
+        assert_eq!(plateau(&moving), None);
+    }
+}
