@@ -51,6 +51,12 @@ pub struct CalibrateArgs {
     /// Write the best parameter set (all model inputs, first model) as TOML, for `mbgc validate`.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// With `--bayes` and one model: write the posterior samples as CSV, one row per equally
+    /// weighted TMCMC sample. Columns: every model input in model order (the fixed ones at
+    /// their value, the PSD's d50 and sigma_ln among them), `sigma` (the relative model error;
+    /// 0 when `--sigma-max 0`), `weight` (1/n), `model` and `material` (the same in every row).
+    #[arg(long, value_name = "FILE")]
+    pub posterior_out: Option<PathBuf>,
 }
 
 pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
@@ -67,6 +73,24 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
     }
     if let Some(out) = &a.out {
         refuse_overwriting_inputs("--out", out, &inputs)?;
+    }
+    if let Some(out) = &a.posterior_out {
+        if !a.bayes {
+            anyhow::bail!(
+                "--posterior-out {}: there is no posterior without --bayes, so it would write \
+                 nothing; add --bayes",
+                out.display()
+            );
+        }
+        if a.model.len() > 1 {
+            anyhow::bail!(
+                "--posterior-out {}: {} models were given and their posteriors have different \
+                 parameters; calibrate with one --model to write its samples",
+                out.display(),
+                a.model.len()
+            );
+        }
+        refuse_overwriting_inputs("--posterior-out", out, &inputs)?;
     }
     if let Some(dir) = &a.plot {
         for label in model_labels(&a.model) {
@@ -95,6 +119,12 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
         if let Some(out) = a.out.as_ref().filter(|_| i == 0) {
             write_atomic(out, s.calibrated_toml().as_bytes())?;
             written.push(out.clone());
+        }
+        if let Some(out) = a.posterior_out.as_ref().filter(|_| i == 0) {
+            if let Some(samples) = s.posterior_samples() {
+                write_atomic(out, posterior_csv(&samples)?.as_bytes())?;
+                written.push(out.clone());
+            }
         }
         if let Some(dir) = &a.plot {
             written.extend(plot(dir, Path::new(label), &s)?);
@@ -131,6 +161,22 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
         outln!("{}", serde_json::to_string_pretty(&v)?)?;
     }
     Ok(())
+}
+
+/// The posterior samples as CSV text (the columns of `--posterior-out`).
+fn posterior_csv(p: &mbgc::calibrate::session::PosteriorSamples) -> anyhow::Result<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header = p.columns();
+    header.push("model".into());
+    header.push("material".into());
+    w.write_record(&header)?;
+    for row in &p.rows {
+        let mut rec: Vec<String> = row.iter().map(|v| format!("{v:?}")).collect();
+        rec.push(p.model.clone());
+        rec.push(p.material.clone());
+        w.write_record(&rec)?;
+    }
+    Ok(String::from_utf8(w.into_inner()?)?)
 }
 
 /// The models' names as the session records them (the shipped ones' when none is given).

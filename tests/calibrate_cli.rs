@@ -52,6 +52,7 @@ fn calibrate_writes_parameters_and_reports_the_posterior() {
     )
     .unwrap();
     let out = dir.path().join("cal.toml");
+    let post = dir.path().join("posterior.csv");
     let text = ok(&[
         "calibrate",
         "--material",
@@ -65,7 +66,45 @@ fn calibrate_writes_parameters_and_reports_the_posterior() {
         "1000",
         "--sigma-max",
         "0.05",
+        "--posterior-out",
+        s(&post),
     ]);
+    // The samples: every model input (the fixed one at its value), sigma, weight, model,
+    // material; equally weighted, the free ones around the truth.
+    let mut r = csv::Reader::from_path(&post).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    assert_eq!(
+        header,
+        ["a", "b", "c", "sigma", "weight", "model", "material"],
+        "{header:?}"
+    );
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    assert!(rows.len() >= 1000, "{} samples", rows.len());
+    let col = |k: usize| -> Vec<f64> { rows.iter().map(|x| x[k].parse().unwrap()).collect() };
+    assert!(col(2).iter().all(|&c| c == 1.5), "c is fixed");
+    let weights: f64 = col(4).iter().sum();
+    assert!((weights - 1.0).abs() < 1e-9, "weights sum to {weights}");
+    let mean_a = col(0).iter().sum::<f64>() / rows.len() as f64;
+    assert!((mean_a - 0.3).abs() < 0.03, "posterior mean of a {mean_a}");
+    assert!(
+        col(3).iter().all(|&g| (0.0..=0.05).contains(&g)),
+        "sigma within its prior"
+    );
+    assert!(rows.iter().all(|x| &x[6] == "toy"), "material named");
+    // Without --bayes there is no posterior to write: refused, not silently skipped.
+    let e = fails(&[
+        "calibrate",
+        "--material",
+        s(&mat),
+        "--model",
+        s(&model),
+        "--posterior-out",
+        s(&dir.path().join("p2.csv")),
+    ]);
+    assert!(
+        e.contains("--posterior-out") && e.contains("--bayes"),
+        "{e}"
+    );
     assert!(text.contains("distinct optim"), "{text}");
     assert!(text.contains("log evidence"), "{text}");
     let cal: toml::Table = std::fs::read_to_string(&out).unwrap().parse().unwrap();

@@ -141,6 +141,36 @@ pub struct Session {
     pub sigma_max: f64,
 }
 
+/// The equally weighted posterior samples of a session, every model input in each (fixed ones
+/// at their value), with the relative model error and the weight: what `calibrate --bayes
+/// --posterior-out` writes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PosteriorSamples {
+    /// The model's inputs, in model order (the material's PSD among them: d50, sigma_ln).
+    pub inputs: Vec<String>,
+    /// The inputs the calibration searched; the others were fixed by the material.
+    pub free: Vec<String>,
+    /// Whether the relative model error sigma was sampled (otherwise its column is 0).
+    pub sigma_sampled: bool,
+    /// One row per sample: the inputs, then sigma, then the weight (1/n: TMCMC's last stage
+    /// leaves equally weighted samples).
+    pub rows: Vec<Vec<f64>>,
+    /// The model the posterior is of, as the session names it.
+    pub model: String,
+    /// The material calibrated.
+    pub material: String,
+}
+
+impl PosteriorSamples {
+    /// The column names of [`PosteriorSamples::rows`]: the inputs, `sigma`, `weight`.
+    pub fn columns(&self) -> Vec<String> {
+        let mut c = self.inputs.clone();
+        c.push("sigma".into());
+        c.push("weight".into());
+        c
+    }
+}
+
 /// Axis ranges and the marked point of a corner plot.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
@@ -325,6 +355,48 @@ impl Session {
         let good = self.equally_good();
         (self.calibration.excess_parameters > 0 && good.len() > 1 && !self.free.is_empty())
             .then(|| good.iter().map(|o| o.x.clone()).collect())
+    }
+
+    /// The posterior as a table a propagation or a script reads: one row per equally weighted
+    /// TMCMC sample, with the columns [`PosteriorSamples::columns`]. `None` without a posterior.
+    pub fn posterior_samples(&self) -> Option<PosteriorSamples> {
+        let post = self.posterior.as_ref()?;
+        let inputs: Vec<String> = self.best_inputs.iter().map(|(n, _)| n.clone()).collect();
+        // Where each free parameter sits among the model inputs; the rest keep their fixed value.
+        let at: Vec<usize> = self
+            .free
+            .iter()
+            .map(|f| inputs.iter().position(|n| n == f).unwrap_or(usize::MAX))
+            .collect();
+        let sampled_sigma = post.names.len() > self.free.len();
+        let weight = 1.0 / post.draws.len().max(1) as f64;
+        let rows = post
+            .draws
+            .iter()
+            .map(|d| {
+                let mut x: Vec<f64> = self.best_inputs.iter().map(|(_, v)| *v).collect();
+                for (&k, &v) in at.iter().zip(d) {
+                    if let Some(slot) = x.get_mut(k) {
+                        *slot = v;
+                    }
+                }
+                x.push(if sampled_sigma {
+                    d[self.free.len()]
+                } else {
+                    0.0
+                });
+                x.push(weight);
+                x
+            })
+            .collect();
+        Some(PosteriorSamples {
+            inputs,
+            free: self.free.clone(),
+            sigma_sampled: sampled_sigma,
+            rows,
+            model: self.model.clone(),
+            material: self.material.clone(),
+        })
     }
 
     /// Axes of a corner plot of the posterior: the search box with the best optimum marked,
