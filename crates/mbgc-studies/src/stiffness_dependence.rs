@@ -38,8 +38,10 @@ pub struct Args {
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = ["a".to_string(), "b".into()]))]
     pub points: Vec<String>,
     /// Cohesion groups Bo = ced_pp / (rho_p g d50) of the lines (ced_pw = 0); 0: without
-    /// cohesion (class hertz,mindlin,epsd2), otherwise hertz,mindlin,epsd2,sjkr.
-    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = vec![0.0, 1000.0]))]
+    /// cohesion (class hertz,mindlin,epsd2), otherwise hertz,mindlin,epsd2,sjkr. At most
+    /// 0.01 K_p on every point of the line: beyond, the box stops measuring (the cohesive
+    /// space's constraint ced_pp <= 0.01 E_p, examples/space_shear_box_sjkr.toml).
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = vec![0.0, 100.0]))]
     pub bond: Vec<f64>,
     /// Seeds per point of a line (1..=seeds).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 3))]
@@ -190,6 +192,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     if let Some(b) = a.bond.iter().find(|b| !(b.is_finite() && **b >= 0.0)) {
         anyhow::bail!("--bond {b}: expected cohesion groups of at least 0");
+    }
+    let k_min = a.k.iter().copied().fold(f64::INFINITY, f64::min);
+    if let Some(b) = a.bond.iter().find(|b| **b > 0.01 * k_min) {
+        anyhow::bail!(
+            "--bond {b}: above 0.01 K_p at K_p = {k_min:e}, where the shear box stops measuring \
+             (no flank, or a fill that never comes to rest; ced_pp <= 0.01 E_p in \
+             examples/space_shear_box_sjkr.toml); expected at most {}",
+            0.01 * k_min
+        );
     }
     if a.seeds == 0 || a.jobs == 0 {
         anyhow::bail!("--seeds and --jobs: expected at least 1");
