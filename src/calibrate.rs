@@ -91,6 +91,9 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             );
         }
         refuse_overwriting_inputs("--posterior-out", out, &inputs)?;
+        if let Some(o) = &a.out {
+            refuse_overwriting_inputs("--posterior-out", out, &[("--out", o.as_path())])?;
+        }
     }
     if let Some(dir) = &a.plot {
         for label in model_labels(&a.model) {
@@ -121,10 +124,14 @@ pub fn run(a: &CalibrateArgs) -> anyhow::Result<()> {
             written.push(out.clone());
         }
         if let Some(out) = a.posterior_out.as_ref().filter(|_| i == 0) {
-            if let Some(samples) = s.posterior_samples() {
-                write_atomic(out, posterior_csv(&samples)?.as_bytes())?;
-                written.push(out.clone());
-            }
+            let samples = s.posterior_samples()?.ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--posterior-out {}: the calibration with {label} has no posterior",
+                    out.display()
+                )
+            })?;
+            write_atomic(out, posterior_csv(&samples)?.as_bytes())?;
+            written.push(out.clone());
         }
         if let Some(dir) = &a.plot {
             written.extend(plot(dir, Path::new(label), &s)?);

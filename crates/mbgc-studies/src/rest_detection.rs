@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 
 use super::noise_floor::replicate_noise;
-use super::rest_tables::{append, design_rows, read_tsv};
+use super::rest_tables::{append, design_box, design_rows, read_tsv};
 use mbgc::experiments::shear_box::{ChunkState, Phase, RestRule, ShearBox, Thresholds};
 use mbgc::experiments::{Experiment, ParamSet, RunOptions};
 
@@ -162,7 +162,7 @@ fn f(s: &str) -> f64 {
 }
 
 fn load(args: &Args) -> anyhow::Result<Vec<(RunRow, Vec<ChunkState>)>> {
-    let runs: Vec<RunRow> = read_tsv(&args.runs, 12)?
+    let runs: Vec<RunRow> = read_tsv(&args.runs, RUN_HEADER)?
         .into_iter()
         .map(|c| RunRow {
             row: c[0].parse().unwrap_or(u64::MAX),
@@ -180,7 +180,7 @@ fn load(args: &Args) -> anyhow::Result<Vec<(RunRow, Vec<ChunkState>)>> {
         })
         .collect();
     let mut traces: BTreeMap<u64, Vec<ChunkState>> = BTreeMap::new();
-    for c in read_tsv(&args.traces, 10)? {
+    for c in read_tsv(&args.traces, TRACE_HEADER)? {
         let row: u64 = c[0].parse().unwrap_or(u64::MAX);
         traces.entry(row).or_default().push(ChunkState {
             phase: if c[1] == "fill" {
@@ -260,11 +260,9 @@ fn max_abs(v: &[f64]) -> f64 {
 
 /// Runs the study.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    // The reruns repeat the recorded runs: the rule every campaign so far used.
-    let sb = ShearBox {
-        rest: RestRule::Kinetic,
-        ..ShearBox::default()
-    };
+    // The reruns repeat the recorded runs: the table's box and the rule every campaign so far
+    // used.
+    let sb = design_box(&args.design, RestRule::Kinetic)?;
     let design = design_rows(&args.design, &sb)?;
     let done: Vec<u64> = load(args)?.iter().map(|(r, _)| r.row).collect();
     for &row in &args.rows {
@@ -324,7 +322,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let runs = load(args)?;
     // The check: both rules, the same seeds, whole runs.
-    let checked = read_tsv(&args.check, 7)?;
+    let checked = read_tsv(&args.check, CHECK_HEADER)?;
     for &row in &args.rows {
         for seed in 1..=args.seeds {
             for (name, rule) in [
@@ -344,7 +342,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 eprintln!("check: design row {row}, seed {seed}, {name} rule");
                 let b = ShearBox {
                     rest: rule,
-                    ..ShearBox::default()
+                    ..sb.clone()
                 };
                 let o = b
                     .run(p, seed, &RunOptions::default())
@@ -363,7 +361,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             }
         }
     }
-    let checked = read_tsv(&args.check, 7)?;
+    let checked = read_tsv(&args.check, CHECK_HEADER)?;
     let noise = replicate_noise(&args.design, &args.replicates)?;
     let mut text = report(args, &runs, noise.as_ref());
     text.push_str(&check_report(&checked, noise.as_ref()));

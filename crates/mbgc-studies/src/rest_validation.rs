@@ -17,8 +17,8 @@ use std::sync::Mutex;
 use anyhow::Context as _;
 
 use super::noise_floor::replicate_noise;
-use super::rest_tables::{append, design_rows, read_tsv};
-use mbgc::experiments::shear_box::{RestRule, ShearBox};
+use super::rest_tables::{append, design_box, design_rows, read_tsv};
+use mbgc::experiments::shear_box::RestRule;
 use mbgc::experiments::{Experiment, RunOptions};
 use mbgc::metamodel::{Metamodel, Metrics};
 
@@ -69,6 +69,8 @@ struct Outcome {
     density: f64,
     steps: f64,
     seconds: f64,
+    /// Whether the run came to rest (a rerun's own record; recorded rows are done runs).
+    settled: bool,
 }
 
 /// The recorded outcome and the model's inputs of every done row of the design table.
@@ -115,6 +117,7 @@ fn recorded(path: &Path, inputs: &[String]) -> anyhow::Result<BTreeMap<u64, (Out
             density: num(c_b)?,
             steps: num(c_steps)?,
             seconds: num(c_wall)?,
+            settled: true,
         };
         let x = c_in
             .iter()
@@ -125,10 +128,11 @@ fn recorded(path: &Path, inputs: &[String]) -> anyhow::Result<BTreeMap<u64, (Out
     Ok(out)
 }
 
-/// The reruns written so far, by row.
-fn reruns(path: &Path) -> anyhow::Result<BTreeMap<u64, Outcome>> {
+/// The reruns written so far, by row; `seeds`: the design's seed of each row, which a rerun must
+/// have (a rerun of another table's row is refused, naming the line).
+fn reruns(path: &Path, seeds: &BTreeMap<u64, u64>) -> anyhow::Result<BTreeMap<u64, Outcome>> {
     let mut out = BTreeMap::new();
-    for (k, c) in read_tsv(path, 7)?.into_iter().enumerate() {
+    for (k, c) in read_tsv(path, HEADER)?.into_iter().enumerate() {
         let num = |i: usize| -> anyhow::Result<f64> {
             c[i].parse().with_context(|| {
                 format!(
@@ -140,33 +144,72 @@ fn reruns(path: &Path) -> anyhow::Result<BTreeMap<u64, Outcome>> {
                 )
             })
         };
-        out.insert(
-            num(0)? as u64,
-            Outcome {
-                angle: num(2)?,
-                density: num(3)?,
-                steps: num(5)?,
-                seconds: num(6)?,
-            },
-        );
+        let (row, seed) = (num(0)? as u64, c[1].parse::<u64>().ok());
+        if seeds.get(&row) != seed.as_ref() {
+            anyhow::bail!(
+                "{}: line {}: row {row} with seed {}, but the design's row {row} has seed {}: \
+                 the reruns of another table? Give another --out",
+                path.display(),
+                k + 2,
+                c[1],
+                seeds
+                    .get(&row)
+                    .map_or("none (no such done row)".into(), |s| s.to_string())
+            );
+        }
+        let o = Outcome {
+            angle: num(2)?,
+            density: num(3)?,
+            steps: num(5)?,
+            seconds: num(6)?,
+            settled: c[4] == "1",
+        };
+        if out.insert(row, o).is_some() {
+            anyhow::bail!(
+                "{}: line {}: row {row} a second time (two studies writing one file?)",
+                path.display(),
+                k + 2
+            );
+        }
     }
     Ok(out)
 }
 
-/// Runs the rows not yet in `--out`, `threads` at a time.
-fn run_missing(args: &Args) -> anyhow::Result<()> {
-    let sb = ShearBox {
-        rest: RestRule::CANDIDATE,
-        ..ShearBox::default()
-    };
+/// Ties `--out` to its design: a sidecar `<out>.design` holds the design's path, written with
+/// the first rerun; another design with the same `--out` is refused.
+fn check_out_design(args: &Args) -> anyhow::Result<()> {
+    let side = PathBuf::from(format!("{}.design", args.out.display()));
+    let design = args.design.display().to_string();
+    match std::fs::read_to_string(&side) {
+        Ok(t) if t.trim() == design => Ok(()),
+        Ok(t) => anyhow::bail!(
+            "--out {}: it holds reruns of {} ({}), not of --design {design}; give another --out",
+            args.out.display(),
+            t.trim(),
+            side.display()
+        ),
+        Err(_) => {
+            if let Some(d) = side.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(d).with_context(|| d.display().to_string())?;
+            }
+            std::fs::write(&side, format!("{design}\n")).with_context(|| side.display().to_string())
+        }
+    }
+}
+
+/// Runs the rows not yet in `--out`, `threads` at a time; returns the failures (a failed row is
+/// tried again by the next call).
+fn run_missing(args: &Args, seeds: &BTreeMap<u64, u64>) -> anyhow::Result<Vec<String>> {
+    // The table's own box (model class, scale) under the candidate rule.
+    let sb = design_box(&args.design, RestRule::CANDIDATE)?;
     let design = design_rows(&args.design, &sb)?;
-    let done = reruns(&args.out)?;
+    let done = reruns(&args.out, seeds)?;
     let todo: Vec<_> = design
         .iter()
         .filter(|(r, _)| !done.contains_key(r))
         .collect();
     if todo.is_empty() {
-        return Ok(());
+        return Ok(Vec::new());
     }
     eprintln!(
         "{} of {} rows to rerun under the candidate rule, {} at a time",
@@ -176,7 +219,7 @@ fn run_missing(args: &Args) -> anyhow::Result<()> {
     );
     let next = AtomicUsize::new(0);
     let write = Mutex::new(());
-    let failure: Mutex<Option<anyhow::Error>> = Mutex::new(None);
+    let failures: Mutex<Vec<String>> = Mutex::new(Vec::new());
     std::thread::scope(|s| {
         for _ in 0..args.threads.max(1) {
             s.spawn(|| loop {
@@ -184,9 +227,6 @@ fn run_missing(args: &Args) -> anyhow::Result<()> {
                 let Some((row, (seed, p, _))) = todo.get(k) else {
                     return;
                 };
-                if failure.lock().map(|f| f.is_some()).unwrap_or(true) {
-                    return;
-                }
                 let result = sb
                     .run(p, *seed, &RunOptions::default())
                     .with_context(|| format!("design row {row}, seed {seed}"))
@@ -204,18 +244,14 @@ fn run_missing(args: &Args) -> anyhow::Result<()> {
                         append(&args.out, HEADER, &[line])
                     });
                 if let Err(e) = result {
-                    if let Ok(mut f) = failure.lock() {
-                        f.get_or_insert(e);
+                    if let Ok(mut f) = failures.lock() {
+                        f.push(format!("{e:#}"));
                     }
-                    return;
                 }
             });
         }
     });
-    match failure.into_inner() {
-        Ok(Some(e)) => Err(e),
-        _ => Ok(()),
-    }
+    Ok(failures.into_inner().unwrap_or_default())
 }
 
 /// Runs the study.
@@ -226,22 +262,40 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let model = Metamodel::load(&args.model).with_context(|| args.model.display().to_string())?;
     let inputs = model.input_names();
     let rec = recorded(&args.design, &inputs)?;
-    run_missing(args)?;
-    let new = reruns(&args.out)?;
+    let seeds: BTreeMap<u64, u64> = design_rows(
+        &args.design,
+        &design_box(&args.design, RestRule::CANDIDATE)?,
+    )?
+    .into_iter()
+    .map(|(row, (seed, _, _))| (row, seed))
+    .collect();
+    check_out_design(args)?;
+    let failures = run_missing(args, &seeds)?;
+    for f in &failures {
+        eprintln!("failed: {f}");
+    }
+    let new = reruns(&args.out, &seeds)?;
     let noise = replicate_noise(&args.design, &args.replicates)?;
     let text = report(args, &model, &rec, &new, noise.as_ref())?;
+    let summary = serde_json::json!({ "rows": new.len(), "failed": failures.len() });
     match &args.report {
-        Some(path) => crate::write_report(
-            args.json,
-            path,
-            &text,
-            serde_json::json!({ "rows": new.len() }),
-        ),
-        None => {
-            print!("{text}");
-            Ok(())
+        Some(path) => crate::write_report(args.json, path, &text, summary)?,
+        None if args.json => {
+            eprint!("{text}");
+            println!(
+                "{}",
+                serde_json::json!({ "report": null, "rows": new.len() })
+            );
         }
+        None => print!("{text}"),
     }
+    if !failures.is_empty() {
+        anyhow::bail!(
+            "{} reruns failed (listed above; the next call tries them again)",
+            failures.len()
+        );
+    }
+    Ok(())
 }
 
 fn mean(v: &[f64]) -> f64 {
@@ -320,17 +374,18 @@ fn report(
     );
     let _ = writeln!(
         w,
-        "## The shipped model on both\n\n`{}` scored on the same {} rows:\n\n| response | RMSE on the \
-         recorded runs | RMSE on the reruns | ratio | rerun - recorded: mean (se) | sd of the \
-         difference | replicate sd x sqrt 2 |\n|---|---|---|---|---|---|---|",
+        "## The model on both\n\n`{}` scored on the rows with a value in both runs and a \
+         prediction (n):\n\n| response | n | RMSE on the recorded runs | RMSE on the reruns | \
+         ratio | rerun - recorded: mean (se) | sd of the difference | replicate sd x sqrt 2 \
+         |\n|---|---|---|---|---|---|---|---|",
         args.model.display(),
-        rows.len()
     );
     let x: Vec<&Vec<f64>> = rows.iter().map(|r| &rec[r].1).collect();
     let cols: Vec<Vec<f64>> = (0..model.inputs.len())
         .map(|j| x.iter().map(|x| x[j]).collect())
         .collect();
     let mean_density = mean(&old.iter().map(|o| o.density).collect::<Vec<_>>());
+    let mut verdicts = Vec::new();
     for (name, get, noise_sd) in [
         (
             "shear_angle",
@@ -348,32 +403,67 @@ fn report(
         };
         let pred = model.predict(r, &cols);
         let keep: Vec<usize> = (0..rows.len())
-            .filter(|&k| get(&old[k]).is_finite() && get(&now[k]).is_finite())
+            .filter(|&k| {
+                get(&old[k]).is_finite() && get(&now[k]).is_finite() && pred[k].is_finite()
+            })
             .collect();
+        if keep.len() < 2 {
+            let _ = writeln!(
+                w,
+                "| {name} | {} | too few rows to compare | | | | | |",
+                keep.len()
+            );
+            continue;
+        }
         let pick = |v: &[Outcome]| keep.iter().map(|&k| get(&v[k])).collect::<Vec<_>>();
         let p: Vec<f64> = keep.iter().map(|&k| pred[k]).collect();
         let (m_old, m_new) = (Metrics::of(&pick(&old), &p), Metrics::of(&pick(&now), &p));
         let d: Vec<f64> = keep.iter().map(|&k| get(&now[k]) - get(&old[k])).collect();
+        let (md, se, sdd) = (mean(&d), sd(&d) / (d.len() as f64).sqrt(), sd(&d));
         let _ = writeln!(
             w,
-            "| {name} | {:.3} | {:.3} | {:.3} | {:+.3} ({:.3}) | {:.3} | {} |",
+            "| {name} | {} | {:.3} | {:.3} | {:.3} | {md:+.3} ({se:.3}) | {sdd:.3} | {} |",
+            keep.len(),
             m_old.rmse,
             m_new.rmse,
             m_new.rmse / m_old.rmse,
-            mean(&d),
-            sd(&d) / (d.len() as f64).sqrt(),
-            sd(&d),
             noise_sd.map_or("not measured".into(), |s| format!(
                 "{:.3}",
                 s * std::f64::consts::SQRT_2
             )),
         );
+        verdicts.push(format!(
+            "{name}: the model's RMSE on the reruns is {:.1} % {} than on the recorded runs \
+             (the bar: within 10 %); the mean shift {md:+.3} is {} twice its standard error; the \
+             rows' differences spread {}",
+            100.0 * (m_new.rmse / m_old.rmse - 1.0).abs(),
+            if m_new.rmse > m_old.rmse {
+                "higher"
+            } else {
+                "lower"
+            },
+            if md.abs() > 2.0 * se {
+                "beyond"
+            } else {
+                "within"
+            },
+            noise_sd.map_or("(no replicate noise to compare with)".into(), |n| format!(
+                "{:.2} times what two replicate runs differ by (sd x sqrt 2)",
+                sdd / (n * std::f64::consts::SQRT_2)
+            ))
+        ));
     }
+    for v in &verdicts {
+        let _ = writeln!(w, "\n- {v}.");
+    }
+    let unsettled = now.iter().filter(|o| !o.settled).count();
     let _ = writeln!(
         w,
-        "\nA rerun under another rule is another sample of the same noise where the rule cuts \
-         in, so the difference of a row is at most about the replicate difference (sd x sqrt \
-         2); a mean difference beyond 2 standard errors would be a bias of the rule."
+        "\nA rerun under another rule is another sample of the run's noise after the point where \
+         the rules part, so a row's difference can reach the replicate difference; a mean shift \
+         beyond twice its standard error would be a bias of the rule. Reruns not at rest by the \
+         rule's criterion: {unsettled} of {} (scored like the others).",
+        now.len()
     );
     Ok(w)
 }

@@ -263,7 +263,7 @@ fn read_rows(table: &Path) -> anyhow::Result<Vec<Row>> {
             c[i].parse::<f64>()
                 .with_context(|| format!("{}: line {}: column {}", table.display(), n + 1, i + 1))
         };
-        let part = ["compare", "gravel", "causes", "scale", "cost"]
+        let part = ["compare", "gravel", "causes", "scale", "cost", COST_RULES]
             .into_iter()
             .find(|p| *p == c[0])
             .with_context(bad)?;
@@ -353,6 +353,10 @@ fn jobs(a: &Args) -> Vec<Job> {
 
 /// mbgc's code name for its runs under the response rule (cost part).
 const MBGC_RESPONSE: &str = "mbgc-response";
+/// The table's part name of the cost runs made since the response rule (issue 38): each seed's
+/// three runs one after the other in one invocation, kept apart from the older "cost" rows,
+/// which came from other builds and sessions.
+const COST_RULES: &str = "cost-rules";
 
 /// The cost runs, the codes of one seed one after the other, so that a slow spell of the machine
 /// hits them alike.
@@ -371,7 +375,7 @@ fn cost_jobs(points: &[String], skins: &[f64], seeds: u64, rules: &[String]) -> 
             for seed in 1..=seeds {
                 for &code in &codes {
                     v.push(Job {
-                        part: "cost",
+                        part: COST_RULES,
                         code,
                         point: pt.clone(),
                         k: 10.0,
@@ -887,8 +891,18 @@ fn report(rows: &[Row], before: &[Row]) -> String {
          mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio | per particle-step |\n\
          |---|---|---|---|---|---|---|---|---|---|---|"
     );
-    cost_table(w, rows);
+    cost_table(w, rows, "cost");
     cost_ratios(w, rows);
+    if rows.iter().any(|r| r.job.part == COST_RULES) {
+        let _ = writeln!(
+            w,
+            "\nThe same runs (mbgc under the kinetic rule) phase by phase:\n\n\
+             | point | skin | seeds | particles mbgc / LIGGGHTS | steps mbgc / LIGGGHTS | mbgc fill s | \
+             mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio | per particle-step |\n\
+             |---|---|---|---|---|---|---|---|---|---|---|"
+        );
+        cost_table(w, rows, COST_RULES);
+    }
     if !before.is_empty() {
         let _ = writeln!(
             w,
@@ -898,7 +912,7 @@ fn report(rows: &[Row], before: &[Row]) -> String {
              mbgc outflow s | mbgc whole s | LIGGGHTS whole s | ratio | per particle-step |\n\
              |---|---|---|---|---|---|---|---|---|---|---|"
         );
-        cost_table(w, before);
+        cost_table(w, before, "cost");
     }
     let _ = writeln!(w, "\n{PROFILE}");
     s
@@ -906,11 +920,11 @@ fn report(rows: &[Row], before: &[Row]) -> String {
 
 /// One line per (point, skin) of the cost rows: seed means, and ratios over the seeds both codes
 /// ran.
-fn cost_table(w: &mut String, rows: &[Row]) {
+fn cost_table(w: &mut String, rows: &[Row], part: &str) {
     use std::fmt::Write as _;
     // Seeds both codes have, per (point, skin): whole-run times are summed over them.
     let mut by: BTreeMap<(String, u64), BTreeMap<u64, CostPair>> = BTreeMap::new();
-    for r in rows.iter().filter(|r| r.job.part == "cost") {
+    for r in rows.iter().filter(|r| r.job.part == part) {
         let e = by
             .entry((r.job.point.clone(), (r.job.skin * 100.0).round() as u64))
             .or_default()
@@ -975,8 +989,8 @@ fn cost_table(w: &mut String, rows: &[Row]) {
 /// mbgc's rest rules; the median and range over the seeds, and the responses beside.
 fn cost_ratios(w: &mut String, rows: &[Row]) {
     use std::fmt::Write as _;
-    let cost: Vec<&Row> = rows.iter().filter(|r| r.job.part == "cost").collect();
-    if !cost.iter().any(|r| r.job.code == MBGC_RESPONSE) {
+    let cost: Vec<&Row> = rows.iter().filter(|r| r.job.part == COST_RULES).collect();
+    if cost.is_empty() {
         return;
     }
     let _ = writeln!(
@@ -1018,18 +1032,31 @@ fn cost_ratios(w: &mut String, rows: &[Row]) {
         };
         let show = |v: &[f64]| match v.len() {
             0 => "not run".to_string(),
-            n => format!("**{:.2}** [{:.2}, {:.2}]", v[n / 2], v[0], v[n - 1]),
+            n => {
+                let median = if n % 2 == 1 {
+                    v[n / 2]
+                } else {
+                    0.5 * (v[n / 2 - 1] + v[n / 2])
+                };
+                format!("**{median:.2}** [{:.2}, {:.2}] ({n} seeds)", v[0], v[n - 1])
+            }
         };
+        // Seed means over the seeds where all three codes ran, so they compare like the ratios.
+        let all: Vec<u64> = lig
+            .keys()
+            .copied()
+            .filter(|s| kin.contains_key(s) && resp.contains_key(s))
+            .collect();
         let mean_of = |m: &BTreeMap<u64, &Row>, f: fn(&Row) -> f64| {
-            m.values().map(|r| f(r)).sum::<f64>() / m.len() as f64
+            all.iter().map(|s| f(m[s])).sum::<f64>() / all.len() as f64
         };
         let (rk, rr) = (ratios(&kin), ratios(&resp));
         let _ = writeln!(
             w,
             "| {pt} ({}), skin {} | {} | {} | {} | {:.2} / {:.2} / {:.2} | {:.1} / {:.1} / {:.1} |",
-            describe(&pt),
+            point(&pt).map_or("unknown point".into(), |_| describe(&pt)),
             skin as f64 / 100.0,
-            rk.len().max(rr.len()),
+            all.len(),
             show(&rk),
             show(&rr),
             mean_of(&kin, |r| r.angle),
@@ -1042,7 +1069,8 @@ fn cost_ratios(w: &mut String, rows: &[Row]) {
     }
     let _ = writeln!(
         w,
-        "\nThe median of an even number of seeds is the upper middle one."
+        "\nseeds: those with all three runs (the angle and density means are over them); each \
+         ratio column counts its own pairs."
     );
 }
 

@@ -358,16 +358,29 @@ impl Session {
     }
 
     /// The posterior as a table a propagation or a script reads: one row per equally weighted
-    /// TMCMC sample, with the columns [`PosteriorSamples::columns`]. `None` without a posterior.
-    pub fn posterior_samples(&self) -> Option<PosteriorSamples> {
-        let post = self.posterior.as_ref()?;
+    /// TMCMC sample, with the columns [`PosteriorSamples::columns`]. `None` without a posterior;
+    /// an error if a searched parameter is not among the model's inputs (a session built by
+    /// hand).
+    pub fn posterior_samples(&self) -> Result<Option<PosteriorSamples>> {
+        let Some(post) = self.posterior.as_ref() else {
+            return Ok(None);
+        };
         let inputs: Vec<String> = self.best_inputs.iter().map(|(n, _)| n.clone()).collect();
         // Where each free parameter sits among the model inputs; the rest keep their fixed value.
         let at: Vec<usize> = self
             .free
             .iter()
-            .map(|f| inputs.iter().position(|n| n == f).unwrap_or(usize::MAX))
-            .collect();
+            .map(|f| {
+                inputs.iter().position(|n| n == f).ok_or_else(|| {
+                    Error::invalid(format!(
+                        "posterior of {}: the searched parameter {f} is not an input of the model \
+                         (inputs: {})",
+                        self.model,
+                        inputs.join(", ")
+                    ))
+                })
+            })
+            .collect::<Result<_>>()?;
         let sampled_sigma = post.names.len() > self.free.len();
         let weight = 1.0 / post.draws.len().max(1) as f64;
         let rows = post
@@ -376,9 +389,7 @@ impl Session {
             .map(|d| {
                 let mut x: Vec<f64> = self.best_inputs.iter().map(|(_, v)| *v).collect();
                 for (&k, &v) in at.iter().zip(d) {
-                    if let Some(slot) = x.get_mut(k) {
-                        *slot = v;
-                    }
+                    x[k] = v;
                 }
                 x.push(if sampled_sigma {
                     d[self.free.len()]
@@ -389,14 +400,14 @@ impl Session {
                 x
             })
             .collect();
-        Some(PosteriorSamples {
+        Ok(Some(PosteriorSamples {
             inputs,
             free: self.free.clone(),
             sigma_sampled: sampled_sigma,
             rows,
             model: self.model.clone(),
             material: self.material.clone(),
-        })
+        }))
     }
 
     /// Axes of a corner plot of the posterior: the search box with the best optimum marked,
