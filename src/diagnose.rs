@@ -19,8 +19,8 @@ pub struct DiagnoseArgs {
     pub measurements: PathBuf,
     /// Metamodels: one of the set's class, and models of classes with a candidate effect (a
     /// model of a richer class also serves the poorer one, with the extra effect off)
-    /// [default: the shipped models/shear_box.json and its cohesive extension
-    /// models/shear_box_sjkr.json, built into mbgc].
+    /// [default: the shipped models/shear_box.json, models/shear_cell.json and their cohesive
+    /// extensions models/shear_box_sjkr.json and models/shear_cell_sjkr.json, built into mbgc].
     #[arg(long)]
     pub model: Vec<PathBuf>,
     /// L-BFGS starts of each joint fit.

@@ -17,6 +17,8 @@ pub const SHEAR_BOX: &str = "models/shear_box.json";
 pub const SHEAR_BOX_SJKR: &str = "models/shear_box_sjkr.json";
 /// The shipped shear-cell model (class hertz,mindlin,epsd2).
 pub const SHEAR_CELL: &str = "models/shear_cell.json";
+/// The shipped cohesive shear-cell model (class hertz,mindlin,epsd2,sjkr).
+pub const SHEAR_CELL_SJKR: &str = "models/shear_cell_sjkr.json";
 
 /// A file of the repository built in: `(its path, its text)`. A macro because `include_str!`
 /// takes only a literal, and one entry a line keeps adding a model one line.
@@ -32,14 +34,15 @@ const MODELS: &[(&str, &str)] = &[
     built_in!("models/shear_box.json"),
     built_in!("models/shear_box_sjkr.json"),
     built_in!("models/shear_cell.json"),
+    built_in!("models/shear_cell_sjkr.json"),
 ];
 
 /// The models a calibration uses when none is given.
 pub const CALIBRATION_MODELS: &[&str] = &[SHEAR_BOX];
-/// The models a diagnosis uses when none is given: the shear box's base class and its cohesive
-/// extension (the candidate sjkr's model), and the shear cell's base class (for a set with
+/// The models a diagnosis uses when none is given: each experiment's base class and its cohesive
+/// extension (the candidate sjkr's model), the shear box's and the shear cell's (for a set with
 /// shear-cell samples: each sample is served by its experiment's models).
-pub const DIAGNOSIS_MODELS: &[&str] = &[SHEAR_BOX, SHEAR_BOX_SJKR, SHEAR_CELL];
+pub const DIAGNOSIS_MODELS: &[&str] = &[SHEAR_BOX, SHEAR_BOX_SJKR, SHEAR_CELL, SHEAR_CELL_SJKR];
 
 /// The example material's path in the repository.
 pub const GRAVEL: &str = "examples/gravel.toml";
