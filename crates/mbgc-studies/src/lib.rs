@@ -75,6 +75,34 @@ pub fn write_report(
     Ok(())
 }
 
+/// A study's report to `report` ([`write_report`]), or without one to standard output; with
+/// `--json` and no file the text goes to standard error and standard output holds one JSON object
+/// (`report: null`, then the study's own fields).
+pub fn emit_report(
+    json: bool,
+    report: Option<&std::path::Path>,
+    text: &str,
+    fields: serde_json::Value,
+) -> anyhow::Result<()> {
+    match report {
+        Some(path) => write_report(json, path, text, fields),
+        None if json => {
+            eprint!("{text}");
+            let mut obj = serde_json::Map::new();
+            obj.insert("report".into(), serde_json::Value::Null);
+            if let serde_json::Value::Object(m) = fields {
+                obj.extend(m);
+            }
+            println!("{}", serde_json::Value::Object(obj));
+            Ok(())
+        }
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
+}
+
 /// Tells where a study's report went: a line on standard error, and with `--json` one JSON
 /// object on standard output (`report`, then the study's own fields), as every command does.
 pub fn report_written(json: bool, report: &std::path::Path, fields: serde_json::Value) {

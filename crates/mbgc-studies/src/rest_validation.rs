@@ -277,18 +277,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let new = reruns(&args.out, &seeds)?;
     let noise = replicate_noise(&args.design, &args.replicates)?;
     let text = report(args, &model, &rec, &new, noise.as_ref())?;
-    let summary = serde_json::json!({ "rows": new.len(), "failed": failures.len() });
-    match &args.report {
-        Some(path) => crate::write_report(args.json, path, &text, summary)?,
-        None if args.json => {
-            eprint!("{text}");
-            println!(
-                "{}",
-                serde_json::json!({ "report": null, "rows": new.len() })
-            );
-        }
-        None => print!("{text}"),
-    }
+    crate::emit_report(
+        args.json,
+        args.report.as_deref(),
+        &text,
+        serde_json::json!({ "rows": new.len(), "failed": failures.len() }),
+    )?;
     if !failures.is_empty() {
         anyhow::bail!(
             "{} reruns failed (listed above; the next call tries them again)",

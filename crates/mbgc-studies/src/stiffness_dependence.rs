@@ -287,22 +287,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let rows = read_rows(&a.table)?;
     let text = report(a, &rows);
-    match &a.report {
-        Some(path) => crate::write_report(
-            a.json,
-            path,
-            &text,
-            serde_json::json!({ "runs": rows.len() }),
-        )?,
-        None if a.json => {
-            eprint!("{text}");
-            println!(
-                "{}",
-                serde_json::json!({ "report": null, "runs": rows.len() })
-            );
-        }
-        None => print!("{text}"),
-    }
+    crate::emit_report(
+        a.json,
+        a.report.as_deref(),
+        &text,
+        serde_json::json!({ "runs": rows.len() }),
+    )?;
     if !failures.is_empty() {
         anyhow::bail!("{} runs failed (listed above)", failures.len());
     }
