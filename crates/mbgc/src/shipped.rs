@@ -167,7 +167,15 @@ mod tests {
                 );
             }
         }
-        assert_eq!(names(), ["shear_box", "shear_box_sjkr", "shear_cell"]);
+        assert_eq!(
+            names(),
+            [
+                "shear_box",
+                "shear_box_sjkr",
+                "shear_cell",
+                "shear_cell_sjkr"
+            ]
+        );
         for defaults in [CALIBRATION_MODELS, DIAGNOSIS_MODELS] {
             let labels: Vec<String> = models(defaults).unwrap().into_iter().map(|m| m.1).collect();
             assert_eq!(labels, defaults);
@@ -179,7 +187,8 @@ mod tests {
         let e = model("shear_cube").unwrap_err().to_string();
         assert_eq!(
             e,
-            "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr, shear_cell"
+            "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr, shear_cell, \
+             shear_cell_sjkr"
         );
     }
 
