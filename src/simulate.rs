@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use mbgc::dem::contact::ModelClass;
+use mbgc::experiments::shear_box::RestRule;
 
 use mbgc::campaign::decks::write_decks;
 use mbgc::campaign::{
@@ -57,6 +58,13 @@ pub struct SimulateArgs {
     /// parameter of an effect not named is refused. Recorded in the table and in each run id.
     #[arg(long, value_name = "EFFECTS", value_parser = parse_model_class)]
     pub model_class: Option<ModelClass>,
+    /// When a shear-box run's fill and outflow are at rest: kinetic (speeds only, every shipped
+    /// campaign's rule) or response (also when the measured density or angle has stood still
+    /// for 5 chunks: 0.84 of the steps on a rerun validation design, docs/rest_validation.md).
+    /// Recorded in the table's sidecar and, when not kinetic, in each run id; other
+    /// experiments and the LIGGGHTS backend refuse it.
+    #[arg(long, value_name = "RULE", value_parser = parse_rest_rule)]
+    pub rest_rule: Option<RestRule>,
     /// Run again the rows whose earlier run failed (their failed lines are replaced).
     #[arg(long)]
     pub retry_failed: bool,
@@ -85,6 +93,11 @@ pub fn parse_backend(s: &str) -> Result<Backend, String> {
     Backend::parse(s).map_err(|e| e.to_string())
 }
 
+/// `--rest-rule` as clap reads it.
+pub fn parse_rest_rule(s: &str) -> Result<RestRule, String> {
+    RestRule::parse(s)
+}
+
 /// `--model-class` as clap reads it (the message names the option and the known effects).
 pub fn parse_model_class(s: &str) -> Result<ModelClass, String> {
     ModelClass::parse(s).map_err(|e| e.to_string())
@@ -108,6 +121,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         model_class: a.model_class,
         backend: a.backend,
         mpi: a.mpi,
+        rest_rule: a.rest_rule,
     };
     if a.backend == Backend::Embedded {
         for (option, given) in [

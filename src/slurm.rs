@@ -53,6 +53,9 @@ pub struct SlurmArgs {
     /// Effects of the contact law, as for `mbgc simulate`.
     #[arg(long, value_name = "EFFECTS", value_parser = parse_model_class)]
     pub model_class: Option<ModelClass>,
+    /// kinetic or response, as for `mbgc simulate`.
+    #[arg(long, value_name = "RULE", value_parser = crate::simulate::parse_rest_rule)]
+    pub rest_rule: Option<mbgc::experiments::shear_box::RestRule>,
     /// embedded or liggghts, as for `mbgc simulate`.
     #[arg(long, default_value = "embedded", value_parser = parse_backend)]
     pub backend: Backend,
@@ -100,6 +103,7 @@ pub fn run(a: &SlurmArgs) -> anyhow::Result<()> {
         model_class: a.model_class,
         backend: a.backend,
         mpi: a.mpi,
+        rest_rule: a.rest_rule,
     };
     let experiment = experiment_by_name(&a.experiment, &settings)?;
     let set = a
@@ -159,6 +163,9 @@ pub fn run(a: &SlurmArgs) -> anyhow::Result<()> {
     }
     if let Some(c) = a.model_class {
         args.extend(["--model-class".into(), c.to_string()]);
+    }
+    if let Some(r) = a.rest_rule {
+        args.extend(["--rest-rule".into(), r.label()]);
     }
     if let Some(n) = a.mpi {
         args.extend(["--mpi".into(), n.to_string()]);

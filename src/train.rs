@@ -42,6 +42,10 @@ pub struct TrainArgs {
     /// Effects of the contact law [default: the space's [model] class, else seed 004's].
     #[arg(long, value_name = "EFFECTS", value_parser = crate::simulate::parse_model_class)]
     pub model_class: Option<ModelClass>,
+    /// Shear box: kinetic or response, as for `mbgc simulate` [default: kinetic]; recorded in
+    /// the train's record, and an extension or a resume under another rule is refused.
+    #[arg(long, value_name = "RULE", value_parser = crate::simulate::parse_rest_rule)]
+    pub rest_rule: Option<mbgc::experiments::shear_box::RestRule>,
     /// Responses to fit, comma-separated [default: the experiment's measured ones].
     #[arg(long, value_delimiter = ',')]
     pub responses: Vec<String>,
@@ -125,6 +129,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         shard: a.shard.as_deref().map(Shard::parse).transpose()?,
         box_scale: a.box_scale,
         model_class: a.model_class,
+        rest_rule: a.rest_rule,
         responses: a.responses.clone(),
         no_similarity: a.no_similarity,
         extends: a.extends.clone(),

@@ -96,6 +96,15 @@ fn train_samples_simulates_fits_resumes_and_extends() {
     assert!(std::fs::read_to_string(d.join("sampling/sleep_test.csv"))
         .unwrap()
         .starts_with(&before));
+    // A rest rule is the shear box's: refused here, naming the option and the experiment.
+    let mut a = args("16");
+    a.extend(["--rest-rule".to_string(), "response".to_string()]);
+    let o = mbgc(d, &a.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("--rest-rule response") && e.contains("sleep-test"),
+        "{e}"
+    );
     // Smaller: refused, naming the design.
     let o = mbgc(
         d,

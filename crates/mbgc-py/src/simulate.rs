@@ -129,6 +129,7 @@ pub fn simulate(
         model_class,
         backend,
         mpi,
+        ..Default::default()
     };
     if let (Backend::Liggghts, Some(v)) = (backend, &vtk) {
         return Err(invalid(
@@ -198,6 +199,11 @@ pub fn simulate(
                 }
             }
             if finished {
+                // A Ctrl-C that came after the last poll (the callable's calls above may be
+                // where it landed, between two of them) is raised, not lost.
+                if interrupted.is_none() {
+                    interrupted = py.check_signals().err();
+                }
                 break;
             }
             py.detach(|| std::thread::sleep(Duration::from_millis(50)));

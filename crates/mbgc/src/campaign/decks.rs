@@ -90,6 +90,8 @@ impl DeckCampaign {
             model_class: Some(class),
             backend,
             mpi,
+            // Decks are LIGGGHTS', which ends its phases by the kinetic rule only.
+            rest_rule: None,
         })
     }
 

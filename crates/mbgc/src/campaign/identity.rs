@@ -2,6 +2,7 @@
 //! restart names and seeds a row the same way.
 
 use super::registry::ExperimentSettings;
+use crate::experiments::shear_box::RestRule;
 use crate::experiments::ParamSet;
 use crate::numeric::{splitmix64, Fnv1a};
 use mbgc_dem::contact::ModelClass;
@@ -11,7 +12,8 @@ use mbgc_dem::contact::ModelClass;
 /// number), the row seed, and the settings that can change results (`box_scale`, only when given;
 /// the model class, only when it is not seed 004's default, so that the ids of tables written
 /// before model classes existed, all of the default class, stay valid; the backend, only when
-/// it is not the embedded engine, for the same reason), printed as 16 lowercase hex digits. The
+/// it is not the embedded engine, and the rest rule, only when it is not the kinetic one, for
+/// the same reason), printed as 16 lowercase hex digits. The
 /// number of MPI processes (`--mpi`) is an execution setting, like the threads: it is recorded
 /// in the table's sidecar, and a table holds the runs of one process count.
 pub fn run_id(
@@ -35,6 +37,10 @@ pub fn run_id(
     if let Some(c) = class.filter(|c| **c != ModelClass::default()) {
         h.str("model_class");
         h.str(&c.label());
+    }
+    if let Some(r) = settings.rest_rule.filter(|r| *r != RestRule::Kinetic) {
+        h.str("rest_rule");
+        h.str(&r.label());
     }
     if settings.backend.is_recorded() {
         h.str("backend");
@@ -121,6 +127,16 @@ mod tests {
         };
         assert_eq!(run_id("wall-impact", &inputs(2.0), 7, &on(1), None), l1);
         assert_eq!(run_id("wall-impact", &inputs(2.0), 7, &on(2), None), l1);
+        // The kinetic rule, given or not, keeps the id (every table before issue 38 was run by
+        // it); the response rule changes it.
+        let rule = |r| ExperimentSettings {
+            rest_rule: Some(r),
+            ..Default::default()
+        };
+        let kinetic = rule(RestRule::Kinetic);
+        assert_eq!(run_id("wall-impact", &inputs(2.0), 7, &kinetic, None), id);
+        let response = rule(RestRule::CANDIDATE);
+        assert_ne!(run_id("wall-impact", &inputs(2.0), 7, &response, None), id);
         assert_ne!(
             run_id("x", &inputs(0.0), 1, &s, None),
             run_id("x", &inputs(-0.0), 1, &s, None)

@@ -44,7 +44,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
 }
 
 /// Refuses tables whose sidecars say they were run as different campaigns (another seed, `--set`,
-/// box scale, model class, backend, MPI processes, experiment or design size): their rows would not
+/// box scale, model class, backend, MPI processes, rest rule, experiment or design size): their rows would not
 /// collide by run id, so nothing else would notice. Tables without a sidecar (already merged) are
 /// not compared.
 fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
@@ -83,6 +83,11 @@ fn same_campaign(inputs: &[PathBuf]) -> Result<()> {
                 "--mpi",
                 m0.mpi.unwrap_or(1).to_string(),
                 m.mpi.unwrap_or(1).to_string(),
+            ),
+            (
+                "--rest-rule",
+                m0.rest_rule.clone().unwrap_or_else(|| "kinetic".into()),
+                m.rest_rule.clone().unwrap_or_else(|| "kinetic".into()),
             ),
         ];
         if let Some((what, a, b)) = differs.iter().find(|(_, a, b)| a != b) {

@@ -27,6 +27,9 @@ pub struct ExperimentSettings {
     /// granular flow amplifies it), so a table records its N in the sidecar and holds runs of
     /// one N; the run id names the physical run and leaves N out, as it leaves out the threads.
     pub mpi: Option<usize>,
+    /// `--rest-rule`: when a shear-box run's fill and outflow are at rest (default: the kinetic
+    /// rule of every campaign before issue 38). Part of a run's identity when not kinetic.
+    pub rest_rule: Option<RestRule>,
 }
 
 impl ExperimentSettings {
@@ -39,6 +42,10 @@ impl ExperimentSettings {
                     "--box-scale {k}: expected a positive finite factor"
                 )));
             }
+        }
+        if let Some(r) = self.rest_rule {
+            r.check()
+                .map_err(|e| Error::invalid(format!("--rest-rule: {e}")))?;
         }
         match (self.mpi, self.backend) {
             (Some(0), _) => Err(Error::invalid("--mpi 0: expected at least 1 process")),
@@ -63,19 +70,22 @@ fn liggghts_experiment(
             ShearBox {
                 box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),
                 class: s.model_class.unwrap_or_default(),
-                rest: RestRule::Kinetic,
+                rest: s.rest_rule.unwrap_or_default(),
                 ..ShearBox::default()
             },
             mode,
         )?)),
-        "shear-cell" => Ok(Box::new(LiggghtsShearCell::new(
-            ShearCell {
-                cell_scale: s.box_scale.unwrap_or(ShearCell::default().cell_scale),
-                class: s.model_class.unwrap_or_default(),
-                ..ShearCell::default()
-            },
-            mode,
-        )?)),
+        "shear-cell" => {
+            no_rest_rule("shear-cell", s)?;
+            Ok(Box::new(LiggghtsShearCell::new(
+                ShearCell {
+                    cell_scale: s.box_scale.unwrap_or(ShearCell::default().cell_scale),
+                    class: s.model_class.unwrap_or_default(),
+                    ..ShearCell::default()
+                },
+                mode,
+            )?))
+        }
         _ if all().iter().any(|(n, _)| *n == name) => Err(Error::invalid(format!(
             "--experiment {name} --backend liggghts: mbgc writes LIGGGHTS decks for the shear box \
              and the shear cell only; run {name} with the embedded backend"
@@ -119,6 +129,18 @@ fn no_box_scale(name: &str, s: &ExperimentSettings, why: &str) -> Result<()> {
     }
 }
 
+/// Refuses `--rest-rule` for an experiment that has no rest rule to set.
+fn no_rest_rule(name: &str, s: &ExperimentSettings) -> Result<()> {
+    match s.rest_rule {
+        Some(r) => Err(Error::invalid(format!(
+            "--rest-rule {}: {name} has no rest rule (only the shear box ends its phases by \
+             one), so it would do nothing",
+            r.label()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// The box scale an experiment runs at when `given` is what the command line said: the shear
 /// box's own default when none was given; `None` for experiments without a box scale.
 pub fn effective_box_scale(experiment: &str, given: Option<f64>) -> Option<f64> {
@@ -136,12 +158,14 @@ pub type Constructor = fn(&ExperimentSettings) -> Result<Box<dyn Experiment>>;
 const EXPERIMENTS: &[(&str, Constructor)] = &[
     ("wall-impact", |s| {
         no_box_scale("wall-impact", s, "it has no box")?;
+        no_rest_rule("wall-impact", s)?;
         Ok(Box::new(WallImpact {
             class: s.model_class.unwrap_or_default(),
         }))
     }),
     ("hopper", |s| {
         no_box_scale("hopper", s, "its size is the `scale` parameter")?;
+        no_rest_rule("hopper", s)?;
         Ok(Box::new(Hopper {
             class: s.model_class.unwrap_or_default(),
         }))
@@ -150,10 +174,12 @@ const EXPERIMENTS: &[(&str, Constructor)] = &[
         Ok(Box::new(ShearBox {
             box_scale: s.box_scale.unwrap_or(ShearBox::default().box_scale),
             class: s.model_class.unwrap_or_default(),
+            rest: s.rest_rule.unwrap_or_default(),
             ..ShearBox::default()
         }))
     }),
     ("shear-cell", |s| {
+        no_rest_rule("shear-cell", s)?;
         Ok(Box::new(ShearCell {
             cell_scale: s.box_scale.unwrap_or(ShearCell::default().cell_scale),
             class: s.model_class.unwrap_or_default(),
@@ -169,8 +195,10 @@ pub(crate) mod sleep_test;
 
 /// Test stand-ins, compiled only into test builds (`stand-ins` feature, see Cargo.toml).
 #[cfg(feature = "stand-ins")]
-const STAND_INS: &[(&str, Constructor)] =
-    &[("sleep-test", |_| Ok(Box::new(sleep_test::SleepTest)))];
+const STAND_INS: &[(&str, Constructor)] = &[("sleep-test", |s| {
+    no_rest_rule("sleep-test", s)?;
+    Ok(Box::new(sleep_test::SleepTest))
+})];
 #[cfg(not(feature = "stand-ins"))]
 const STAND_INS: &[(&str, Constructor)] = &[];
 
@@ -269,6 +297,43 @@ mod tests {
         assert!(experiment_names().contains(&"embedded"));
         let e = register("shear-box", |_| Ok(Box::new(WallImpact::default())));
         assert!(e.unwrap_err().to_string().contains("already registered"));
+    }
+
+    #[test]
+    fn the_rest_rule_reaches_the_shear_box_and_is_refused_where_nothing_reads_it() {
+        let response = ExperimentSettings {
+            rest_rule: Some(RestRule::parse("response").unwrap()),
+            ..Default::default()
+        };
+        let e = experiment_by_name("shear-box", &response).unwrap();
+        assert_eq!(e.name(), "shear-box");
+        for name in ["wall-impact", "hopper", "shear-cell"] {
+            let e = experiment_by_name(name, &response)
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(
+                e.contains("--rest-rule response") && e.contains(name),
+                "{e}"
+            );
+        }
+        let liggghts = ExperimentSettings {
+            backend: Backend::Liggghts,
+            ..response
+        };
+        let e = experiment_by_name("shear-box", &liggghts)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("kinetic rule only"), "{e}");
+        // An unknown name is refused with the known ones.
+        let e = RestRule::parse("calm").unwrap_err();
+        assert!(
+            e.contains("\"calm\"") && e.contains("kinetic, response"),
+            "{e}"
+        );
+        assert_eq!(RestRule::parse("kinetic").unwrap().label(), "kinetic");
+        assert_eq!(RestRule::CANDIDATE.label(), "response");
     }
 
     #[test]

@@ -45,6 +45,10 @@ pub struct Meta {
     /// MPI processes per run of an external backend, when given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mpi: Option<usize>,
+    /// The shear box's rest rule when it is not the kinetic one (absent otherwise, as in every
+    /// sidecar written before the rule could be chosen).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_rule: Option<String>,
 }
 
 fn default_class_label() -> String {
@@ -77,6 +81,11 @@ impl Meta {
                 .is_recorded()
                 .then(|| plan.settings.backend.label().to_string()),
             mpi: plan.settings.mpi,
+            rest_rule: plan
+                .settings
+                .rest_rule
+                .filter(|r| *r != crate::experiments::shear_box::RestRule::Kinetic)
+                .map(|r| r.label()),
         }
     }
 
@@ -285,4 +294,43 @@ pub fn status(out: &Path, design: Option<&Path>) -> Result<Status> {
         total,
         partial_line: t.partial_len > 0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::{experiment_by_name, ExperimentSettings};
+    use crate::experiments::shear_box::RestRule;
+
+    /// A non-kinetic rest rule is written into the sidecar and changes every run id; the
+    /// kinetic one, given or not, leaves both as tables before the rule existed had them.
+    #[test]
+    fn the_rest_rule_is_in_the_sidecar_and_the_run_ids_only_when_not_kinetic() {
+        let dir = tempfile::tempdir().unwrap();
+        let design = dir.path().join("design.csv");
+        std::fs::write(
+            &design,
+            "E_p,E_w,nu_p,e_pp,e_pw,mu_pp,mu_pw,mu_r_pp,mu_r_pw,rho_p,d50,sigma_ln\n\
+             3.5e7,1.3e7,0.4,0.85,0.44,0.69,0.93,0.016,0.17,2600,10,0.118\n",
+        )
+        .unwrap();
+        let plan = |rule: Option<RestRule>| {
+            let s = ExperimentSettings {
+                rest_rule: rule,
+                ..Default::default()
+            };
+            let e = experiment_by_name("shear-box", &s).unwrap();
+            Plan::new(e.as_ref(), &design, &[], 1, &s, None).unwrap()
+        };
+        let (none, kinetic, response) = (
+            plan(None),
+            plan(Some(RestRule::Kinetic)),
+            plan(Some(RestRule::CANDIDATE)),
+        );
+        assert_eq!(Meta::of(&none).rest_rule, None);
+        assert_eq!(Meta::of(&kinetic).rest_rule, None);
+        assert_eq!(Meta::of(&response).rest_rule.as_deref(), Some("response"));
+        assert_eq!(none.rows[0].run_id, kinetic.rows[0].run_id);
+        assert_ne!(none.rows[0].run_id, response.rows[0].run_id);
+    }
 }

@@ -101,6 +101,37 @@ impl RestRule {
         angle_tol: 0.05,
     };
 
+    /// The names `--rest-rule` takes: `kinetic`, and `response` for [`RestRule::CANDIDATE`],
+    /// the one response rule a whole validation design was rerun under (docs/rest_validation.md).
+    pub const NAMES: [&'static str; 2] = ["kinetic", "response"];
+
+    /// The rule called `name` on the command line.
+    pub fn parse(name: &str) -> Result<RestRule, String> {
+        match name {
+            "kinetic" => Ok(RestRule::Kinetic),
+            "response" => Ok(RestRule::CANDIDATE),
+            _ => Err(format!(
+                "rest rule \"{name}\": expected one of {}",
+                RestRule::NAMES.join(", ")
+            )),
+        }
+    }
+
+    /// The rule's name in a run id, a sidecar and a report: `kinetic`, `response` for the
+    /// candidate, and the numbers for any other response rule (a study's), so that two rules
+    /// never share a label.
+    pub fn label(&self) -> String {
+        match *self {
+            RestRule::Kinetic => "kinetic".into(),
+            r if r == RestRule::CANDIDATE => "response".into(),
+            RestRule::Response {
+                window,
+                density_tol,
+                angle_tol,
+            } => format!("response(window {window}, density {density_tol}, angle {angle_tol})"),
+        }
+    }
+
     /// Checks the rule's numbers; a window of 0 chunks or a negative tolerance is refused.
     pub fn check(&self) -> Result<(), String> {
         match *self {

@@ -14,6 +14,7 @@ use crate::campaign::{
     experiment_by_name, run_campaign, CampaignOptions, ExperimentSettings, ObserverHandle, Shard,
 };
 use crate::error::{read_to_string, write_atomic, Error, Result};
+use crate::experiments::shear_box::RestRule;
 use crate::export::{export, Format};
 use crate::metamodel::{fit, FitSettings, Metamodel, TrainingTable};
 use crate::space::Space;
@@ -89,6 +90,8 @@ pub struct TrainRequest {
     pub box_scale: Option<f64>,
     /// Effects of the contact law (default: the space's class, else seed 004's).
     pub model_class: Option<ModelClass>,
+    /// The shear box's rest rule (default: kinetic); other experiments refuse it.
+    pub rest_rule: Option<RestRule>,
     /// Responses to fit (default: the experiment's calibration responses).
     pub responses: Vec<String>,
     /// Fit in the raw inputs even where the experiment has dimensionless groups.
@@ -129,6 +132,7 @@ impl TrainRequest {
             shard: None,
             box_scale: None,
             model_class: None,
+            rest_rule: None,
             responses: Vec::new(),
             no_similarity: false,
             extends: None,
@@ -220,6 +224,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     let settings = ExperimentSettings {
         box_scale: req.box_scale,
         model_class: class,
+        rest_rule: req.rest_rule,
         ..Default::default()
     };
     let experiment = experiment_by_name(&req.experiment, &settings)?;
@@ -283,7 +288,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     };
 
     // Stage 1: the designs, made for this space only.
-    refuse_another_space(&paths, &space, &req.space)?;
+    refuse_another_space(&paths, &space, &req.space, req.rest_rule)?;
     let (fssf, random) = samplers();
     let changed = |before: usize, after: usize| {
         if before == after {
@@ -445,6 +450,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         box_scale: req
             .box_scale
             .or_else(|| (req.experiment == "shear-box").then_some(10.0)),
+        rest_rule: rest_label(req.rest_rule),
         n: req.n,
         validation: req.validation,
         design_method: "fssf-f".into(),
@@ -615,13 +621,34 @@ fn table_run_ids(table: &Path) -> Result<std::collections::HashSet<String>> {
         .collect())
 }
 
+/// The rest rule as a train record holds it: absent for the kinetic rule (every record from
+/// before the rule could be chosen), the rule's label otherwise.
+fn rest_label(rule: Option<RestRule>) -> Option<String> {
+    rule.filter(|r| *r != RestRule::Kinetic).map(|r| r.label())
+}
+
 /// A train resumed under a name whose designs were made for another space (a widened range, a
 /// parameter fixed or freed) is refused: its rows would be taken as a sample of the new space.
-fn refuse_another_space(paths: &TrainPaths, space: &Space, file: &Path) -> Result<()> {
+fn refuse_another_space(
+    paths: &TrainPaths,
+    space: &Space,
+    file: &Path,
+    rule: Option<RestRule>,
+) -> Result<()> {
     if !paths.record.exists() {
         return Ok(());
     }
     let record = TrainRecord::load(&paths.record)?;
+    if record.rest_rule != rest_label(rule) {
+        let label = |r: &Option<String>| r.clone().unwrap_or_else(|| "kinetic".into());
+        return Err(Error::invalid(format!(
+            "{}: --rest-rule: the runs under this name were made with the {} rule, this train \
+             asks for the {} rule; give another --name or --out-dir",
+            paths.record.display(),
+            label(&record.rest_rule),
+            label(&rest_label(rule))
+        )));
+    }
     let Some(before) = record.space_parameters else {
         return Ok(());
     };
@@ -701,6 +728,16 @@ fn prepare_extension(
         return Err(Error::invalid(format!(
             "--box-scale: {from} was run with {:?}, this train asks for {box_scale:?}",
             record.box_scale
+        )));
+    }
+    let rule = rest_label(req.rest_rule);
+    if record.rest_rule != rule {
+        let label = |r: &Option<String>| r.clone().unwrap_or_else(|| "kinetic".into());
+        return Err(Error::invalid(format!(
+            "--rest-rule: {from} was run with the {} rule, this train asks for the {} rule; the \
+             copied runs would not be the rows the new campaign runs",
+            label(&record.rest_rule),
+            label(&rule)
         )));
     }
     // A record names its space as `train --space` was given, relative to where train ran: the

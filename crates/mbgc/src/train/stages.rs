@@ -137,6 +137,10 @@ pub struct TrainRecord {
     pub model_class: Option<String>,
     /// The experiment's box scale in effect (shear box: k, the smallest side in d_max).
     pub box_scale: Option<f64>,
+    /// The shear box's rest rule when it is not the kinetic one (absent in every record from
+    /// before the rule could be chosen).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_rule: Option<String>,
     /// Rows of the training design (DEM runs to fit on).
     pub n: usize,
     /// Rows of the validation design (0: none).
