@@ -21,6 +21,7 @@ pub mod fit;
 pub mod metrics;
 pub mod noise;
 pub mod predict;
+pub mod propagate;
 pub mod psd;
 pub mod sample;
 pub mod sensitivity;
@@ -73,6 +74,9 @@ pub enum Command {
     Validate(validate::ValidateArgs),
     /// Compare a measurement set with the model: where it fails, which effect is missing.
     Diagnose(diagnose::DiagnoseArgs),
+    /// Carry a calibrated posterior through DEM: draws, runs of a process experiment (a
+    /// hopper's discharge), the robust band of each quantity beside the best-fit point's.
+    Propagate(propagate::PropagateArgs),
     /// Which inputs matter for which response: power laws, PCA and norms of contact-law
     /// sensitivities (seed 000's three levels), Sobol indices and local sensitivities of a model.
     Sensitivity(sensitivity::SensitivityArgs),
@@ -97,6 +101,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Validate(a) => validate::run(&a),
         Command::Diagnose(a) => diagnose::run(&a),
+        Command::Propagate(a) => propagate::run(&a),
         Command::Sensitivity(a) => sensitivity::run(&a),
         Command::Bench(a) => bench::run(&a),
     }

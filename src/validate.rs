@@ -80,7 +80,7 @@ fn check_picture(p: &std::path::Path) -> anyhow::Result<()> {
 }
 
 /// The parameters, the predicted responses and the `[model] class` of a parameter file.
-type ParamsFile = (
+pub(crate) type ParamsFile = (
     ParamSet,
     Vec<(String, f64)>,
     Option<ModelClass>,
@@ -91,12 +91,12 @@ type ParamsFile = (
 /// table, written by `calibrate --out`).
 #[derive(Debug, Clone, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Trained {
+pub(crate) struct Trained {
     name: String,
     box_scale: Option<f64>,
 }
 
-fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
+pub(crate) fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
     let file = path.display().to_string();
     let doc: toml::Table = read_to_string(path)?
         .parse()

@@ -113,6 +113,7 @@ pub mod model_table;
 pub mod numeric;
 pub mod outputs;
 pub mod plot;
+pub mod propagate;
 pub mod psd;
 pub mod sampling;
 pub mod sensitivity;

@@ -1017,6 +1017,13 @@ impl Experiment for Hopper {
         Some(&self.class)
     }
 
+    /// `scale` = d50 / 2 mm: the apparatus and its fill in particle diameters as at the 2 mm
+    /// default (D_o / d50 = 7.5, some 4800 particles), so the pile and the orifice keep their
+    /// size in particles whatever the material (the module's notes on a campaign over d50).
+    fn sized_to(&self, p: &ParamSet) -> Option<(&'static str, f64)> {
+        p.get("d50").map(|d50| ("scale", d50 / 2.0))
+    }
+
     fn responses(&self) -> Vec<&'static str> {
         let mut r = vec![
             "flow_rate",

@@ -155,6 +155,13 @@ pub trait Experiment: Send + Sync {
     fn pairs(&self) -> &'static [Pair] {
         &Pair::BOTH
     }
+    /// The setting that sizes the apparatus to the material's particles, with its value for the
+    /// parameters `p`, when the experiment has one: a propagation (`crate::propagate`) carries a
+    /// calibrated material into it at the size its own particles call for. `None`: the
+    /// experiment's size does not follow the particles (or is already in particle diameters).
+    fn sized_to(&self, _p: &ParamSet) -> Option<(&'static str, f64)> {
+        None
+    }
     /// Response names, in output order.
     fn responses(&self) -> Vec<&'static str>;
     /// Refuses an impossible parameter set before anything runs; the error names the parameter.

@@ -1,0 +1,176 @@
+//! `mbgc propagate` end to end on the wall impact (runs of milliseconds): a posterior file ->
+//! draws -> DEM runs -> bands; a repeated call runs nothing again; bad input is refused by name.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn mbgc(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mbgc"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run mbgc")
+}
+
+const HEADER: &str = "E_p,nu_p,rho_p,d50,E_w,e_pw,mu_pw,mu_r_pw,sigma,weight,model,material\n";
+
+/// 200 samples with e_pw from 0.3 to 0.7, equally weighted.
+fn posterior() -> String {
+    let mut s = HEADER.to_string();
+    for i in 0..200 {
+        let e = 0.3 + 0.4 * i as f64 / 199.0;
+        s.push_str(&format!(
+            "1e9,0.3,2600,5,1e9,{e},0.35,0.1,0.05,0.005,m.json,Test\n"
+        ));
+    }
+    s
+}
+
+const SET: [&str; 4] = ["--set", "impact_speed=3", "--set", "impact_angle=30"];
+
+fn propagate(dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "propagate",
+        "--posterior",
+        "post.csv",
+        "--experiment",
+        "wall-impact",
+        "--out-dir",
+        "run",
+        "--threads",
+        "1",
+    ];
+    args.extend(SET);
+    args.extend(extra);
+    mbgc(dir, &args)
+}
+
+#[test]
+fn draws_run_and_the_band_follows_the_posterior() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("post.csv"), posterior()).unwrap();
+    std::fs::write(
+        d.join("best.toml"),
+        "[parameters]\nE_p = 1e9\nnu_p = 0.3\nrho_p = 2600\nd50 = 5\nE_w = 1e9\ne_pw = 0.5\n\
+         mu_pw = 0.35\nmu_r_pw = 0.1\n",
+    )
+    .unwrap();
+    let extra = [
+        "--draws",
+        "40",
+        "--seeds",
+        "2",
+        "--params",
+        "best.toml",
+        "--json",
+    ];
+    let o = propagate(d, &extra);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (v["draws"].as_u64(), v["seeds"].as_u64()),
+        (Some(40), Some(2))
+    );
+    let cnr = &v["bands"][0];
+    assert_eq!(cnr["response"], "cnr");
+    let band = &cnr["band"];
+    assert_eq!(band["runs"], 80);
+    // The normal restitution of a wall impact is e_pw: the band is the drawn e_pw's, whose
+    // systematic draws from an even grid on [0.3, 0.7] have mean 0.5 and sd 0.4 / sqrt 12.
+    let mean = band["mean"].as_f64().unwrap();
+    let sd = band["sd"].as_f64().unwrap();
+    assert!((mean - 0.5).abs() < 0.01, "{band}");
+    assert!((sd - 0.4 / 12f64.sqrt()).abs() < 0.01, "{band}");
+    assert!(band["q05"].as_f64().unwrap() < mean && mean < band["q95"].as_f64().unwrap());
+    // One engine, one seed or another: a wall impact has no run scatter.
+    assert!(band["scatter_sd"].as_f64().unwrap() < 1e-9, "{band}");
+    assert!(
+        (cnr["best_fit"].as_f64().unwrap() - 0.5).abs() < 0.01,
+        "{cnr}"
+    );
+    // Again: nothing runs twice and the bands are the same.
+    let table = std::fs::read_to_string(d.join("run/runs.csv")).unwrap();
+    let o = propagate(d, &extra);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap(),
+        v
+    );
+    assert_eq!(
+        std::fs::read_to_string(d.join("run/runs.csv")).unwrap(),
+        table
+    );
+    // Other draws into the same directory are refused: its runs belong to the first design.
+    let o = propagate(d, &["--draws", "41"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("design of another propagation"),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_input_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let nan = posterior().replacen(",0.005,m.json", ",NaN,m.json", 1);
+    let pp = posterior().replace("mu_r_pw,sigma", "mu_pp,sigma");
+    let cases: [(&str, String, Vec<&str>, &str); 6] = [
+        ("NaN weight", nan, vec![], "line 2, column weight"),
+        ("no draws", posterior(), vec!["--draws", "0"], "--draws 0"),
+        (
+            "too many draws",
+            posterior(),
+            vec!["--draws", "1000000"],
+            "--draws 1000000",
+        ),
+        (
+            "a parameter the experiment lacks",
+            pp,
+            vec![],
+            "posterior column mu_pp",
+        ),
+        (
+            "missing columns",
+            "mu_pw,weight\n0.3,1\n".into(),
+            vec![],
+            "then sigma,weight,model,material",
+        ),
+        (
+            "an unknown quantity",
+            posterior(),
+            vec!["--responses", "flow_rate"],
+            "--responses flow_rate",
+        ),
+    ];
+    for (what, text, extra, want) in cases {
+        std::fs::write(d.join("post.csv"), text).unwrap();
+        let o = propagate(d, &extra);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{what}: {e}");
+    }
+    // Without the constants the experiment needs.
+    std::fs::write(d.join("post.csv"), posterior()).unwrap();
+    let o = mbgc(
+        d,
+        &[
+            "propagate",
+            "--posterior",
+            "post.csv",
+            "--experiment",
+            "wall-impact",
+            "--out-dir",
+            "run",
+        ],
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("impact_speed, impact_angle"),
+        "{e}"
+    );
+    assert!(
+        !d.join("run").exists(),
+        "nothing is written before the input is checked"
+    );
+}
