@@ -40,6 +40,10 @@ pub struct PropagateArgs {
     /// the single best-fit prediction beside the band.
     #[arg(long)]
     pub params: Option<PathBuf>,
+    /// A metamodel of the quantities (e.g. a hopper model from `mbgc train`): the draws also go
+    /// through its equations, with and without its own error, beside the DEM band.
+    #[arg(long, value_name = "MODEL.json")]
+    pub metamodel: Option<PathBuf>,
     /// Constants the experiment needs beyond the posterior's parameters (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
@@ -172,6 +176,23 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
     }
     let draws = resample::systematic(&post.weights, a.draws, a.seed)?;
     let d = propagate::design(&post, experiment.as_ref(), &draws, a.seeds, &set)?;
+    // The cheap path first: a model that cannot take the draws is refused before any run.
+    let through_model = match &a.metamodel {
+        None => None,
+        Some(m) => {
+            let model = mbgc::metamodel::Metamodel::load(m)?;
+            let draws_only: Vec<Vec<f64>> = d.rows.iter().step_by(d.seeds).cloned().collect();
+            let mut header = d.header.clone();
+            let mut rows = draws_only;
+            for (k, v) in &set {
+                header.push(k.clone());
+                rows.iter_mut().for_each(|r| r.push(*v));
+            }
+            Some(propagate::through_metamodel(
+                &model, &header, &rows, &responses, a.seed,
+            )?)
+        }
+    };
     let best = match &a.params {
         None => None,
         Some(p) => {
@@ -209,6 +230,9 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
     let mut inputs: Vec<(&str, &Path)> = vec![("--posterior", &a.posterior)];
     if let Some(p) = &a.params {
         inputs.push(("--params", p));
+    }
+    if let Some(m) = &a.metamodel {
+        inputs.push(("--metamodel", m));
     }
     for f in ["design.csv", "runs.csv", "best_design.csv", "best.csv"] {
         refuse_overwriting_inputs("--out-dir", &path(f), &inputs)?;
@@ -268,7 +292,7 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
         };
         rows.push((r.clone(), band, best_value));
     }
-    let text = report(a, &post, &d, &rows);
+    let text = report(a, &post, &d, &rows, through_model.as_deref());
     if let Some(r) = &a.report {
         write_atomic(r, text.as_bytes())?;
         say!(out, "wrote {}", r.display());
@@ -289,6 +313,17 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
                 "cov": b.cov, "scatter_sd": b.scatter_sd, "parametric_sd": b.parametric_sd,
             })),
         })).collect::<Vec<_>>(),
+        "metamodel": through_model.as_ref().map(|bands| bands.iter().map(|m| serde_json::json!({
+            "response": m.response,
+            "mean": m.without_error.mean,
+            "sd": m.without_error.sd,
+            "q05": m.without_error.q05,
+            "q95": m.without_error.q95,
+            "with_error": m.with_error.as_ref().map(|b| serde_json::json!({
+                "mean": b.mean, "sd": b.sd, "q05": b.q05, "q95": b.q95,
+            })),
+            "error_source": m.error_source,
+        })).collect::<Vec<_>>()),
     }))
 }
 
@@ -298,6 +333,7 @@ fn report(
     post: &PosteriorFile,
     d: &DrawDesign,
     rows: &[(String, Option<Band>, Option<f64>)],
+    model: Option<&[propagate::MetamodelBand]>,
 ) -> String {
     let mut s = format!(
         "# Propagation of {} to {}\n\n\
@@ -344,5 +380,48 @@ fn report(
          is added: the DEM is the model of these quantities, and the posterior's sigma is the \
          calibration metamodel's relative error.\n",
     );
+    if let (Some(bands), Some(m)) = (model, &a.metamodel) {
+        s.push_str(&format!(
+            "\n## Through the metamodel `{}`\n\nThe same draws through its equations (one \
+             prediction per draw), then with its own error added (normal, per draw), which is \
+             what a single DEM run per draw should match.\n\n\
+             | quantity | mean | sd | 5 % | 95 % | with error: sd | 5 % | 95 % | error |\n\
+             |---|---|---|---|---|---|---|---|---|\n",
+            m.display()
+        ));
+        for b in bands {
+            let w = &b.without_error;
+            let (esd, e05, e95) = b
+                .with_error
+                .as_ref()
+                .map_or(("-".to_string(), "-".to_string(), "-".to_string()), |e| {
+                    (num(e.sd), num(e.q05), num(e.q95))
+                });
+            s.push_str(&format!(
+                "| {} | {} | {} | {} | {} | {esd} | {e05} | {e95} | {} |\n",
+                b.response,
+                num(w.mean),
+                num(w.sd),
+                num(w.q05),
+                num(w.q95),
+                b.error_source
+            ));
+        }
+        let missing: Vec<&String> = rows
+            .iter()
+            .map(|(r, ..)| r)
+            .filter(|r| !bands.iter().any(|b| &b.response == *r))
+            .collect();
+        if !missing.is_empty() {
+            s.push_str(&format!(
+                "\nThe metamodel predicts no {}.\n",
+                missing
+                    .iter()
+                    .map(|r| r.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+    }
     s
 }

@@ -101,6 +101,64 @@ fn draws_run_and_the_band_follows_the_posterior() {
         std::fs::read_to_string(d.join("run/runs.csv")).unwrap(),
         table
     );
+    // The cheap path: a metamodel of cnr fitted to these runs gives the same band, and with its
+    // own error a band at least as wide.
+    let o = mbgc(
+        d,
+        &[
+            "fit",
+            "--data",
+            "run/runs.csv",
+            "--inputs",
+            "e_pw",
+            "--targets",
+            "cnr",
+            "--out",
+            "cnr.json",
+            "--population",
+            "200",
+            "--generations",
+            "5",
+            "--no-figures",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut with_model = extra.to_vec();
+    with_model.extend(["--metamodel", "cnr.json"]);
+    let o = propagate(d, &with_model);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        m["bands"], v["bands"],
+        "the DEM band is unchanged (nothing reran)"
+    );
+    let cheap = &m["metamodel"][0];
+    assert_eq!(cheap["response"], "cnr");
+    assert!(
+        (cheap["mean"].as_f64().unwrap() - mean).abs() < 0.01,
+        "{cheap}"
+    );
+    assert!((cheap["sd"].as_f64().unwrap() - sd).abs() < 0.01, "{cheap}");
+    // (The error here is 1e-4; the band with it is over 200 error samples per draw, whose sd
+    // divides by n - 1 of 8000 rather than of 40.)
+    let with_error = cheap["with_error"]["sd"].as_f64().unwrap();
+    assert!(
+        with_error >= 0.98 * cheap["sd"].as_f64().unwrap(),
+        "{cheap}"
+    );
+    // A model whose input the draws do not hold is refused before anything runs.
+    std::fs::write(
+        d.join("other.json"),
+        std::fs::read_to_string(d.join("cnr.json"))
+            .unwrap()
+            .replace("\"e_pw\"", "\"e_pp\""),
+    )
+    .unwrap();
+    let mut other = extra.to_vec();
+    other.extend(["--metamodel", "other.json"]);
+    let o = propagate(d, &other);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("its input e_pp"), "{e}");
     // Other draws into the same directory are refused: its runs belong to the first design.
     let o = propagate(d, &["--draws", "41"]);
     let e = String::from_utf8_lossy(&o.stderr);

@@ -1024,6 +1024,12 @@ impl Experiment for Hopper {
         p.get("d50").map(|d50| ("scale", d50 / 2.0))
     }
 
+    /// Seed 000's three measured responses; the rest are diagnostics and per-bin or
+    /// per-sector parts of these.
+    fn calibration_responses(&self) -> Vec<&'static str> {
+        vec!["flow_rate", "repose_angle_top", "repose_angle_bottom"]
+    }
+
     fn responses(&self) -> Vec<&'static str> {
         let mut r = vec![
             "flow_rate",

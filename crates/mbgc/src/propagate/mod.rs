@@ -10,15 +10,20 @@
 //! 4. [`Band::of`]: per quantity, the robust mean, sd, 5/50/95 % quantiles and COV over the
 //!    draws, and with several seeds per draw the parametric spread apart from the run scatter.
 //!
+//! 5. [`through_metamodel`]: the same draws through a metamodel of the quantity, when one
+//!    exists, with and without its own error: the cheap path beside the DEM band.
+//!
 //! The DEM is the model of the propagated quantity, so a band from DEM runs carries no model
 //! error term: the posterior's `sigma` is the calibration metamodel's relative error and says
 //! nothing about the new quantity; it is kept in the file, not added.
 
 pub mod band;
+pub mod metamodel_band;
 pub mod posterior_file;
 pub mod resample;
 
 pub use band::Band;
+pub use metamodel_band::{through_metamodel, MetamodelBand};
 pub use posterior_file::PosteriorFile;
 
 use crate::error::{Error, Result};

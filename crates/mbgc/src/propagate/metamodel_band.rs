@@ -1,0 +1,138 @@
+//! The cheap path: the draws through a metamodel of the quantity instead of (or beside) DEM,
+//! with and without the metamodel's own error, so that a user sees when it is good enough.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+use super::Band;
+use crate::error::{Error, Result};
+use crate::metamodel::Metamodel;
+
+/// Samples of the model error drawn per draw for the band with error.
+pub const ERROR_SAMPLES: usize = 200;
+
+/// A quantity's band through a metamodel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MetamodelBand {
+    /// The response.
+    pub response: String,
+    /// The band of the equation's predictions at the draws.
+    pub without_error: Band,
+    /// The band of a single DEM run as the metamodel predicts it: each prediction plus its
+    /// error (normal, sd from the error model, else the validation or test RMSE), so it
+    /// compares with a DEM band of one run per draw. Its `scatter_sd` is that error. `None`
+    /// when the model records no error for the response.
+    pub with_error: Option<Band>,
+    /// Where the error came from, in words (or why there is none).
+    pub error_source: String,
+}
+
+/// The draws `rows` (columns `header`) through `model`, for each of `responses` it predicts.
+/// Refuses a model input that no column holds and a draw outside the model's domain (naming the
+/// input, the value and the domain): an equation is not evaluated where it was never fitted.
+pub fn through_metamodel(
+    model: &Metamodel,
+    header: &[String],
+    rows: &[Vec<f64>],
+    responses: &[String],
+    seed: u64,
+) -> Result<Vec<MetamodelBand>> {
+    let columns = model
+        .input_names()
+        .iter()
+        .map(|name| {
+            header.iter().position(|h| h == name).ok_or_else(|| {
+                Error::invalid(format!(
+                    "--metamodel: its input {name} is neither a posterior column nor a --set \
+                     constant (the draws hold {})",
+                    header.join(", ")
+                ))
+            })
+        })
+        .collect::<Result<Vec<usize>>>()?;
+    let points: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|r| columns.iter().map(|&j| r[j]).collect())
+        .collect();
+    let outside: Vec<(usize, String)> = points
+        .iter()
+        .enumerate()
+        .filter_map(|(k, x)| {
+            model
+                .outside_domain(x)
+                .first()
+                .map(|(n, v, d)| (k, format!("{n} = {v} outside [{}, {}]", d[0], d[1])))
+        })
+        .collect();
+    if let Some((k, what)) = outside.first() {
+        return Err(Error::invalid(format!(
+            "--metamodel: {} of {} draws lie outside the model's domain (draw {k}: {what}); an \
+             equation is not evaluated where it was never fitted",
+            outside.len(),
+            points.len()
+        )));
+    }
+    let cols: Vec<Vec<f64>> = (0..columns.len())
+        .map(|j| points.iter().map(|x| x[j]).collect())
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut bands = Vec::new();
+    for r in responses {
+        let Some(m) = model.response(r) else { continue };
+        let predicted = model.predict(m, &cols);
+        let Some(without_error) = Band::of(&predicted.iter().map(|&p| vec![p]).collect::<Vec<_>>())
+        else {
+            continue;
+        };
+        let rmse = m.validation.or(m.test).map(|v| v.rmse);
+        let (sds, error_source): (Option<Vec<f64>>, String) = if m.error_model.is_some() {
+            (
+                Some(
+                    points
+                        .iter()
+                        .map(|x| model.error_at(m, x).unwrap_or(f64::NAN))
+                        .collect(),
+                ),
+                "its error model (validation residuals as a function of the inputs)".into(),
+            )
+        } else if let Some(rmse) = rmse {
+            (
+                Some(vec![rmse; points.len()]),
+                format!(
+                    "its {} RMSE {}",
+                    if m.validation.is_some() {
+                        "validation"
+                    } else {
+                        "test"
+                    },
+                    crate::numeric::round_significant(rmse, 4)
+                ),
+            )
+        } else {
+            (
+                None,
+                "none: the model records no validation or test error".into(),
+            )
+        };
+        let with_error = sds.and_then(|sds| {
+            let per_draw: Vec<Vec<f64>> = predicted
+                .iter()
+                .zip(&sds)
+                .map(|(p, sd)| {
+                    (0..ERROR_SAMPLES)
+                        .map(|_| p + sd * rng.sample::<f64, _>(StandardNormal))
+                        .collect()
+                })
+                .collect();
+            Band::of(&per_draw)
+        });
+        bands.push(MetamodelBand {
+            response: r.clone(),
+            without_error,
+            with_error,
+            error_source,
+        });
+    }
+    Ok(bands)
+}
