@@ -87,12 +87,25 @@ fn train_samples_simulates_fits_resumes_and_extends() {
     assert_eq!(v["rows"], 6, "{model}");
     assert!(v["r2"].as_f64().unwrap() > 0.99, "{v}");
     // Again: nothing is simulated twice.
+    let saved = std::fs::read_to_string(d.join("models/sleep_test.json")).unwrap();
     let err = run("12");
     assert!(err.contains("12 already done, ran 0"), "{err}");
+    // ... nor fitted twice: the same rows and settings keep the saved model as it is.
+    assert!(err.contains("already; kept"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(d.join("models/sleep_test.json")).unwrap(),
+        saved
+    );
+    // Another GP setting fits again.
+    let mut other = args("12");
+    other.extend(["--parsimony".to_string(), "0.01".to_string()]);
+    let err = ok(d, &other.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!err.contains("already; kept"), "{err}");
     // Larger: the old rows stay, only the new ones run.
     let before = std::fs::read_to_string(d.join("sampling/sleep_test.csv")).unwrap();
     let err = run("16");
     assert!(err.contains("12 already done, ran 4"), "{err}");
+    assert!(!err.contains("already; kept"), "new rows are fitted: {err}");
     assert!(std::fs::read_to_string(d.join("sampling/sleep_test.csv"))
         .unwrap()
         .starts_with(&before));

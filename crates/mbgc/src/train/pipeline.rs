@@ -554,6 +554,29 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         );
     }
     fit_settings.validation = validation;
+    // A resumed train whose tables, record and settings are those of the saved fit would only
+    // fit the same equations again (a GP search of up to hours): the saved model is kept.
+    let stamp = fit_stamp(req, &record_json, &paths, &extension)?;
+    if paths.model.exists()
+        && std::fs::read_to_string(&paths.fit_stamp).is_ok_and(|s| s.trim() == stamp)
+    {
+        let model = Metamodel::load(&paths.model)?;
+        observer.note(
+            TrainStage::Fit,
+            &format!(
+                "{}: fitted on these rows with these settings already; kept (remove {} to fit \
+                 again)",
+                paths.model.display(),
+                paths.fit_stamp.display()
+            ),
+        );
+        return Ok(TrainOutcome::Fitted {
+            model: Box::new(model),
+            paths,
+            figures: Vec::new(),
+            warnings: Vec::new(),
+        });
+    }
     let fitted = fit(&table, &fit_settings, |target, p| {
         observer.fit_progress(target, p)
     })?;
@@ -569,6 +592,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         }
     }
     model.save(&paths.model)?;
+    write_atomic(&paths.fit_stamp, stamp.as_bytes())?;
     for (format, ext) in [(Format::Rust, "rs"), (Format::Latex, "tex")] {
         write_atomic(
             &paths.model.with_extension(ext),
@@ -619,6 +643,40 @@ fn table_run_ids(table: &Path) -> Result<std::collections::HashSet<String>> {
         .into_iter()
         .map(|(_, r)| r[0].to_string())
         .collect())
+}
+
+/// The fingerprint of a fit: the version, the record (space, inputs, groups, responses, class,
+/// extension), the GP settings and seed, the flags that change the fit, and the bytes of every
+/// table it reads.
+fn fit_stamp(
+    req: &TrainRequest,
+    record_json: &str,
+    paths: &TrainPaths,
+    extension: &Option<(TrainPaths, Extension)>,
+) -> Result<String> {
+    let mut h = crate::numeric::Fnv1a::default();
+    h.str(env!("CARGO_PKG_VERSION"));
+    h.str(record_json);
+    h.str(&format!(
+        "{:?} seed {} correction {} partial {} no_similarity {}",
+        req.config, req.seed, req.correction, req.partial, req.no_similarity
+    ));
+    let mut files = vec![paths.table.clone()];
+    if req.validation > 0 {
+        files.push(paths.validation_table.clone());
+    }
+    for (t, v) in &req.also_fit {
+        files.push(t.clone());
+        files.push(v.clone());
+    }
+    if let (true, Some((old, _))) = (req.correction, extension) {
+        files.push(old.model.clone());
+    }
+    for f in files {
+        h.str(&f.display().to_string());
+        h.bytes(&std::fs::read(&f).map_err(|e| Error::io(&f, e))?);
+    }
+    Ok(format!("{:016x}", h.0))
 }
 
 /// The rest rule as a train record holds it: absent for the kinetic rule (every record from

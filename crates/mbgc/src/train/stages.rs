@@ -26,6 +26,9 @@ pub struct TrainPaths {
     pub record: PathBuf,
     /// `models/<name>.json`: the fitted metamodel.
     pub model: PathBuf,
+    /// `training_data/<name>.fit`: a fingerprint of what the saved model was fitted on (the
+    /// tables, the record and the GP settings); a train that would fit the same again keeps it.
+    pub fit_stamp: PathBuf,
     /// `models/<name>_figures/`: parity plots and residual histograms of the fit.
     pub figures: PathBuf,
 }
@@ -45,6 +48,7 @@ impl TrainPaths {
             validation_table: t.join(format!("{name}_validation.csv")),
             record: t.join(format!("{name}.train.json")),
             model: m.join(format!("{name}.json")),
+            fit_stamp: t.join(format!("{name}.fit")),
             figures: m.join(format!("{name}_figures")),
         }
     }
