@@ -57,6 +57,9 @@ pub struct PropagateArgs {
     /// Worker threads, one run each [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Directory for the figures: one robust CDF per quantity (`<quantity>.svg`).
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
     /// Markdown report of the bands.
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -66,13 +69,15 @@ pub struct PropagateArgs {
 }
 
 /// Writes a design, or checks that the one there is the same: a propagation's directory holds
-/// one propagation, and its runs are only resumed under the design that made them.
-fn put_design(path: &Path, text: &str) -> anyhow::Result<()> {
-    if path.exists() {
+/// one propagation, and its runs are only resumed under the design that made them. A design
+/// whose table `runs` does not exist yet (nothing ran) is replaced.
+fn put_design(path: &Path, text: &str, runs: &Path) -> anyhow::Result<()> {
+    if path.exists() && runs.exists() {
         if read_to_string(path)? != text {
             anyhow::bail!(
-                "{}: holds the design of another propagation (other draws, seeds, posterior or \
-                 --set); choose another --out-dir to keep both",
+                "{}: holds the design of another propagation (other draws, seeds or \
+                 posterior), whose runs are in this directory; choose another --out-dir to keep \
+                 both",
                 path.display()
             );
         }
@@ -87,7 +92,10 @@ fn put_design(path: &Path, text: &str) -> anyhow::Result<()> {
 fn values(out: &Path, plan: &Plan, response: &str) -> anyhow::Result<Vec<f64>> {
     let mut reader =
         csv::Reader::from_path(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
-    let header = reader.headers()?.clone();
+    let header = reader
+        .headers()
+        .map_err(|e| anyhow::anyhow!("{}: header: {e}", out.display()))?
+        .clone();
     let col = |name: &str| {
         header.iter().position(|h| h == name).ok_or_else(|| {
             anyhow::anyhow!(
@@ -98,9 +106,16 @@ fn values(out: &Path, plan: &Plan, response: &str) -> anyhow::Result<Vec<f64>> {
     };
     let (row_col, status_col, value_col) = (col("row")?, col("status")?, col(response)?);
     let mut v = vec![f64::NAN; plan.rows.len()];
-    for rec in reader.records() {
-        let rec = rec?;
-        let row: usize = rec[row_col].parse()?;
+    for (i, rec) in reader.records().enumerate() {
+        let rec = rec.map_err(|e| anyhow::anyhow!("{}: line {}: {e}", out.display(), i + 2))?;
+        let row: usize = rec[row_col].parse().map_err(|_| {
+            anyhow::anyhow!(
+                "{}: line {}, column row: expected a row number, found \"{}\"",
+                out.display(),
+                i + 2,
+                &rec[row_col]
+            )
+        })?;
         if rec[status_col] == *"done" {
             if let Some(slot) = v.get_mut(row) {
                 *slot = rec[value_col].parse().unwrap_or(f64::NAN);
@@ -181,6 +196,21 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
         None => None,
         Some(m) => {
             let model = mbgc::metamodel::Metamodel::load(m)?;
+            if let Some(e) = model.experiment.as_ref().filter(|e| **e != a.experiment) {
+                anyhow::bail!(
+                    "--metamodel {}: a model of {e} runs, not of --experiment {}",
+                    m.display(),
+                    a.experiment
+                );
+            }
+            if let (Some(c), Some(mine)) = (model.class()?, experiment.class()) {
+                if c != *mine {
+                    anyhow::bail!(
+                        "--metamodel {}: fitted on runs of class {c}, the propagation runs {mine}",
+                        m.display()
+                    );
+                }
+            }
             let draws_only: Vec<Vec<f64>> = d.rows.iter().step_by(d.seeds).cloned().collect();
             let mut header = d.header.clone();
             let mut rows = draws_only;
@@ -196,7 +226,29 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
     let best = match &a.params {
         None => None,
         Some(p) => {
-            let (params, ..) = crate::validate::read_params(p)?;
+            let (params, _, params_class, _) = crate::validate::read_params(p)?;
+            // A calibrated value the propagation would not use is refused, as is another class.
+            for (k, v) in params.iter() {
+                let given = set.iter().find(|(s, _)| s == k).map(|(_, x)| *x);
+                if !post.inputs.iter().any(|i| i == k) && given != Some(v) {
+                    anyhow::bail!(
+                        "{}: [parameters] {k} = {v}: the posterior does not hold {k}, so the \
+                         best-fit point would run without this value{}; drop it or pass --set \
+                         {k}={v}",
+                        p.display(),
+                        given.map_or(String::new(), |g| format!(" (--set gives {g})"))
+                    );
+                }
+            }
+            if let (Some(c), Some(mine)) = (params_class, experiment.class()) {
+                if c != *mine {
+                    anyhow::bail!(
+                        "{}: [model] class {c}: the propagation runs {mine} (--model-class); the \
+                         best-fit point must run the class it was calibrated in",
+                        p.display()
+                    );
+                }
+            }
             let row: Vec<f64> = post
                 .inputs
                 .iter()
@@ -234,13 +286,28 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
     if let Some(m) = &a.metamodel {
         inputs.push(("--metamodel", m));
     }
-    for f in ["design.csv", "runs.csv", "best_design.csv", "best.csv"] {
+    let own = [
+        "design.csv",
+        "runs.csv",
+        "runs.csv.meta.json",
+        "runs.csv.lock",
+        "best_design.csv",
+        "best.csv",
+        "best.csv.meta.json",
+        "best.csv.lock",
+    ];
+    for f in own {
         refuse_overwriting_inputs("--out-dir", &path(f), &inputs)?;
     }
     if let Some(r) = &a.report {
         refuse_overwriting_inputs("--report", r, &inputs)?;
+        let outputs: Vec<(&str, PathBuf)> = own.iter().map(|f| (*f, path(f))).collect();
+        let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(f, p)| (*f, p.as_path())).collect();
+        refuse_overwriting_inputs("--report", r, &outputs)?;
     }
-    put_design(&path("design.csv"), &d.csv())?;
+    // Everything the runs would refuse is refused before the design is written.
+    worker_threads(a.threads, None)?;
+    put_design(&path("design.csv"), &d.csv(), &path("runs.csv"))?;
     say!(
         out,
         "{}: {} draws of {} x {} seed(s) = {} runs of {} ({}{})",
@@ -266,7 +333,7 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
     let best_plan = match &best {
         None => None,
         Some(b) => {
-            put_design(&path("best_design.csv"), &b.csv())?;
+            put_design(&path("best_design.csv"), &b.csv(), &path("best.csv"))?;
             Some(run_design(
                 experiment.as_ref(),
                 &path("best_design.csv"),
@@ -291,6 +358,29 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
             None => None,
         };
         rows.push((r.clone(), band, best_value));
+    }
+    if let Some(dir) = &a.plot {
+        for (r, _, best) in &rows {
+            let per_draw = d.by_draw(&values(&path("runs.csv"), &plan, r)?);
+            if per_draw.iter().flatten().all(|v| !v.is_finite()) {
+                continue;
+            }
+            let model = through_model
+                .as_ref()
+                .and_then(|m| m.iter().find(|b| &b.response == r))
+                .map(|b| b.predictions.as_slice());
+            let file = dir.join(format!("{r}.svg"));
+            mbgc::plot::propagation::robust_cdf(
+                &file,
+                &mbgc::plot::propagation::PropagationFigure {
+                    response: r,
+                    per_draw: &per_draw,
+                    metamodel: model,
+                    best_fit: *best,
+                },
+            )?;
+            say!(out, "wrote {}", file.display());
+        }
     }
     let text = report(a, &post, &d, &rows, through_model.as_deref());
     if let Some(r) = &a.report {
@@ -357,13 +447,13 @@ fn report(
         let best = best.map_or("-".into(), num);
         match b {
             Some(b) => s.push_str(&format!(
-                "| {r} | {best} | {} | {} | {} | {} | {} | {:.3} | {} | {} | {} ({}) |\n",
+                "| {r} | {best} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({}) |\n",
                 num(b.mean),
                 num(b.sd),
                 num(b.q05),
                 num(b.q50),
                 num(b.q95),
-                b.cov,
+                num(b.cov),
                 b.scatter_sd.map_or("-".into(), num),
                 b.parametric_sd.map_or("-".into(), num),
                 b.runs,

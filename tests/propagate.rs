@@ -124,7 +124,7 @@ fn draws_run_and_the_band_follows_the_posterior() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut with_model = extra.to_vec();
-    with_model.extend(["--metamodel", "cnr.json"]);
+    with_model.extend(["--metamodel", "cnr.json", "--plot", "figs"]);
     let o = propagate(d, &with_model);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -132,6 +132,8 @@ fn draws_run_and_the_band_follows_the_posterior() {
         m["bands"], v["bands"],
         "the DEM band is unchanged (nothing reran)"
     );
+    let svg = std::fs::read_to_string(d.join("figs/cnr.svg")).unwrap();
+    assert!(svg.contains("metamodel, same draws") && svg.contains("best-fit point"));
     let cheap = &m["metamodel"][0];
     assert_eq!(cheap["response"], "cnr");
     assert!(
@@ -230,5 +232,34 @@ fn bad_input_is_refused_by_name() {
     assert!(
         !d.join("run").exists(),
         "nothing is written before the input is checked"
+    );
+    // A constant no experiment reads fails the plan; the design it left is no lock on the
+    // directory, since nothing ran.
+    let o = propagate(d, &["--draws", "3", "--set", "foo=1"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("foo"), "{e}");
+    let o = propagate(d, &["--draws", "4"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The report never replaces the propagation's own table.
+    let o = propagate(d, &["--draws", "4", "--report", "run/runs.csv"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("--report"), "{e}");
+    assert!(std::fs::read_to_string(d.join("run/runs.csv"))
+        .unwrap()
+        .starts_with("run_id,"));
+    // A best-fit file with a value the propagation would not use.
+    std::fs::write(
+        d.join("best.toml"),
+        "[parameters]\nE_p = 1e9\nnu_p = 0.3\nrho_p = 2600\nd50 = 5\nE_w = 1e9\ne_pw = 0.5\n\
+         mu_pw = 0.35\nmu_r_pw = 0.1\nimpact_speed = 9\n",
+    )
+    .unwrap();
+    let o = propagate(d, &["--draws", "4", "--params", "best.toml"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("[parameters] impact_speed = 9")
+            && e.contains("--set gives 3"),
+        "{e}"
     );
 }

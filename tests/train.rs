@@ -96,6 +96,15 @@ fn train_samples_simulates_fits_resumes_and_extends() {
         std::fs::read_to_string(d.join("models/sleep_test.json")).unwrap(),
         saved
     );
+    // The space file is part of what was fitted (its constraints and scales): an edit fits
+    // again, while another spelling of its path does not.
+    let mut dotted = args("12");
+    dotted[2] = "./space.toml".to_string();
+    let err = ok(d, &dotted.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(err.contains("already; kept"), "{err}");
+    std::fs::write(d.join("space.toml"), format!("{SPACE}# edited\n")).unwrap();
+    let err = run("12");
+    assert!(!err.contains("already; kept"), "{err}");
     // Another GP setting fits again.
     let mut other = args("12");
     other.extend(["--parsimony".to_string(), "0.01".to_string()]);

@@ -419,7 +419,8 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
                     field(),
                     format!(
                         "row {row} has run_id {}, but {} on this design with this --seed, --set, \
-                         --box-scale, --model-class, --backend and --mpi gives {}: the table \
+                         --box-scale, --model-class, --rest-rule, --backend and --mpi gives {}: \
+                         the table \
                          comes from another campaign (its <out>.meta.json says how it was run); \
                          choose another --out",
                         &rec[0], plan.experiment, planned.run_id

@@ -12,6 +12,7 @@ pub mod fit_figures;
 pub mod labels;
 pub mod parity;
 pub mod partial_dependence;
+pub mod propagation;
 pub mod psd;
 pub mod sensitivity;
 

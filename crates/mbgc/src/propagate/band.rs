@@ -14,9 +14,12 @@ pub struct Band {
     pub runs: usize,
     /// Runs without a finite value (failed, or the experiment measured nothing).
     pub missing: usize,
-    /// Robust mean: over every run, each draw weighing by its runs.
+    /// Robust mean: the mean of the draws' means (every draw weighs the same, seed 003's
+    /// Eq. 11 with the draws as equally weighted posterior samples).
     pub mean: f64,
-    /// Robust standard deviation over every run (parametric spread and run scatter together).
+    /// Robust standard deviation of one run at a posterior draw: with one seed per draw the sd
+    /// of the values; with replicates sqrt(parametric_sd^2 + scatter_sd^2), so it is never
+    /// below either part.
     pub sd: f64,
     /// 5 %, 50 % and 95 % quantiles over every run.
     pub q05: f64,
@@ -47,7 +50,8 @@ impl Band {
             return None;
         }
         let total: usize = per_draw.iter().map(Vec::len).sum();
-        let (mean, sd) = mean_sd(&all);
+        let means: Vec<f64> = finite.iter().map(|v| mean_sd(v).0).collect();
+        let (mean, _) = mean_sd(&means);
         let replicated: Vec<&Vec<f64>> = finite.iter().filter(|v| v.len() > 1).collect();
         let (scatter_sd, parametric_sd) = if replicated.is_empty() || finite.len() < 2 {
             (None, None)
@@ -62,11 +66,19 @@ impl Band {
                 )
             });
             let scatter = (ss / dof as f64).sqrt();
-            let means: Vec<f64> = finite.iter().map(|v| mean_sd(v).0).collect();
-            let seeds = finite.iter().map(Vec::len).sum::<usize>() as f64 / finite.len() as f64;
+            // The variance of a draw's mean holds scatter^2 / n_d of run scatter: on average
+            // over the draws, scatter^2 times the mean of 1 / n_d.
+            let inverse_seeds =
+                finite.iter().map(|v| 1.0 / v.len() as f64).sum::<f64>() / finite.len() as f64;
             let (_, sd_means) = mean_sd(&means);
-            let parametric = (sd_means.powi(2) - scatter.powi(2) / seeds).max(0.0).sqrt();
+            let parametric = (sd_means.powi(2) - scatter.powi(2) * inverse_seeds)
+                .max(0.0)
+                .sqrt();
             (Some(scatter), Some(parametric))
+        };
+        let sd = match (scatter_sd, parametric_sd) {
+            (Some(s), Some(p)) => s.hypot(p),
+            _ => mean_sd(&all).1,
         };
         Some(Band {
             draws: finite.len(),

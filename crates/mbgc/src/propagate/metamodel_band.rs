@@ -26,6 +26,8 @@ pub struct MetamodelBand {
     pub with_error: Option<Band>,
     /// Where the error came from, in words (or why there is none).
     pub error_source: String,
+    /// The prediction at each draw.
+    pub predictions: Vec<f64>,
 }
 
 /// The draws `rows` (columns `header`) through `model`, for each of `responses` it predicts.
@@ -55,6 +57,26 @@ pub fn through_metamodel(
         .iter()
         .map(|r| columns.iter().map(|&j| r[j]).collect())
         .collect();
+    // What the model's campaign held fixed must hold at every draw too.
+    for c in &model.constants {
+        let Some(j) = header.iter().position(|h| h == &c.name) else {
+            return Err(Error::invalid(format!(
+                "--metamodel: its campaign held {} = {}, which the draws do not set; give --set \
+                 {}={} (or a model of this setting)",
+                c.name, c.value, c.name, c.value
+            )));
+        };
+        if let Some(r) = rows
+            .iter()
+            .find(|r| (r[j] - c.value).abs() > 1e-9 * c.value.abs().max(1e-300))
+        {
+            return Err(Error::invalid(format!(
+                "--metamodel: its campaign held {} = {}, the draws have {} = {}: the model \
+                 does not describe them",
+                c.name, c.value, c.name, r[j]
+            )));
+        }
+    }
     let outside: Vec<(usize, String)> = points
         .iter()
         .enumerate()
@@ -63,6 +85,14 @@ pub fn through_metamodel(
                 .outside_domain(x)
                 .first()
                 .map(|(n, v, d)| (k, format!("{n} = {v} outside [{}, {}]", d[0], d[1])))
+                .or_else(|| {
+                    model.violated_constraint(x).map(|c| {
+                        (
+                            k,
+                            format!("outside the model's limit {c} (its runs stayed inside)"),
+                        )
+                    })
+                })
         })
         .collect();
     if let Some((k, what)) = outside.first() {
@@ -76,6 +106,19 @@ pub fn through_metamodel(
     let cols: Vec<Vec<f64>> = (0..columns.len())
         .map(|j| points.iter().map(|x| x[j]).collect())
         .collect();
+    if !responses.iter().any(|r| model.response(r).is_some()) {
+        return Err(Error::invalid(format!(
+            "--metamodel: it predicts {}, none of the quantities propagated ({}); pass \
+             --responses to choose others",
+            model
+                .responses
+                .iter()
+                .map(|r| r.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            responses.join(", ")
+        )));
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut bands = Vec::new();
     for r in responses {
@@ -132,6 +175,7 @@ pub fn through_metamodel(
             without_error,
             with_error,
             error_source,
+            predictions: predicted,
         });
     }
     Ok(bands)

@@ -46,7 +46,8 @@ pub struct DrawDesign {
     /// Runs per draw, each with its own seed.
     pub seeds: usize,
     /// The setting that sizes the experiment to the particles (`scale` of the hopper), if the
-    /// design sets it.
+    /// design sets it: one value for every draw, the median of what each draw's particles
+    /// call for.
     pub sized_by: Option<&'static str>,
 }
 
@@ -66,6 +67,14 @@ pub fn design(
     if seeds == 0 || seeds > MAX_SEEDS {
         return Err(Error::invalid(format!(
             "--seeds {seeds}: expected 1 to {MAX_SEEDS} runs per draw"
+        )));
+    }
+    if draws.len() * seeds > resample::MAX_DRAWS {
+        return Err(Error::invalid(format!(
+            "--draws {} --seeds {seeds}: {} DEM runs; at most {} in one propagation",
+            draws.len(),
+            draws.len() * seeds,
+            resample::MAX_DRAWS
         )));
     }
     let name = experiment.name();
@@ -123,21 +132,28 @@ pub fn design(
         }
         experiment.sized_to(&p)
     };
-    // A constant the user set wins over the sizing (the user sized the apparatus).
-    let sized_by = draws
+    // One apparatus for every draw, sized by the median draw: a plant has one orifice, and a
+    // size that followed each draw's d50 would mix apparatus sizes into the band. A constant
+    // the user set, or a posterior column of that name, wins (the apparatus is then theirs).
+    let sizes: Vec<(&'static str, f64)> = draws
+        .iter()
+        .filter_map(|&d| sizing(&post.rows[d]))
+        .collect();
+    let sized = sizes
         .first()
-        .and_then(|&d| sizing(&post.rows[d]))
-        .map(|(k, _)| k)
-        .filter(|k| !set.iter().any(|(s, _)| s == k));
+        .map(|(k, _)| *k)
+        .filter(|k| !set.iter().any(|(s, _)| s == k) && !post.inputs.iter().any(|i| i == k))
+        .map(|k| {
+            let values: Vec<f64> = sizes.iter().map(|(_, v)| *v).collect();
+            (k, crate::numeric::quantile(&values, 0.5))
+        });
+    let sized_by = sized.map(|(k, _)| k);
     let mut header = post.inputs.clone();
     header.extend(sized_by.map(String::from));
     let mut rows = Vec::with_capacity(draws.len() * seeds);
     for &d in draws {
         let mut row = post.rows[d].clone();
-        if sized_by.is_some() {
-            let (_, v) = sizing(&row).expect("the experiment sized the first draw");
-            row.push(v);
-        }
+        row.extend(sized.map(|(_, v)| v));
         rows.extend(std::iter::repeat_n(row, seeds));
     }
     Ok(DrawDesign {
@@ -194,33 +210,50 @@ mod tests {
     ];
 
     #[test]
-    fn a_hopper_is_sized_to_each_draws_particles_and_seeds_repeat_rows() {
+    fn a_hopper_is_sized_to_the_median_draws_particles_and_seeds_repeat_rows() {
         let row = |d50: f64| {
             vec![
                 4e7, 4e7, 0.25, 0.6, 0.6, 0.3, 0.36, 0.8, 0.8, 2700.0, d50, 0.26,
             ]
         };
         let post = posterior(&HOPPER, vec![row(11.0), row(4.0), row(6.0)]);
-        let d = design(&post, &Hopper::default(), &[2, 0], 2, &[]).unwrap();
+        let d = design(&post, &Hopper::default(), &[2, 0, 1], 2, &[]).unwrap();
         assert_eq!(d.header.last().map(String::as_str), Some("scale"));
         assert_eq!(d.sized_by, Some("scale"));
-        assert_eq!(d.rows.len(), 4);
+        assert_eq!(d.rows.len(), 6);
         assert_eq!(d.rows[0], d.rows[1]);
-        assert_eq!(d.rows[0].last(), Some(&3.0));
-        assert_eq!(d.rows[2].last(), Some(&5.5));
+        // One apparatus: the median draw's d50 (6 mm) / 2 mm.
+        assert!(
+            d.rows.iter().all(|r| r.last() == Some(&3.0)),
+            "{:?}",
+            d.rows
+        );
+        assert_eq!(d.rows[2][10], 11.0);
         assert_eq!(
             d.by_draw(&[1.0, 2.0, 3.0, 4.0]),
             [vec![1.0, 2.0], vec![3.0, 4.0]]
         );
         let text = d.csv();
         assert!(
-            text.starts_with("E_p,E_w,") && text.lines().count() == 5,
+            text.starts_with("E_p,E_w,") && text.lines().count() == 7,
             "{text}"
         );
         // A scale the user sets wins, and is not a design column.
         let set = [("scale".to_string(), 2.0)];
         let d = design(&post, &Hopper::default(), &[0], 1, &set).unwrap();
         assert_eq!((d.sized_by, d.header.len()), (None, 12));
+        // So does a posterior that holds it.
+        let mut names = HOPPER.to_vec();
+        names.push("scale");
+        let mut with_scale = row(4.0);
+        with_scale.push(2.5);
+        let post = posterior(&names, vec![with_scale]);
+        let d = design(&post, &Hopper::default(), &[0], 1, &[]).unwrap();
+        assert_eq!((d.sized_by, d.header.len()), (None, 13));
+        let e = design(&post, &Hopper::default(), &[0; 1001], 100, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("100100 DEM runs"), "{e}");
     }
 
     #[test]

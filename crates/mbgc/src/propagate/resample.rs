@@ -30,23 +30,31 @@ pub fn systematic(weights: &[f64], n: usize, seed: u64) -> Result<Vec<usize>> {
             "posterior weight {w}: expected finite weights >= 0"
         )));
     }
-    let total: f64 = weights.iter().sum();
-    if total <= 0.0 {
+    // Scaled by the largest weight first, so that a sum of huge weights cannot overflow.
+    let largest = weights.iter().fold(0.0f64, |m, w| m.max(*w));
+    if largest <= 0.0 {
         return Err(Error::invalid("posterior weights: all 0, nothing to draw"));
     }
+    let cumulative: Vec<f64> = weights
+        .iter()
+        .scan(0.0, |c, w| {
+            *c += w / largest;
+            Some(*c)
+        })
+        .collect();
+    let total = cumulative[cumulative.len() - 1];
+    let last_drawable = weights.iter().rposition(|w| *w > 0.0).unwrap_or(0);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let start: f64 = rng.random::<f64>();
-    let mut draws = Vec::with_capacity(n);
-    let (mut i, mut cumulative) = (0, weights[0] / total);
-    for k in 0..n {
-        let u = (start + k as f64) / n as f64;
-        while u >= cumulative && i + 1 < weights.len() {
-            i += 1;
-            cumulative += weights[i] / total;
-        }
-        draws.push(i);
-    }
-    Ok(draws)
+    Ok((0..n)
+        .map(|k| {
+            let u = total * (start + k as f64) / n as f64;
+            // The first sample whose cumulative weight exceeds u: never one of weight 0 (its
+            // cumulative equals its predecessor's), and the last drawable one where rounding
+            // leaves u at the very top.
+            cumulative.partition_point(|c| *c <= u).min(last_drawable)
+        })
+        .collect())
 }
 
 #[cfg(test)]
@@ -75,6 +83,17 @@ mod tests {
     fn equal_weights_give_evenly_spaced_distinct_samples() {
         let d = systematic(&[1.0; 2000], 100, 7).unwrap();
         assert!(d.windows(2).all(|p| p[1] - p[0] == 20), "{d:?}");
+    }
+
+    #[test]
+    fn huge_weights_do_not_overflow_and_zero_weights_are_never_drawn() {
+        let d = systematic(&[1e308, 1e308, 0.0], 4, 1).unwrap();
+        assert_eq!(d.iter().filter(|&&i| i == 0).count(), 2, "{d:?}");
+        assert_eq!(d.iter().filter(|&&i| i == 1).count(), 2, "{d:?}");
+        for seed in 0..200 {
+            let d = systematic(&[0.3, 0.0, 0.7, 0.0, 0.0], 7, seed).unwrap();
+            assert!(d.iter().all(|&i| i == 0 || i == 2), "{d:?}");
+        }
     }
 
     #[test]

@@ -556,7 +556,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     fit_settings.validation = validation;
     // A resumed train whose tables, record and settings are those of the saved fit would only
     // fit the same equations again (a GP search of up to hours): the saved model is kept.
-    let stamp = fit_stamp(req, &record_json, &paths, &extension)?;
+    let stamp = fit_stamp(req, &record, &paths, &extension)?;
     if paths.model.exists()
         && std::fs::read_to_string(&paths.fit_stamp).is_ok_and(|s| s.trim() == stamp)
     {
@@ -592,13 +592,14 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         }
     }
     model.save(&paths.model)?;
-    write_atomic(&paths.fit_stamp, stamp.as_bytes())?;
     for (format, ext) in [(Format::Rust, "rs"), (Format::Latex, "tex")] {
         write_atomic(
             &paths.model.with_extension(ext),
             export(&model, format).as_bytes(),
         )?;
     }
+    // Last: a crash before it leaves no stamp, and the next train fits again.
+    write_atomic(&paths.fit_stamp, stamp.as_bytes())?;
     Ok(TrainOutcome::Fitted {
         model: Box::new(model),
         paths,
@@ -650,31 +651,39 @@ fn table_run_ids(table: &Path) -> Result<std::collections::HashSet<String>> {
 /// table it reads.
 fn fit_stamp(
     req: &TrainRequest,
-    record_json: &str,
+    record: &TrainRecord,
     paths: &TrainPaths,
     extension: &Option<(TrainPaths, Extension)>,
 ) -> Result<String> {
     let mut h = crate::numeric::Fnv1a::default();
     h.str(env!("CARGO_PKG_VERSION"));
-    h.str(record_json);
+    // The record without the space's path as typed (`./space.toml` is `space.toml`); the
+    // space file's bytes stand for it, constraints and scales included.
+    let mut record = record.clone();
+    record.space = String::new();
+    h.str(&serde_json::to_string(&record).map_err(|e| Error::invalid(e.to_string()))?);
     h.str(&format!(
-        "{:?} seed {} correction {} partial {} no_similarity {}",
-        req.config, req.seed, req.correction, req.partial, req.no_similarity
+        "{:?} seed {} correction {} no_similarity {}",
+        req.config, req.seed, req.correction, req.no_similarity
     ));
-    let mut files = vec![paths.table.clone()];
+    let mut files = vec![req.space.clone(), paths.table.clone()];
     if req.validation > 0 {
         files.push(paths.validation_table.clone());
     }
     for (t, v) in &req.also_fit {
         files.push(t.clone());
-        files.push(v.clone());
+        if req.validation > 0 {
+            files.push(v.clone());
+        }
     }
     if let (true, Some((old, _))) = (req.correction, extension) {
         files.push(old.model.clone());
     }
+    // Contents only: another spelling of the same directory fits the same.
     for f in files {
-        h.str(&f.display().to_string());
-        h.bytes(&std::fs::read(&f).map_err(|e| Error::io(&f, e))?);
+        let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
+        h.u64(bytes.len() as u64);
+        h.bytes(&bytes);
     }
     Ok(format!("{:016x}", h.0))
 }
