@@ -94,6 +94,9 @@ pub(crate) type ParamsFile = (
 pub(crate) struct Trained {
     name: String,
     box_scale: Option<f64>,
+    /// The shear box's rest rule of the training runs (absent: kinetic).
+    #[serde(default)]
+    rest_rule: Option<String>,
 }
 
 pub(crate) fn read_params(path: &std::path::Path) -> anyhow::Result<ParamsFile> {
@@ -253,6 +256,15 @@ pub fn run(a: &ValidateArgs) -> anyhow::Result<()> {
         &ExperimentSettings {
             box_scale,
             model_class: class,
+            // The DEM reruns the procedure the metamodel's runs had.
+            rest_rule: trained
+                .as_ref()
+                .and_then(|t| t.rest_rule.as_deref())
+                .map(mbgc::experiments::shear_box::RestRule::parse)
+                .transpose()
+                .map_err(|e| {
+                    anyhow::anyhow!("{}: [experiment] rest_rule: {e}", a.params.display())
+                })?,
             ..Default::default()
         },
     )?;

@@ -117,6 +117,8 @@ pub struct Session {
     pub experiment: Option<String>,
     /// The box scale of those runs, if the experiment has one.
     pub box_scale: Option<f64>,
+    /// The rest rule of those runs when it was not the kinetic one.
+    pub rest_rule: Option<String>,
     /// What was decided on the user's behalf (PSD fitted, parameters left free, ...).
     pub notes: Vec<String>,
     /// The material's fixed parameters, in file order.
@@ -282,6 +284,7 @@ pub fn run(
         model_class: model.model_class.clone(),
         experiment: model.experiment.clone(),
         box_scale: model.box_scale,
+        rest_rule: model.rest_rule.clone(),
         notes: problem.notes.clone(),
         fixed: material.fixed.clone(),
         measured: problem
@@ -465,6 +468,9 @@ impl Session {
             let _ = write!(t, "\n[experiment]\nname = {e:?}\n");
             if let Some(k) = self.box_scale {
                 let _ = writeln!(t, "box_scale = {k:?}");
+            }
+            if let Some(r) = &self.rest_rule {
+                let _ = writeln!(t, "rest_rule = {r:?}");
             }
         }
         t

@@ -922,6 +922,7 @@ pub fn fit(
         box_scale: table.campaign.as_ref().and_then(|m| {
             crate::campaign::registry::effective_box_scale(&m.experiment, m.box_scale)
         }),
+        rest_rule: table.campaign.as_ref().and_then(|m| m.rest_rule.clone()),
         constants: fixed,
         constraints: Vec::new(),
         constraint_terms: Vec::new(),

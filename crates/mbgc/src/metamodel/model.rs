@@ -358,6 +358,10 @@ pub struct Metamodel {
     /// d_max), when it has one: a validation at another scale would compare other physics.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub box_scale: Option<f64>,
+    /// The shear box's rest rule in the training runs when it was not the kinetic one
+    /// (`--rest-rule`, from the table's sidecar): a validation reruns the DEM under it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_rule: Option<String>,
     /// Parameters the campaign held at one value that are not inputs (a local space's known
     /// material values): the model describes runs at these values only.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
