@@ -5,7 +5,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
-use super::Band;
+use super::band::Band;
 use crate::error::{Error, Result};
 use crate::metamodel::Metamodel;
 
