@@ -88,7 +88,19 @@ def test_a_failing_callback_is_raised_after_the_campaign(tmp_path: Path) -> None
     assert mbgc.simulate(design(), "wall-impact", out, set=SET, model_class="hertz,mindlin").attrs["summary"]["done"] == 0
 
 
-def test_ctrl_c_stops_the_campaign_and_keeps_its_runs(tmp_path: Path) -> None:
+@pytest.fixture
+def ctrl_c_raises():
+    """Python turns SIGINT into KeyboardInterrupt only where its parent left SIGINT alone: a test
+    run started in the background of a shell inherits it ignored, and interrupt_main then does
+    nothing. This installs the handler a terminal's Python has, whatever started this one."""
+    import signal
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_stops_the_campaign_and_keeps_its_runs(tmp_path: Path, ctrl_c_raises: None) -> None:
     import _thread
 
     out = tmp_path / "wall.csv"
