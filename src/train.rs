@@ -153,7 +153,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
             model,
             paths,
             warnings,
-            ..
+            figures,
         } => {
             for w in &warnings {
                 eprintln!("warning: {w}");
@@ -184,11 +184,16 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
                     r.train.rmse
                 );
             }
-            eprintln!(
-                "wrote {} (+ .rs, .tex, {})",
-                paths.model.display(),
-                paths.figures.display()
-            );
+            // A model kept from an unchanged fit draws no figures (those of its fit remain).
+            if figures.is_empty() {
+                eprintln!("kept {}", paths.model.display());
+            } else {
+                eprintln!(
+                    "wrote {} (+ .rs, .tex, {})",
+                    paths.model.display(),
+                    paths.figures.display()
+                );
+            }
         }
     }
     Ok(())
