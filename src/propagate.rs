@@ -345,8 +345,10 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
         }
     };
     let mut rows = Vec::new();
+    let mut values_by_draw = Vec::new();
     for r in &responses {
-        let band = Band::of(&d.by_draw(&values(&path("runs.csv"), &plan, r)?));
+        let per_draw = d.by_draw(&values(&path("runs.csv"), &plan, r)?);
+        let band = Band::of(&per_draw);
         let best_value = match &best_plan {
             Some(p) => {
                 let v: Vec<f64> = values(&path("best.csv"), p, r)?
@@ -358,10 +360,10 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
             None => None,
         };
         rows.push((r.clone(), band, best_value));
+        values_by_draw.push(per_draw);
     }
     if let Some(dir) = &a.plot {
-        for (r, _, best) in &rows {
-            let per_draw = d.by_draw(&values(&path("runs.csv"), &plan, r)?);
+        for ((r, _, best), per_draw) in rows.iter().zip(&values_by_draw) {
             if per_draw.iter().flatten().all(|v| !v.is_finite()) {
                 continue;
             }
@@ -374,7 +376,7 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
                 &file,
                 &mbgc::plot::propagation::PropagationFigure {
                     response: r,
-                    per_draw: &per_draw,
+                    per_draw,
                     metamodel: model,
                     best_fit: *best,
                 },
