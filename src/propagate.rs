@@ -12,7 +12,7 @@ use mbgc::dem::contact::ModelClass;
 use mbgc::error::{read_to_string, write_atomic};
 use mbgc::experiments::Experiment;
 use mbgc::outputs::refuse_overwriting_inputs;
-use mbgc::propagate::{self, resample, Band, DrawDesign, PosteriorFile};
+use mbgc::propagate::{self, resample, Band, DrawDesign, EventRate, PosteriorFile, RecordedRuns};
 use mbgc_output::{say, Output};
 
 #[derive(Debug, Args)]
@@ -87,9 +87,10 @@ fn put_design(path: &Path, text: &str, runs: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The value of `response` of every design row of `plan` in the table at `out` (NaN for a
-/// failed run or one without the value).
-fn values(out: &Path, plan: &Plan, response: &str) -> anyhow::Result<Vec<f64>> {
+/// The runs of `plan` in the table at `out`: per design row, the recorded values of `names`
+/// (NaN where the run has none or the table no such column), `None` for a row that has not
+/// finished (not run yet, or failed). The shape [`RecordedRuns::new`] takes.
+fn recorded(out: &Path, plan: &Plan, names: &[&str]) -> anyhow::Result<Vec<Option<Vec<f64>>>> {
     let mut reader =
         csv::Reader::from_path(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
     let header = reader
@@ -104,8 +105,12 @@ fn values(out: &Path, plan: &Plan, response: &str) -> anyhow::Result<Vec<f64>> {
             )
         })
     };
-    let (row_col, status_col, value_col) = (col("row")?, col("status")?, col(response)?);
-    let mut v = vec![f64::NAN; plan.rows.len()];
+    let (row_col, status_col) = (col("row")?, col("status")?);
+    let value_cols: Vec<Option<usize>> = names
+        .iter()
+        .map(|n| header.iter().position(|h| h == *n))
+        .collect();
+    let mut v = vec![None; plan.rows.len()];
     for (i, rec) in reader.records().enumerate() {
         let rec = rec.map_err(|e| anyhow::anyhow!("{}: line {}: {e}", out.display(), i + 2))?;
         let row: usize = rec[row_col].parse().map_err(|_| {
@@ -118,7 +123,12 @@ fn values(out: &Path, plan: &Plan, response: &str) -> anyhow::Result<Vec<f64>> {
         })?;
         if rec[status_col] == *"done" {
             if let Some(slot) = v.get_mut(row) {
-                *slot = rec[value_col].parse().unwrap_or(f64::NAN);
+                *slot = Some(
+                    value_cols
+                        .iter()
+                        .map(|c| c.and_then(|c| rec[c].parse().ok()).unwrap_or(f64::NAN))
+                        .collect(),
+                );
             }
         }
     }
@@ -319,7 +329,7 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
         a.experiment,
         post.material,
         d.sized_by
-            .map(|k| format!(", {k} set by each draw's d50"))
+            .map(|k| format!(", one {k} for every draw, by the median draw's particles"))
             .unwrap_or_default()
     );
     let plan = run_design(
@@ -344,21 +354,30 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
             )?)
         }
     };
+    let read = |table: &str, plan: &Plan| -> anyhow::Result<RecordedRuns> {
+        let names = experiment.responses();
+        let runs = recorded(&path(table), plan, &names)?;
+        Ok(RecordedRuns::new(experiment.as_ref(), runs))
+    };
+    let runs = read("runs.csv", &plan)?;
+    let best_runs = match &best_plan {
+        Some(p) => Some(read("best.csv", p)?),
+        None => None,
+    };
+    let events: Vec<EventRate> = experiment
+        .events()
+        .into_iter()
+        .filter_map(|e| EventRate::of(e, &runs.event_by_draw(e, d.seeds)))
+        .collect();
     let mut rows = Vec::new();
     let mut values_by_draw = Vec::new();
     for r in &responses {
-        let per_draw = d.by_draw(&values(&path("runs.csv"), &plan, r)?);
+        let per_draw = d.by_draw(&runs.values(r));
         let band = Band::of(&per_draw);
-        let best_value = match &best_plan {
-            Some(p) => {
-                let v: Vec<f64> = values(&path("best.csv"), p, r)?
-                    .into_iter()
-                    .filter(|v| v.is_finite())
-                    .collect();
-                (!v.is_empty()).then(|| mbgc::numeric::mean_sd(&v).0)
-            }
-            None => None,
-        };
+        let best_value = best_runs.as_ref().and_then(|b| {
+            let v: Vec<f64> = b.values(r).into_iter().filter(|v| v.is_finite()).collect();
+            (!v.is_empty()).then(|| mbgc::numeric::mean_sd(&v).0)
+        });
         rows.push((r.clone(), band, best_value));
         values_by_draw.push(per_draw);
     }
@@ -384,7 +403,7 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
             say!(out, "wrote {}", file.display());
         }
     }
-    let text = report(a, &post, &d, &rows, through_model.as_deref());
+    let text = report(a, &post, &d, &rows, &events, through_model.as_deref());
     if let Some(r) = &a.report {
         write_atomic(r, text.as_bytes())?;
         say!(out, "wrote {}", r.display());
@@ -404,6 +423,10 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
                 "mean": b.mean, "sd": b.sd, "q05": b.q05, "q50": b.q50, "q95": b.q95,
                 "cov": b.cov, "scatter_sd": b.scatter_sd, "parametric_sd": b.parametric_sd,
             })),
+        })).collect::<Vec<_>>(),
+        "events": events.iter().map(|e| serde_json::json!({
+            "event": e.event, "count": e.count, "runs": e.runs, "draws": e.draws,
+            "share": e.share, "q05": e.q05, "q95": e.q95,
         })).collect::<Vec<_>>(),
         "metamodel": through_model.as_ref().map(|bands| bands.iter().map(|m| serde_json::json!({
             "response": m.response,
@@ -425,6 +448,7 @@ fn report(
     post: &PosteriorFile,
     d: &DrawDesign,
     rows: &[(String, Option<Band>, Option<f64>)],
+    events: &[EventRate],
     model: Option<&[propagate::MetamodelBand]>,
 ) -> String {
     let mut s = format!(
@@ -442,7 +466,7 @@ fn report(
         a.seed,
         d.seeds,
         d.sized_by
-            .map(|k| format!("; `{k}` sized to each draw's particles"))
+            .map(|k| format!("; one `{k}` for every draw, sized to the median draw's particles"))
             .unwrap_or_default(),
     );
     for (r, b, best) in rows {
@@ -472,6 +496,28 @@ fn report(
          is added: the DEM is the model of these quantities, and the posterior's sigma is the \
          calibration metamodel's relative error.\n",
     );
+    if !events.is_empty() {
+        s.push_str(
+            "\n## Events\n\nRuns that finished without their measured quantities, and why. \
+             They count as missing above. The share of the finished runs estimates the \
+             posterior mean of the event's probability; the interval is Jeffreys' (Beta(k + \
+             1/2, n - k + 1/2)).\n\n\
+             | event | runs with it | of finished runs | share | 90 % interval | draws with it |\n\
+             |---|---|---|---|---|---|\n",
+        );
+        for e in events {
+            s.push_str(&format!(
+                "| {} | {} | {} | {} | [{}, {}] | {} |\n",
+                e.event,
+                e.count,
+                e.runs,
+                num(e.share),
+                num(e.q05),
+                num(e.q95),
+                e.draws
+            ));
+        }
+    }
     if let (Some(bands), Some(m)) = (model, &a.metamodel) {
         s.push_str(&format!(
             "\n## Through the metamodel `{}`\n\nThe same draws through its equations (one \

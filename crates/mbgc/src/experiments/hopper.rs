@@ -33,6 +33,11 @@
 //!   walking from the wall inward (top) or from the apex outward (bottom) and stopping at the
 //!   first bin below 20 % or with fewer than half its cells occupied: the flat rest of a shallow
 //!   fill, the crater floor, the toe of the pile and scattered particles are left out.
+//! - a clog: a discharge that stops before the material standing over the orifice has left
+//!   ([`clogged`]: `discharged_fraction` below (D_o / D)^2) was stopped by an arch. It has no
+//!   steady flow, crater or pile, so `flow_rate`, `beverloo_ratio` and the repose angles are
+//!   NaN and the run warns; `discharged_fraction` is the avalanche before the arch. The event is
+//!   `clogged` ([`Experiment::events`]), which a propagation counts.
 //! - diagnostics: `discharged_mass` (kg), `discharged_fraction`, `flow_R2` (of the flow-rate fit),
 //!   `bulk_density` (kg/m^3, settled fill), `beverloo_ratio` (flow_rate over
 //!   [`beverloo_flow_rate`] with the measured bulk density and d50).
@@ -135,6 +140,22 @@ pub const DT_FRACTION: f64 = 0.2;
 pub const MAX_PARTICLES: usize = 2_000_000;
 /// Smallest orifice diameter in largest particle diameters: below ~4 d_max the orifice bridges.
 pub const MIN_ORIFICE_RATIO: f64 = 4.0;
+/// The share of the fill that stands over the orifice, (D_o / D)^2 = 0.09: the settled fill is a
+/// flat layer, and a discharge that no arch stops empties at least this column, because the
+/// crater of the material left behind rises from the orifice's edge. A run that discharged less
+/// clogged ([`clogged`]).
+pub const OVER_ORIFICE_SHARE: f64 =
+    (ORIFICE_DIAMETER / CONTAINER_DIAMETER) * (ORIFICE_DIAMETER / CONTAINER_DIAMETER);
+
+/// Whether a discharge that stopped at `discharged_fraction` of the fill clogged: an arch over
+/// the orifice stopped it before the material standing over the orifice had left
+/// ([`OVER_ORIFICE_SHARE`]). Such a run has no flow rate (the few particles before the arch are
+/// no steady flow), no crater and no pile. The rule reads only a recorded response, so a table
+/// written before runs were voided is read alike. An arch that forms after the column has
+/// emptied is not caught: the run then warns, and its flow rate is that of the flow before it.
+pub fn clogged(discharged_fraction: f64) -> bool {
+    discharged_fraction < OVER_ORIFICE_SHARE
+}
 
 /// Beverloo's mass flow rate W = C rho_b sqrt(g) (D_o - k d)^(5/2), kg/s (SI units; 0 if
 /// D_o <= k d).
@@ -934,11 +955,39 @@ impl Hopper {
         let top_angles = repose_angles(&xc, &rc, Surface::Top, 0.0, geo.radius, s.d50);
         let bottom_angles =
             repose_angles(&xb, &rb, Surface::Bottom, z_plate, geo.plate_radius, s.d50);
+        let (mut top_angles, mut bottom_angles) = (top_angles, bottom_angles);
+        let (mut flow_rate, discharged_fraction) = (flow_rate, passed_mass / total_mass);
+        // Particles wholly over the hole and within one d_max of its plane, at rest: only an
+        // arch can hold them.
+        let held = (0..p.len())
+            .filter(|&i| {
+                let x = p.x[i];
+                x[2] >= z_pass && x[2] < s.d_max && x[0].hypot(x[1]) + p.r[i] < geo.orifice_radius
+            })
+            .count();
+        if clogged(discharged_fraction) {
+            warnings.push(format!(
+                "the orifice clogged: the discharge stopped after {:.1} % of the fill, less than \
+                 the {:.0} % standing over the orifice; flow_rate and the repose angles are NaN \
+                 (no steady flow, no crater, no pile)",
+                100.0 * discharged_fraction,
+                100.0 * OVER_ORIFICE_SHARE
+            ));
+            flow_rate = f64::NAN;
+            top_angles = [f64::NAN; 4];
+            bottom_angles = [f64::NAN; 4];
+        } else if settled && held > 0 {
+            warnings.push(format!(
+                "an arch holds {held} particles over the orifice after {:.1} % of the fill left: \
+                 the discharge stopped by a late clog; flow_rate is that of the flow before it",
+                100.0 * discharged_fraction
+            ));
+        }
         let top = finite_mean(&top_angles);
         let bottom = finite_mean(&bottom_angles);
         for (name, a) in [("top", &top_angles), ("bottom", &bottom_angles)] {
             let bad = a.iter().filter(|v| !v.is_finite()).count();
-            if bad > 0 {
+            if bad > 0 && !clogged(discharged_fraction) {
                 warnings.push(format!(
                     "repose angle {name}: {bad} of 4 sectors had too few surface points"
                 ));
@@ -949,7 +998,7 @@ impl Hopper {
             ("repose_angle_top".into(), top),
             ("repose_angle_bottom".into(), bottom),
             ("discharged_mass".into(), passed_mass),
-            ("discharged_fraction".into(), passed_mass / total_mass),
+            ("discharged_fraction".into(), discharged_fraction),
             ("flow_R2".into(), flow_r2),
             ("bulk_density".into(), bulk_density),
             ("beverloo_ratio".into(), flow_rate / w_bev),
@@ -1028,6 +1077,16 @@ impl Experiment for Hopper {
     /// per-sector parts of these.
     fn calibration_responses(&self) -> Vec<&'static str> {
         vec!["flow_rate", "repose_angle_top", "repose_angle_bottom"]
+    }
+
+    fn events(&self) -> Vec<&'static str> {
+        vec!["clogged"]
+    }
+
+    fn event_of(&self, value: &dyn Fn(&str) -> Option<f64>) -> Option<&'static str> {
+        value("discharged_fraction")
+            .filter(|f| f.is_finite() && clogged(*f))
+            .map(|_| "clogged")
     }
 
     fn responses(&self) -> Vec<&'static str> {
@@ -1160,6 +1219,26 @@ fn draw_side<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The clog rule reads the recorded discharged fraction: the 0.09 over the orifice is the
+    /// line, and a table without the column, or without a value, has no event.
+    #[test]
+    fn a_run_that_left_less_than_the_column_over_the_orifice_clogged() {
+        assert!((OVER_ORIFICE_SHARE - 0.09).abs() < 1e-12);
+        let hopper = Hopper {
+            class: ModelClass::default(),
+        };
+        let event = |f: Option<f64>| {
+            hopper.event_of(&|n: &str| if n == "discharged_fraction" { f } else { None })
+        };
+        assert_eq!(event(Some(0.023)), Some("clogged"));
+        assert_eq!(event(Some(0.0)), Some("clogged"));
+        assert_eq!(event(Some(0.25)), None);
+        assert_eq!(event(Some(0.0901)), None);
+        assert_eq!(event(Some(f64::NAN)), None);
+        assert_eq!(event(None), None);
+        assert_eq!(hopper.events(), vec!["clogged"]);
+    }
 
     #[test]
     fn repose_angles_of_a_synthetic_cone_and_crater() {

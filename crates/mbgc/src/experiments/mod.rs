@@ -162,6 +162,19 @@ pub trait Experiment: Send + Sync {
     fn sized_to(&self, _p: &ParamSet) -> Option<(&'static str, f64)> {
         None
     }
+    /// Events a finished run can have that leave it without its calibration responses (a
+    /// hopper's clogged orifice: no flow rate), by name. A propagation (`crate::propagate`)
+    /// reports how often each happened over the posterior.
+    fn events(&self) -> Vec<&'static str> {
+        Vec::new()
+    }
+    /// Which of [`Experiment::events`] a finished run had, from its recorded responses (`value`
+    /// gives one by name, `None` when the table lacks it). The run itself already left its
+    /// calibration responses NaN; reading the event from what a table records lets a table
+    /// written before the experiment did so be read alike.
+    fn event_of(&self, _value: &dyn Fn(&str) -> Option<f64>) -> Option<&'static str> {
+        None
+    }
     /// Response names, in output order.
     fn responses(&self) -> Vec<&'static str>;
     /// Refuses an impossible parameter set before anything runs; the error names the parameter.

@@ -9,7 +9,9 @@
 //!    like any design ([`crate::campaign`]: resumable, shardable).
 //! 4. [`Band::of`]: per quantity, the robust mean, sd, 5/50/95 % quantiles and COV over the
 //!    draws, and with several seeds per draw the parametric spread apart from the run scatter.
-//!
+//!    [`EventRate`]: how often a run had an event that leaves it without its responses (a
+//!    clogged hopper), with its interval; such runs count as missing in the bands
+//!    ([`RecordedRuns`]).
 //! 5. [`through_metamodel`]: the same draws through a metamodel of the quantity, when one
 //!    exists, with and without its own error: the cheap path beside the DEM band.
 //!
@@ -18,13 +20,17 @@
 //! nothing about the new quantity; it is kept in the file, not added.
 
 pub mod band;
+pub mod event_rate;
 pub mod metamodel_band;
 pub mod posterior_file;
+pub mod recorded_runs;
 pub mod resample;
 
 pub use band::Band;
+pub use event_rate::EventRate;
 pub use metamodel_band::{through_metamodel, MetamodelBand};
 pub use posterior_file::PosteriorFile;
+pub use recorded_runs::RecordedRuns;
 
 use crate::error::{Error, Result};
 use crate::experiments::{Experiment, ParamSet};
