@@ -498,3 +498,49 @@ fn a_model_without_the_size_spread_is_refused_for_graded_samples() {
         "{err}"
     );
 }
+
+/// The intervals beside those of exact models tell a limiting model from limiting measurements:
+/// the same set and predictions, once with a model error well below the measurement sd and once
+/// with one three times above it. The exact-model widths are the same in both (only the sds
+/// enter them); the fitted ones are about as wide with the precise model and wider with the
+/// imprecise one.
+#[test]
+fn the_intervals_with_exact_models_say_whether_the_model_limits_them() {
+    let s = set("hertz,mindlin,epsd2", "", 0.5, 0.3, 0.0, 3);
+    let opts = Options {
+        samples: 1000,
+        ..Options::default()
+    };
+    let width = |p: &mbgc::diagnose::Parameter| {
+        let [lo, hi] = p.exact_models.expect("every value has an sd");
+        (p.q95 - p.q05, hi - lo)
+    };
+    let precise = diagnose(
+        &s,
+        &[base_model("precise.json", &MODEL_ERROR, [0.0; 2])],
+        &opts,
+    )
+    .unwrap()
+    .base;
+    let rough = [("shear_angle", 3.0), ("bulk_density", 11.4)];
+    let imprecise = diagnose(&s, &[base_model("rough.json", &rough, [0.0; 2])], &opts)
+        .unwrap()
+        .base;
+    for (p, q) in precise.parameters.iter().zip(&imprecise.parameters) {
+        let ((fit_p, exact_p), (fit_q, exact_q)) = (width(p), width(q));
+        eprintln!(
+            "{}: precise {fit_p} / {exact_p}, rough {fit_q} / {exact_q}",
+            p.name
+        );
+        assert!(
+            (exact_p / exact_q - 1.0).abs() < 0.1,
+            "{}: {exact_p} vs {exact_q}",
+            p.name
+        );
+        // Measured: 1.04 (both parameters) and 1.40 / 1.42; the searched range (mu_pp 0.05-1)
+        // and the ridge between the two frictions keep the rough model's intervals from growing
+        // with its error.
+        assert!(fit_p / exact_p < 1.15, "{}: {fit_p} / {exact_p}", p.name);
+        assert!(fit_q / exact_q > 1.3, "{}: {fit_q} / {exact_q}", q.name);
+    }
+}

@@ -84,6 +84,13 @@ pub struct Parameter {
     /// truth may lie beyond.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub at_edge: Option<String>,
+    /// The 90 % interval with every model's error taken as zero (each measured value's sd
+    /// alone): how wide the measurements by themselves allow it to be. Much narrower than
+    /// `[q05, q95]`: the models limit the answer; about as wide: the measurements do. Only its
+    /// width means something, since it still rests on the models' predictions. `None` when a
+    /// value has no sd of its own.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exact_models: Option<[f64; 2]>,
 }
 
 /// One measurement against the model's prediction at the best fit.
@@ -292,19 +299,33 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
         }
         j.notes.extend(notes);
     }
+    let exact = j
+        .exact_model_draws(opts.samples, opts.seed)
+        .map_err(|e| Error::invalid(format!("TMCMC of {} with exact models: {e}", j.class)))?;
     let j = &*j;
     let ev = j
         .evidence(opts.samples, opts.seed)
         .map_err(|e| Error::invalid(format!("TMCMC of {}: {e}", j.class)))?;
+    let sorted = |draws: &[Vec<f64>], k: usize| {
+        let mut v: Vec<f64> = draws.iter().map(|d| d[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v
+    };
     let (pred, inside) = j.predictions(&fit.theta);
     let parameters = j
         .names
         .iter()
         .enumerate()
         .map(|(k, n)| {
-            let mut v: Vec<f64> = ev.draws.iter().map(|d| d[k]).collect();
-            v.sort_by(f64::total_cmp);
+            let v = sorted(&ev.draws, k);
             let q = |p: f64| crate::numeric::quantile_sorted(&v, p);
+            let exact_models = exact.as_ref().map(|d| {
+                let e = sorted(d, k);
+                [
+                    crate::numeric::quantile_sorted(&e, 0.05),
+                    crate::numeric::quantile_sorted(&e, 0.95),
+                ]
+            });
             Parameter {
                 name: n.clone(),
                 best: fit.theta[k],
@@ -312,6 +333,7 @@ fn class_fit(set: &MeasurementSet, j: &mut Joint, opts: &Options) -> Result<Clas
                 q05: q(0.05),
                 q95: q(0.95),
                 at_edge: edge(j, &fit.theta, inside, k),
+                exact_models,
             }
         })
         .collect();

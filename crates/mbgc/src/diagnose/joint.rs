@@ -650,6 +650,44 @@ impl<'s> Joint<'s> {
         changed
     }
 
+    /// Posterior draws as if every model were exact up to its DEM noise: each measured value's
+    /// sd alone, no model error. That is what the measurements by themselves allow; beside the
+    /// real posterior it says whether the models or the measurements limit the intervals (a
+    /// better model helps only in the first case, more or better measurements only in the
+    /// second). `Ok(None)` when a value has no sd of its own (the model error was its only
+    /// uncertainty, so there is no such limit). The model errors are restored afterwards.
+    pub fn exact_model_draws(
+        &mut self,
+        samples: usize,
+        seed: u64,
+    ) -> Result<Option<Vec<Vec<f64>>>, String> {
+        if self.dim() == 0
+            || self
+                .targets
+                .iter()
+                .any(|t| t.sd.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
+        {
+            return Ok(None);
+        }
+        let kept: Vec<(f64, bool)> = self
+            .targets
+            .iter()
+            .map(|t| (t.model_error, t.error_given))
+            .collect();
+        for t in &mut self.targets {
+            t.model_error = 0.0;
+            t.error_given = true;
+        }
+        self.cov = covariance(&self.rows, &self.targets, self.correlation);
+        let ev = self.evidence(samples, seed);
+        for (t, (e, g)) in self.targets.iter_mut().zip(kept) {
+            t.model_error = e;
+            t.error_given = g;
+        }
+        self.cov = covariance(&self.rows, &self.targets, self.correlation);
+        ev.map(|e| Some(e.draws))
+    }
+
     /// Degrees of freedom: measurements minus searched parameters.
     pub fn dof(&self) -> isize {
         self.targets.len() as isize - self.dim() as isize

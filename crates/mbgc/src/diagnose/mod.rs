@@ -16,6 +16,6 @@ pub mod report;
 pub mod structure;
 pub mod surrogate;
 
-pub use diagnosis::{diagnose, Diagnosis, Options};
+pub use diagnosis::{diagnose, Diagnosis, Options, Parameter};
 pub use measurements::MeasurementSet;
 pub use surrogate::Surrogate;
