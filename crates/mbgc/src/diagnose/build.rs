@@ -1074,6 +1074,7 @@ mod tests {
             q05,
             q95,
             at_edge: None,
+            exact_models: None,
         }
     }
 
