@@ -212,7 +212,9 @@ fn limits<'a>(out: &mut String, fits: impl Iterator<Item = &'a ClassFit>) {
          taken as zero (each value's sd alone). Only the widths compare: the second interval \
          still rests on the models' predictions, which miss. A width ratio well above 1: the \
          models limit the answer (more DEM runs would narrow it); near 1: the measurements do \
-         (more or more precise measurements would)."
+         (more or more precise measurements would), or nothing does where both intervals span \
+         the searched range. An exact-model interval outside the fitted one is a sign of \
+         misfit, not of precision."
     );
     line!(
         out,

@@ -168,6 +168,11 @@ pub trait Experiment: Send + Sync {
     fn events(&self) -> Vec<&'static str> {
         Vec::new()
     }
+    /// The responses a run with any of [`Experiment::events`] has no value of (NaN in the run
+    /// itself, and voided by readers of older tables). By default the calibration responses.
+    fn voided_by_events(&self) -> Vec<&'static str> {
+        self.calibration_responses()
+    }
     /// Which of [`Experiment::events`] a finished run had, from its recorded responses (`value`
     /// gives one by name, `None` when the table lacks it). The run itself already left its
     /// calibration responses NaN; reading the event from what a table records lets a table

@@ -8,7 +8,7 @@ use crate::experiments::Experiment;
 pub struct RecordedRuns {
     /// The experiment's responses, the order of each run's values.
     names: Vec<&'static str>,
-    /// Its calibration responses: what an event leaves without a value.
+    /// What an event leaves without a value ([`Experiment::voided_by_events`]).
     voided: Vec<&'static str>,
     /// Per design row: `None` until the run finished, else its event and values.
     runs: Vec<Option<(Option<&'static str>, Vec<f64>)>>,
@@ -23,20 +23,25 @@ impl RecordedRuns {
             .into_iter()
             .map(|r| {
                 r.map(|v| {
-                    let value = |n: &str| names.iter().position(|m| *m == n).map(|i| v[i]);
+                    let value = |n: &str| {
+                        names
+                            .iter()
+                            .position(|m| *m == n)
+                            .and_then(|i| v.get(i).copied())
+                    };
                     (experiment.event_of(&value), v)
                 })
             })
             .collect();
         RecordedRuns {
             names,
-            voided: experiment.calibration_responses(),
+            voided: experiment.voided_by_events(),
             runs,
         }
     }
 
     /// `response` of every design row: NaN for a row that has not finished or lacks it, and for
-    /// a calibration response of a run that had an event (a table written before the
+    /// a response an event voids, of a run that had one (a table written before the
     /// experiment voided such runs itself still holds a number there).
     pub fn values(&self, response: &str) -> Vec<f64> {
         let i = self.names.iter().position(|n| *n == response);
@@ -44,7 +49,9 @@ impl RecordedRuns {
         self.runs
             .iter()
             .map(|r| match (r, i) {
-                (Some((event, v)), Some(i)) if !(void && event.is_some()) => v[i],
+                (Some((event, v)), Some(i)) if !(void && event.is_some()) => {
+                    v.get(i).copied().unwrap_or(f64::NAN)
+                }
                 _ => f64::NAN,
             })
             .collect()
@@ -100,6 +107,8 @@ mod tests {
         assert!(flow[1].is_nan() && flow[2].is_nan());
         assert_eq!(flow[3], 2.5);
         assert!(runs.values("repose_angle_top")[1].is_nan());
+        assert!(runs.values("beverloo_ratio")[1].is_nan());
+        assert_eq!(runs.values("beverloo_ratio")[0], 1.0);
         assert_eq!(runs.values("discharged_fraction")[1], 0.03);
         assert!(runs.values("no_such_response").iter().all(|v| v.is_nan()));
         assert_eq!(
