@@ -36,7 +36,7 @@
 //! - a clog: a discharge that stops before half the material standing over the orifice has left
 //!   ([`clogged`]: `discharged_fraction` below 0.5 (D_o / D)^2) was stopped by an arch. It has
 //!   no steady flow, crater or pile, so `flow_rate`, `beverloo_ratio` and the repose angles
-//!   ([`VOIDED_BY_CLOG`]) are NaN and the run warns; `discharged_fraction` is the avalanche
+//!   ([`VOIDED_BY_CLOG`] and the sector angles) are NaN and the run warns; `discharged_fraction` is the avalanche
 //!   before the arch. The event is `clogged` ([`Experiment::events`]), which a propagation
 //!   counts; it is a lower bound of the clogs (a later arch only warns).
 //! - diagnostics: `discharged_mass` (kg), `discharged_fraction`, `flow_R2` (of the flow-rate fit),
@@ -154,22 +154,15 @@ pub const OVER_ORIFICE_SHARE: f64 =
 /// more.
 pub const CLOG_SHARE: f64 = 0.5 * OVER_ORIFICE_SHARE;
 
-/// The responses a clogged run has no value of: the flow rate (the few particles before the
-/// arch are no steady flow), Beverloo's ratio, and the angles of the crater and the pile it
-/// never formed. A reader of an older table voids the same ([`Experiment::event_of`]).
-pub const VOIDED_BY_CLOG: [&str; 12] = [
+/// The responses a clogged run has no value of, besides the sector angles
+/// ([`SECTOR_ANGLE_NAMES`]): the flow rate (the few particles before the arch are no steady
+/// flow), Beverloo's ratio, and the angles of the crater and the pile it never formed. A reader
+/// of an older table voids the same ([`Experiment::voided_by_events`]).
+pub const VOIDED_BY_CLOG: [&str; 4] = [
     "flow_rate",
     "beverloo_ratio",
     "repose_angle_top",
     "repose_angle_bottom",
-    "repose_angle_top_1",
-    "repose_angle_top_2",
-    "repose_angle_top_3",
-    "repose_angle_top_4",
-    "repose_angle_bottom_1",
-    "repose_angle_bottom_2",
-    "repose_angle_bottom_3",
-    "repose_angle_bottom_4",
 ];
 
 /// Whether a discharge that stopped at `discharged_fraction` of the fill clogged: an arch over
@@ -1110,7 +1103,11 @@ impl Experiment for Hopper {
     }
 
     fn voided_by_events(&self) -> Vec<&'static str> {
-        VOIDED_BY_CLOG.to_vec()
+        VOIDED_BY_CLOG
+            .iter()
+            .chain(&SECTOR_ANGLE_NAMES)
+            .copied()
+            .collect()
     }
 
     fn event_of(&self, value: &dyn Fn(&str) -> Option<f64>) -> Option<&'static str> {

@@ -108,6 +108,7 @@ mod tests {
         assert_eq!(flow[3], 2.5);
         assert!(runs.values("repose_angle_top")[1].is_nan());
         assert!(runs.values("beverloo_ratio")[1].is_nan());
+        assert!(runs.values("repose_angle_bottom_4")[1].is_nan());
         assert_eq!(runs.values("beverloo_ratio")[0], 1.0);
         assert_eq!(runs.values("discharged_fraction")[1], 0.03);
         assert!(runs.values("no_such_response").iter().all(|v| v.is_nan()));
