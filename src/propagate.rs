@@ -500,8 +500,9 @@ fn report(
         s.push_str(
             "\n## Events\n\nRuns that finished without their measured quantities, and why. \
              They count as missing above. The share of the finished runs estimates the \
-             posterior mean of the event's probability; the interval is Jeffreys' (Beta(k + \
-             1/2, n - k + 1/2)).\n\n\
+             posterior mean of the event's probability, as a lower bound where the experiment \
+             cannot catch every case (a hopper's late arch or restarting flow); the interval is \
+             Jeffreys' (Beta(k + 1/2, n - k + 1/2)), for one run per draw.\n\n\
              | event | runs with it | of finished runs | share | 90 % interval | draws with it |\n\
              |---|---|---|---|---|---|\n",
         );

@@ -661,12 +661,7 @@ impl<'s> Joint<'s> {
         samples: usize,
         seed: u64,
     ) -> Result<Option<Vec<Vec<f64>>>, String> {
-        if self.dim() == 0
-            || self
-                .targets
-                .iter()
-                .any(|t| t.sd.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
-        {
+        if self.dim() == 0 || self.targets.iter().any(|t| t.sd.is_nan() || t.sd <= 0.0) {
             return Ok(None);
         }
         let kept: Vec<(f64, bool)> = self
