@@ -1,5 +1,5 @@
 //! One shear-box run with a side-view picture:
-//! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png] [trace.csv] [seed]
+//! cargo run --release --example shear_box -- [k] [mu_pp] [mu_r_pp] [d50_mm] [sigma_ln] [E] [picture.png] [trace.csv] [seed] [skin in d_min]
 use mbgc::experiments::{shear_box::ShearBox, ParamSet, RunOptions};
 
 fn main() {
@@ -21,10 +21,11 @@ fn main() {
     ]);
     let sb = ShearBox {
         box_scale: f(0, 6.0),
+        skin: f(9, mbgc::experiments::shear_box::SKIN),
         ..Default::default()
     };
     let opts = RunOptions {
-        picture: a.get(6).map(Into::into),
+        picture: a.get(6).filter(|s| !s.is_empty()).map(Into::into),
         threads: 1,
         ..Default::default()
     };
@@ -44,7 +45,7 @@ fn main() {
         rec.flow_seconds,
         rec.dt
     );
-    if let Some(path) = a.get(7) {
+    if let Some(path) = a.get(7).filter(|s| !s.is_empty()) {
         let mut out =
             String::from("phase,step,time,rms_speed,max_speed,max_step,removed,response\n");
         for c in &rec.trace {

@@ -364,6 +364,8 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
         Some(p) => Some(read("best.csv", p)?),
         None => None,
     };
+    // A best-fit run an event voided drops out of the best-fit value: the report says so.
+    let best_events = best_runs.as_ref().map(RecordedRuns::event_counts);
     let events: Vec<EventRate> = experiment
         .events()
         .into_iter()
@@ -403,7 +405,15 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
             say!(out, "wrote {}", file.display());
         }
     }
-    let text = report(a, &post, &d, &rows, &events, through_model.as_deref());
+    let text = report(
+        a,
+        &post,
+        &d,
+        &rows,
+        &events,
+        best_events.as_ref(),
+        through_model.as_deref(),
+    );
     if let Some(r) = &a.report {
         write_atomic(r, text.as_bytes())?;
         say!(out, "wrote {}", r.display());
@@ -424,9 +434,14 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
                 "cov": b.cov, "scatter_sd": b.scatter_sd, "parametric_sd": b.parametric_sd,
             })),
         })).collect::<Vec<_>>(),
+        "best_fit_events": best_events.as_ref().map(|(runs, counts)| serde_json::json!({
+            "runs": runs,
+            "events": counts.iter().map(|(e, k)| serde_json::json!({"event": e, "count": k}))
+                .collect::<Vec<_>>(),
+        })),
         "events": events.iter().map(|e| serde_json::json!({
             "event": e.event, "count": e.count, "runs": e.runs, "draws": e.draws,
-            "share": e.share, "q05": e.q05, "q95": e.q95,
+            "share": e.share, "q05": e.q05, "q95": e.q95, "effective_runs": e.effective_runs,
         })).collect::<Vec<_>>(),
         "metamodel": through_model.as_ref().map(|bands| bands.iter().map(|m| serde_json::json!({
             "response": m.response,
@@ -449,6 +464,7 @@ fn report(
     d: &DrawDesign,
     rows: &[(String, Option<Band>, Option<f64>)],
     events: &[EventRate],
+    best_events: Option<&(usize, Vec<(&'static str, usize)>)>,
     model: Option<&[propagate::MetamodelBand]>,
 ) -> String {
     let mut s = format!(
@@ -496,25 +512,41 @@ fn report(
          is added: the DEM is the model of these quantities, and the posterior's sigma is the \
          calibration metamodel's relative error.\n",
     );
+    if let Some((runs, counts)) = best_events.filter(|(_, c)| !c.is_empty()) {
+        s.push_str(&format!(
+            "\nThe best-fit point's runs had events: {} of its {runs} finished run(s). A \
+             quantity an event voids is the mean of the point's other runs, `-` where none is \
+             left.\n",
+            counts
+                .iter()
+                .map(|(e, k)| format!("{e} in {k}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     if !events.is_empty() {
         s.push_str(
             "\n## Events\n\nRuns that finished without their measured quantities, and why. \
              They count as missing above. The share of the finished runs estimates the \
              posterior mean of the event's probability, as a lower bound where the experiment \
-             cannot catch every case (a hopper's late arch or restarting flow); the interval is \
-             Jeffreys' (Beta(k + 1/2, n - k + 1/2)), for one run per draw.\n\n\
-             | event | runs with it | of finished runs | share | 90 % interval | draws with it |\n\
-             |---|---|---|---|---|---|\n",
+             cannot catch every case (a hopper's arch after its first bins, or a stall after \
+             its last); the share is the mean over the draws of their runs' share. The interval \
+             is Jeffreys' (Beta(k + 1/2, n - k + 1/2)) with n the independent runs: all of them \
+             with one run per draw, else the effective number (Korn and Graubard), since the \
+             seeds of one draw share its parameters.\n\n\
+             | event | runs with it | of finished runs | share | 90 % interval | effective runs \
+             | draws with it |\n|---|---|---|---|---|---|---|\n",
         );
         for e in events {
             s.push_str(&format!(
-                "| {} | {} | {} | {} | [{}, {}] | {} |\n",
+                "| {} | {} | {} | {} | [{}, {}] | {} | {} |\n",
                 e.event,
                 e.count,
                 e.runs,
                 num(e.share),
                 num(e.q05),
                 num(e.q95),
+                num(e.effective_runs),
                 e.draws
             ));
         }

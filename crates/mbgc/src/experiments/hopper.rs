@@ -39,6 +39,11 @@
 //!   ([`VOIDED_BY_CLOG`] and the sector angles) are NaN and the run warns; `discharged_fraction` is the avalanche
 //!   before the arch. The event is `clogged` ([`Experiment::events`]), which a propagation
 //!   counts; it is a lower bound of the clogs (a later arch only warns).
+//! - an intermittent discharge: the binned flow rate falls below half its peak and rises again
+//!   by a quarter of it ([`intermittent`]): an arch formed and collapsed. It has no steady
+//!   rate, so `flow_rate` and `beverloo_ratio` are NaN ([`VOIDED_BY_INTERMITTENT`]) and the run
+//!   warns; the angles stand. The event is `intermittent`, also a lower bound (a stall after the
+//!   last bin is not seen).
 //! - diagnostics: `discharged_mass` (kg), `discharged_fraction`, `flow_R2` (of the flow-rate fit),
 //!   `bulk_density` (kg/m^3, settled fill), `beverloo_ratio` (flow_rate over
 //!   [`beverloo_flow_rate`] with the measured bulk density and d50).
@@ -157,7 +162,7 @@ pub const CLOG_SHARE: f64 = 0.5 * OVER_ORIFICE_SHARE;
 /// The responses a clogged run has no value of, besides the sector angles
 /// ([`SECTOR_ANGLE_NAMES`]): the flow rate (the few particles before the arch are no steady
 /// flow), Beverloo's ratio, and the angles of the crater and the pile it never formed. A reader
-/// of an older table voids the same ([`Experiment::voided_by_events`]).
+/// of an older table voids the same ([`Experiment::voided_by`]).
 pub const VOIDED_BY_CLOG: [&str; 4] = [
     "flow_rate",
     "beverloo_ratio",
@@ -165,12 +170,56 @@ pub const VOIDED_BY_CLOG: [&str; 4] = [
     "repose_angle_bottom",
 ];
 
+/// The event of a clogged orifice ([`clogged`]).
+pub const CLOGGED: &str = "clogged";
+/// The event of a discharge that stalled and started again ([`intermittent`]).
+pub const INTERMITTENT: &str = "intermittent";
+
+/// An intermittent discharge: the binned flow rate fell below this share of its peak so far...
+pub const STALL_SHARE: f64 = 0.5;
+/// ...and then rose again by at least this share of that peak. A free discharge declines
+/// steadily once its crater reaches the wall; its tail bins wobble by a few hundredths of the
+/// peak. On the 78 hopper runs in docs/data (the gravel propagation and seed 000's sensitivity
+/// design) one run qualifies: row 22 of the gravel propagation, 1.02, 0.41, 0.24, then 0.87 and
+/// 1.22 kg/s, a rise of 0.96 of its peak; the largest rise after a dip among the others is 0.027
+/// of the peak (row 27).
+pub const RESTART_SHARE: f64 = 0.25;
+
+/// The responses an intermittent run has no value of: a flow that stalls has no steady rate,
+/// so neither `flow_rate` nor Beverloo's ratio means anything. The crater and the pile it
+/// leaves are measured as usual.
+pub const VOIDED_BY_INTERMITTENT: [&str; 2] = ["flow_rate", "beverloo_ratio"];
+
+/// Whether the binned flow rates (`flow_rate_t1` ..) show a discharge that stalled and
+/// restarted: after falling below [`STALL_SHARE`] of its peak so far, the rate rose again by
+/// [`RESTART_SHARE`] of that peak (an arch that formed and collapsed). False when a bin is not
+/// finite (an unfinished series). Like [`clogged`], a lower bound: a stall after the last bin,
+/// or shorter than a bin, is not seen.
+pub fn intermittent(bins: &[f64]) -> bool {
+    if bins.iter().any(|b| !b.is_finite()) {
+        return false;
+    }
+    let (mut peak, mut low) = (0.0f64, f64::INFINITY);
+    for &b in bins {
+        if low.is_finite() && b - low >= RESTART_SHARE * peak {
+            return true;
+        }
+        if b > peak {
+            peak = b;
+            low = f64::INFINITY;
+        } else if b < STALL_SHARE * peak {
+            low = low.min(b);
+        }
+    }
+    false
+}
+
 /// Whether a discharge that stopped at `discharged_fraction` of the fill clogged: an arch over
 /// the orifice stopped it before half the material standing over the orifice had left
 /// ([`CLOG_SHARE`]). The rule reads only a recorded response, so a table written before runs
-/// were voided is read alike. It is a lower bound of the clogs: an arch that forms later, or a
-/// flow that stops and starts again, is not caught (the first warns when it holds particles
-/// over the orifice at the end; its flow rate is that of the flow before it).
+/// were voided is read alike. It is a lower bound of the clogs: an arch that forms later is not
+/// caught (the run warns when it holds particles over the orifice at the end; its flow rate is
+/// that of the flow before it); a flow that stops and starts again is [`intermittent`].
 pub fn clogged(discharged_fraction: f64) -> bool {
     discharged_fraction < CLOG_SHARE
 }
@@ -984,6 +1033,21 @@ impl Hopper {
                 x[2] >= z_pass && x[2] < top && x[0].hypot(x[1]) + p.r[i] < geo.orifice_radius
             })
             .count();
+        let t_unit = FLOW_BIN_WIDTH
+            * nominal_discharge_time(s.fill_mass, s.rho, 2.0 * geo.orifice_radius, s.d50);
+        let bins = binned_flow_rates(&series, t_unit, FLOW_BINS, settled);
+        let stalled = !clogged(discharged_fraction) && intermittent(&bins);
+        if stalled {
+            warnings.push(format!(
+                "the discharge stalled and restarted (flow rate by bin, kg/s: {}); flow_rate and \
+                 beverloo_ratio are NaN (no steady flow)",
+                bins.iter()
+                    .map(|b| format!("{b:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+            flow_rate = f64::NAN;
+        }
         if clogged(discharged_fraction) {
             warnings.push(format!(
                 "the orifice clogged: the discharge stopped after {:.1} % of the fill, less than \
@@ -995,7 +1059,7 @@ impl Hopper {
             flow_rate = f64::NAN;
             top_angles = [f64::NAN; 4];
             bottom_angles = [f64::NAN; 4];
-        } else if settled && held > 0 {
+        } else if settled && held > 0 && !stalled {
             warnings.push(format!(
                 "an arch holds {held} particles over the orifice after {:.1} % of the fill left: \
                  the discharge stopped by a late clog; flow_rate is that of the flow before it",
@@ -1022,9 +1086,6 @@ impl Hopper {
             ("bulk_density".into(), bulk_density),
             ("beverloo_ratio".into(), flow_rate / w_bev),
         ];
-        let t_unit = FLOW_BIN_WIDTH
-            * nominal_discharge_time(s.fill_mass, s.rho, 2.0 * geo.orifice_radius, s.d50);
-        let bins = binned_flow_rates(&series, t_unit, FLOW_BINS, settled);
         responses.push(("flow_bin_width".into(), t_unit));
         responses.extend(FLOW_BIN_NAMES.iter().map(|n| n.to_string()).zip(bins));
         let sectors = top_angles.iter().chain(&bottom_angles).copied();
@@ -1099,21 +1160,28 @@ impl Experiment for Hopper {
     }
 
     fn events(&self) -> Vec<&'static str> {
-        vec!["clogged"]
+        vec![CLOGGED, INTERMITTENT]
     }
 
-    fn voided_by_events(&self) -> Vec<&'static str> {
-        VOIDED_BY_CLOG
-            .iter()
-            .chain(&SECTOR_ANGLE_NAMES)
-            .copied()
-            .collect()
+    fn voided_by(&self, event: &str) -> Vec<&'static str> {
+        match event {
+            CLOGGED => VOIDED_BY_CLOG
+                .iter()
+                .chain(&SECTOR_ANGLE_NAMES)
+                .copied()
+                .collect(),
+            INTERMITTENT => VOIDED_BY_INTERMITTENT.to_vec(),
+            _ => Vec::new(),
+        }
     }
 
+    /// A clog first: its flow bins (an avalanche, then nothing) never restart.
     fn event_of(&self, value: &dyn Fn(&str) -> Option<f64>) -> Option<&'static str> {
-        value("discharged_fraction")
-            .filter(|f| f.is_finite() && clogged(*f))
-            .map(|_| "clogged")
+        if value("discharged_fraction").is_some_and(|f| f.is_finite() && clogged(f)) {
+            return Some(CLOGGED);
+        }
+        let bins: Option<Vec<f64>> = FLOW_BIN_NAMES.iter().map(|n| value(n)).collect();
+        bins.filter(|b| intermittent(b)).map(|_| INTERMITTENT)
     }
 
     fn responses(&self) -> Vec<&'static str> {
@@ -1269,7 +1337,52 @@ mod tests {
         assert_eq!(event(Some(0.085)), None);
         assert_eq!(event(Some(f64::NAN)), None);
         assert_eq!(event(None), None);
-        assert_eq!(hopper.events(), vec!["clogged"]);
+        assert_eq!(hopper.events(), vec!["clogged", "intermittent"]);
+    }
+
+    /// The stall rule on binned flow rates of real runs (docs/data/propagation/gravel/hopper):
+    /// row 22 stalled and restarted; row 7 started late, row 27 wobbled in its tail, row 3
+    /// clogged: none of them restarted. A bin that is NaN (an unfinished series) decides
+    /// nothing.
+    #[test]
+    fn a_flow_that_stalls_and_restarts_is_intermittent() {
+        let row22 = [1.02, 0.41, 0.24, 0.87, 1.22, 1.07, 0.55, 0.37];
+        assert!(intermittent(&row22));
+        assert!(!intermittent(&[
+            1.10, 1.44, 2.19, 0.84, 0.60, 0.46, 0.18, 0.15
+        ]));
+        assert!(!intermittent(&[
+            2.53, 2.37, 1.29, 0.86, 0.27, 0.15, 0.22, 0.12
+        ]));
+        assert!(!intermittent(&[0.45, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+        // At the lines (binary-exact values): a rise of exactly a quarter of the peak counts, a
+        // dip to exactly half does not.
+        assert!(intermittent(&[1.0, 0.25, 0.5]));
+        assert!(!intermittent(&[1.0, 0.25, 0.49]));
+        assert!(!intermittent(&[1.0, 0.5, 0.9]));
+        let mut unfinished = row22;
+        unfinished[7] = f64::NAN;
+        assert!(!intermittent(&unfinished));
+        let hopper = Hopper {
+            class: ModelClass::default(),
+        };
+        let event = |fraction: f64, bins: [f64; 8]| {
+            hopper.event_of(&|n: &str| {
+                if n == "discharged_fraction" {
+                    Some(fraction)
+                } else {
+                    FLOW_BIN_NAMES.iter().position(|b| *b == n).map(|k| bins[k])
+                }
+            })
+        };
+        assert_eq!(event(0.28, row22), Some("intermittent"));
+        // A clog comes first.
+        assert_eq!(event(0.02, row22), Some("clogged"));
+        assert_eq!(
+            hopper.voided_by("intermittent"),
+            vec!["flow_rate", "beverloo_ratio"]
+        );
+        assert!(hopper.voided_by("clogged").contains(&"repose_angle_top_1"));
     }
 
     #[test]

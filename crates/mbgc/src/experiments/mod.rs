@@ -168,9 +168,10 @@ pub trait Experiment: Send + Sync {
     fn events(&self) -> Vec<&'static str> {
         Vec::new()
     }
-    /// The responses a run with any of [`Experiment::events`] has no value of (NaN in the run
-    /// itself, and voided by readers of older tables). By default the calibration responses.
-    fn voided_by_events(&self) -> Vec<&'static str> {
+    /// The responses a run with `event` (one of [`Experiment::events`]) has no value of (NaN
+    /// in the run itself, and voided by readers of older tables). By default the calibration
+    /// responses.
+    fn voided_by(&self, _event: &str) -> Vec<&'static str> {
         self.calibration_responses()
     }
     /// Which of [`Experiment::events`] a finished run had, from its recorded responses (`value`

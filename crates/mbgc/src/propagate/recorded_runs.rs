@@ -8,8 +8,8 @@ use crate::experiments::Experiment;
 pub struct RecordedRuns {
     /// The experiment's responses, the order of each run's values.
     names: Vec<&'static str>,
-    /// What an event leaves without a value ([`Experiment::voided_by_events`]).
-    voided: Vec<&'static str>,
+    /// Each event and what it leaves without a value ([`Experiment::voided_by`]).
+    voided: Vec<(&'static str, Vec<&'static str>)>,
     /// Per design row: `None` until the run finished, else its event and values.
     runs: Vec<Option<(Option<&'static str>, Vec<f64>)>>,
 }
@@ -35,7 +35,11 @@ impl RecordedRuns {
             .collect();
         RecordedRuns {
             names,
-            voided: experiment.voided_by_events(),
+            voided: experiment
+                .events()
+                .into_iter()
+                .map(|e| (e, experiment.voided_by(e)))
+                .collect(),
             runs,
         }
     }
@@ -45,16 +49,44 @@ impl RecordedRuns {
     /// experiment voided such runs itself still holds a number there).
     pub fn values(&self, response: &str) -> Vec<f64> {
         let i = self.names.iter().position(|n| *n == response);
-        let void = self.voided.contains(&response);
+        let voids = |event: &Option<&str>| {
+            event.is_some_and(|e| {
+                self.voided
+                    .iter()
+                    .any(|(name, list)| *name == e && list.contains(&response))
+            })
+        };
         self.runs
             .iter()
             .map(|r| match (r, i) {
-                (Some((event, v)), Some(i)) if !(void && event.is_some()) => {
+                (Some((event, v)), Some(i)) if !voids(event) => {
                     v.get(i).copied().unwrap_or(f64::NAN)
                 }
                 _ => f64::NAN,
             })
             .collect()
+    }
+
+    /// Finished runs, and how many had each event that happened at all (in the experiment's
+    /// order): what a reader of one point's runs (the best fit's) must be told, since a run an
+    /// event voided drops out of that point's value.
+    pub fn event_counts(&self) -> (usize, Vec<(&'static str, usize)>) {
+        let finished = self.runs.iter().flatten().count();
+        let counts = self
+            .voided
+            .iter()
+            .map(|(e, _)| {
+                let k = self
+                    .runs
+                    .iter()
+                    .flatten()
+                    .filter(|(x, _)| *x == Some(*e))
+                    .count();
+                (*e, k)
+            })
+            .filter(|(_, k)| *k > 0)
+            .collect();
+        (finished, counts)
     }
 
     /// Per draw (`seeds` consecutive rows each), whether each of its finished runs had `event`.
@@ -115,6 +147,45 @@ mod tests {
         assert_eq!(
             runs.event_by_draw("clogged", 2),
             vec![vec![false, true], vec![false]]
+        );
+        assert_eq!(runs.event_counts(), (3, vec![("clogged", 1)]));
+    }
+
+    /// A discharge that stalled and restarted (the binned rates of row 22 of the gravel
+    /// propagation, docs/data/propagation/gravel/hopper/runs.csv) loses its flow rate and
+    /// Beverloo's ratio, not its angles; each event voids only its own list.
+    #[test]
+    fn an_intermittent_run_loses_its_flow_rate_only() {
+        let h = Hopper {
+            class: Default::default(),
+        };
+        let mut stalled = hopper_row(&h, 0.45, 33.0, 0.28);
+        let row22 = [1.02, 0.41, 0.24, 0.87, 1.22, 1.07, 0.55, 0.37];
+        for (name, v) in crate::experiments::hopper::FLOW_BIN_NAMES.iter().zip(row22) {
+            let i = h.responses().iter().position(|n| n == name).unwrap();
+            stalled[i] = v;
+        }
+        let runs = RecordedRuns::new(
+            &h,
+            vec![
+                Some(stalled),
+                Some(hopper_row(&h, 0.97, 30.0, 0.03)),
+                Some(hopper_row(&h, 2.5, 44.0, 0.37)),
+            ],
+        );
+        let flow = runs.values("flow_rate");
+        assert!(flow[0].is_nan() && flow[1].is_nan());
+        assert_eq!(flow[2], 2.5);
+        assert!(runs.values("beverloo_ratio")[0].is_nan());
+        assert_eq!(runs.values("repose_angle_top")[0], 33.0);
+        assert!(runs.values("repose_angle_top")[1].is_nan());
+        assert_eq!(
+            runs.event_by_draw("intermittent", 1),
+            vec![vec![true], vec![false], vec![false]]
+        );
+        assert_eq!(
+            runs.event_counts(),
+            (3, vec![("clogged", 1), ("intermittent", 1)])
         );
     }
 }
