@@ -265,6 +265,14 @@ impl Materials {
         self.materials.len()
     }
 
+    /// Whether every pair's tangential spring is Mindlin's, not strict and not of constant
+    /// stiffness: the pairs the four-lane kernel computes (`crate::contact::lanes`).
+    pub fn lanes_ready(&self) -> bool {
+        self.table
+            .iter()
+            .all(|p| !p.strict_coulomb && p.k_t_fixed <= 0.0)
+    }
+
     /// The contact-law constants of materials a and b (the kernel's lookup; zeros for a pair
     /// without an interaction). Panics if an index is out of range.
     #[inline(always)]

@@ -7,6 +7,8 @@ use crate::vec3::V3;
 
 /// A kernel of the normal slot: elasticity and damping along the line of centres.
 pub trait NormalForce: Copy + Default + Send + Sync {
+    /// Whether the four-lane kernel ([`super::lanes`]) implements this effect exactly.
+    const LANES: bool = false;
     /// Normal force along n, N (positive pushes the bodies apart; negative near separation when
     /// the dashpot outweighs the spring, as LIGGGHTS allows).
     fn normal(&self, c: &Contact, p: &PairConstants) -> f64;
@@ -14,6 +16,8 @@ pub trait NormalForce: Copy + Default + Send + Sync {
 
 /// A kernel of the tangential slot: friction in the contact plane.
 pub trait Tangential: Copy + Default + Send + Sync {
+    /// Whether the four-lane kernel ([`super::lanes`]) implements this effect exactly.
+    const LANES: bool = false;
     /// Advances the history spring `xi` (m) by the tangential slip over `dt` (s) and returns the
     /// tangential force on i, N; `f_n` (N) is the normal load the Coulomb cap scales with.
     fn force(&self, c: &Contact, p: &PairConstants, f_n: f64, xi: &mut V3, dt: f64) -> V3;
@@ -21,6 +25,8 @@ pub trait Tangential: Copy + Default + Send + Sync {
 
 /// A kernel of the rolling slot: a torque against the relative rolling rotation.
 pub trait Rolling: Copy + Default + Send + Sync {
+    /// Whether the four-lane kernel ([`super::lanes`]) implements this effect exactly.
+    const LANES: bool = false;
     /// The rolling resistance torque M, N m: i receives -M and j +M (the contact law
     /// applies the signs); updates the stored torque `m` over `dt` (s). `f_n` (N) is the load
     /// the cap mu_r R* |F_n| scales with.

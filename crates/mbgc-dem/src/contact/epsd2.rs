@@ -36,6 +36,7 @@ pub const SPEC: EffectSpec = EffectSpec {
 pub struct Epsd2;
 
 impl Rolling for Epsd2 {
+    const LANES: bool = true;
     #[inline(always)]
     fn torque(&self, c: &Contact, p: &PairConstants, f_n: f64, m: &mut V3, dt: f64) -> V3 {
         // The pair's tangential stiffness: Mindlin's, or the constant of `linear-spring`.

@@ -37,6 +37,7 @@ pub const SPEC: EffectSpec = EffectSpec {
 pub struct Hertz;
 
 impl NormalForce for Hertz {
+    const LANES: bool = true;
     #[inline(always)]
     fn normal(&self, c: &Contact, p: &PairConstants) -> f64 {
         let k_n = (4.0 / 3.0) * p.y_eff * c.sqrt_rd;

@@ -28,6 +28,11 @@ pub trait ContactLaw: Sync {
     /// The force and torques of contact `c` with pair constants `p`, advancing the contact's
     /// history `h` by the time step `dt` (s).
     fn force(&self, c: &Contact, p: &PairConstants, h: &mut History, dt: f64) -> ContactOutput;
+    /// Whether this law is the one the four-lane kernel ([`super::lanes`]) computes, bit for
+    /// bit (for pairs whose constants [`crate::material::Materials::lanes_ready`] accepts).
+    fn four_lanes(&self) -> bool {
+        false
+    }
 }
 
 /// The contact law for one combination of effects.
@@ -48,6 +53,10 @@ pub struct Law<N, T, R, C> {
 
 impl<N: NormalForce, T: Tangential, R: Rolling, C: Cohesion> ContactLaw for Law<N, T, R, C> {
     const NEEDS_AREA: bool = C::ACTIVE;
+
+    fn four_lanes(&self) -> bool {
+        N::LANES && T::LANES && R::LANES && !C::ACTIVE && !self.limit_force
+    }
 
     #[inline(always)]
     fn force(&self, c: &Contact, p: &PairConstants, h: &mut History, dt: f64) -> ContactOutput {

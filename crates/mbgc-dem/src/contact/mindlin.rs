@@ -80,6 +80,7 @@ pub const LINEAR_SPRING: EffectSpec = EffectSpec {
 pub struct HistorySpring;
 
 impl Tangential for HistorySpring {
+    const LANES: bool = true;
     #[inline(always)]
     fn force(&self, c: &Contact, p: &PairConstants, f_n: f64, xi: &mut V3, dt: f64) -> V3 {
         mindlin_history(c, p, f_n, xi, dt, p.strict_coulomb)

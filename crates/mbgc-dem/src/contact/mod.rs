@@ -24,6 +24,7 @@ pub mod hertz;
 #[doc(hidden)]
 pub mod kinds;
 mod kinematics;
+pub(crate) mod lanes;
 #[doc(hidden)]
 pub mod law;
 pub mod mindlin;
