@@ -865,9 +865,9 @@ unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool>(
 }
 
 /// [`pair_rows`] for the common law (`hertz,mindlin,epsd2`, `law.four_lanes()`): the test of
-/// each list entry as there, the touching pairs gathered four at a time into
-/// [`lanes::Lanes`], their forces computed together, and added to the particles in list order,
-/// so that every sum is the scalar loop's to the bit.
+/// each list entry as there, the touching pairs gathered into [`BATCHES`] batches of four
+/// ([`lanes::Lanes`]), each batch's forces computed together, and all added to the particles in
+/// list order, so that every sum is the scalar loop's to the bit.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // e indexes nb, hist and live at once (offset by base)
