@@ -526,11 +526,12 @@ fn report(
     }
     if !events.is_empty() {
         s.push_str(
-            "\n## Events\n\nRuns that finished without their measured quantities, and why. \
-             They count as missing above. The share of the finished runs estimates the \
-             posterior mean of the event's probability, as a lower bound where the experiment \
-             cannot catch every case (a hopper's arch after its first bins, or a stall after \
-             its last); the share is the mean over the draws of their runs' share. The interval \
+            "\n## Events\n\nRuns that finished without some of their measured quantities, and \
+             why. They count as missing above in what their event voids. The share of the \
+             finished runs estimates the posterior mean of the event's probability, as a lower \
+             bound where the experiment cannot catch every case (a hopper's arch that forms \
+             after half the column over the orifice has left, or a stall after its last flow \
+             bin); the share is the mean over the draws of their runs' share. The interval \
              is Jeffreys' (Beta(k + 1/2, n - k + 1/2)) with n the independent runs: all of them \
              with one run per draw, else the effective number (Korn and Graubard), since the \
              seeds of one draw share its parameters.\n\n\

@@ -162,8 +162,9 @@ pub trait Experiment: Send + Sync {
     fn sized_to(&self, _p: &ParamSet) -> Option<(&'static str, f64)> {
         None
     }
-    /// Events a finished run can have that leave it without its calibration responses (a
-    /// hopper's clogged orifice: no flow rate), by name. A propagation (`crate::propagate`)
+    /// Events a finished run can have that leave it without some of its calibration responses
+    /// ([`Experiment::voided_by`]; a hopper's clogged orifice: no flow rate, crater or pile), by
+    /// name. A propagation (`crate::propagate`)
     /// reports how often each happened over the posterior.
     fn events(&self) -> Vec<&'static str> {
         Vec::new()
