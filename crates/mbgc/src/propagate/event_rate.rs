@@ -47,14 +47,16 @@ impl EventRate {
         if runs == 0 {
             return None;
         }
-        let count = finished
+        let counts: Vec<usize> = finished
             .iter()
             .map(|v| v.iter().filter(|&&e| e).count())
-            .sum();
-        let draws = finished.iter().filter(|v| v.iter().any(|&e| e)).count();
-        let shares: Vec<f64> = finished
+            .collect();
+        let count = counts.iter().sum();
+        let draws = counts.iter().filter(|&&k| k > 0).count();
+        let shares: Vec<f64> = counts
             .iter()
-            .map(|v| v.iter().filter(|&&e| e).count() as f64 / v.len() as f64)
+            .zip(&finished)
+            .map(|(&k, v)| k as f64 / v.len() as f64)
             .collect();
         let d = shares.len() as f64;
         let share = shares.iter().sum::<f64>() / d;
