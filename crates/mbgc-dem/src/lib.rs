@@ -96,6 +96,7 @@ pub mod error;
 pub mod impact;
 pub mod insertion;
 pub mod material;
+mod near;
 pub mod neighbor;
 pub mod param_set;
 pub mod particles;

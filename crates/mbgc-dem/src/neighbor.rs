@@ -31,6 +31,17 @@ pub struct NeighborList {
     /// Per list entry: 0 promises that its history is zero. Most entries are separated pairs;
     /// the force loop then skips them without touching their 48-byte histories.
     pub live: Vec<u8>,
+    /// The near list (`crate::near`): row i's entries closer than touching plus the near skin,
+    /// as list-entry indices in `near[start[i]..start[i] + near_len[i]]`. Rebuilt by the step
+    /// at the first step of every run and whenever it is used up.
+    pub(crate) near: Vec<u32>,
+    pub(crate) near_len: Vec<u32>,
+    /// Positions at the last near build.
+    pub(crate) x_near: Vec<V3>,
+    /// Per particle: its squared near skin at the last near build (how far it may move).
+    pub(crate) near_s2: Vec<f64>,
+    /// Per particle: radius plus the near skin its speed asked for at the near build.
+    pub(crate) reach: Vec<f64>,
     x_build: Vec<V3>,
     pbox: PeriodicBox,
     /// Number of rebuilds so far (for performance reports: a run rebuilding every few steps has
@@ -108,6 +119,11 @@ impl NeighborList {
             self.hist.clear();
             self.live.clear();
             self.x_build.clear();
+            self.near.clear();
+            self.near_len.clear();
+            self.x_near.clear();
+            self.near_s2.clear();
+            self.reach.clear();
             return;
         }
         let pbox = self.pbox;
@@ -385,6 +401,14 @@ impl NeighborList {
             .extend(self.hist.iter().map(|h| u8::from(!h.is_zero())));
         self.x_build.clear();
         self.x_build.extend_from_slice(&p.x);
+        // Sized for the step, which fills them (a near list lives no longer than its list).
+        self.near.resize(self.nb.len(), 0);
+        self.near_len.resize(n, 0);
+        self.x_near.clear();
+        self.x_near.extend_from_slice(&p.x);
+        self.near_s2.clear();
+        self.near_s2.resize(n, 0.0);
+        self.reach.resize(n, 0.0);
     }
 
     /// After the counting sort, particle k sits in the cell whose range contains k.

@@ -31,6 +31,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use super::blowup::BlowUp;
 use super::contact::{lanes, Contact, ContactLaw, ContactOutput, History};
 use super::material::Materials;
+use super::near;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
 use super::periodic::PeriodicBox;
@@ -126,6 +127,13 @@ pub(crate) struct Raw {
     hist: *mut History,
     live: *mut u8,
     entries: usize,
+    /// The near list (`crate::near`), the positions and squared near skins at its build, and
+    /// the reaches the particles' current speeds ask for.
+    near: *mut u32,
+    near_len: *mut u32,
+    x_near: *mut V3,
+    near_s2: *mut f64,
+    reach: *mut f64,
     wall_hist: *mut History,
     walls: *const Wall,
     n_walls: usize,
@@ -178,6 +186,8 @@ impl Raw {
         );
         debug_assert_eq!(nl.hist.len(), nl.nb.len(), "one history per list entry");
         debug_assert_eq!(nl.live.len(), nl.nb.len(), "one live flag per list entry");
+        debug_assert_eq!(nl.near.len(), nl.nb.len(), "near list sized as the list");
+        debug_assert_eq!(nl.near_len.len(), n, "one near row per particle");
         debug_assert_eq!(
             wall_hist.len(),
             n * walls.len(),
@@ -198,7 +208,11 @@ impl Raw {
             inv_m: p.inv_m.as_ptr(),
             inv_i: p.inv_i.as_ptr(),
             mat: p.material.as_ptr(),
-            x_build: if xb.len() == n {
+            x_build: if xb.len() == n
+                && nl.x_near.len() == n
+                && nl.near_s2.len() == n
+                && nl.reach.len() == n
+            {
                 xb.as_ptr()
             } else {
                 std::ptr::null()
@@ -208,6 +222,11 @@ impl Raw {
             hist: nl.hist.as_mut_ptr(),
             live: nl.live.as_mut_ptr(),
             entries: nl.nb.len(),
+            near: nl.near.as_mut_ptr(),
+            near_len: nl.near_len.as_mut_ptr(),
+            x_near: nl.x_near.as_mut_ptr(),
+            near_s2: nl.near_s2.as_mut_ptr(),
+            reach: nl.reach.as_mut_ptr(),
             wall_hist: wall_hist.as_mut_ptr(),
             walls: walls.as_ptr(),
             n_walls: walls.len(),
@@ -219,13 +238,14 @@ impl Raw {
     }
 
     /// Half kick and drift of the particles in `own`, forces reset to gravity (to zero for
-    /// driven particles, whose zero inverse mass makes the kick a no-op); returns their largest
-    /// squared displacement since the list build (infinite without a list).
+    /// driven particles, whose zero inverse mass makes the kick a no-op). Returns their largest squared
+    /// displacement since the list build, and 1 if one of them has moved beyond its near skin
+    /// since the near build, else 0 (both infinite without a list).
     ///
     /// # Safety
     /// The views are current and nobody else accesses these particles meanwhile.
     #[inline(always)]
-    unsafe fn kick_drift(&self, own: Range<usize>, dt: f64, g: V3) -> f64 {
+    unsafe fn kick_drift(&self, own: Range<usize>, dt: f64, g: V3) -> (f64, f64) {
         let half = 0.5 * dt;
         let (lo, len) = (own.start, own.len());
         let x = std::slice::from_raw_parts_mut(self.x.add(lo), len);
@@ -239,9 +259,14 @@ impl Raw {
         let xb = if self.x_build.is_null() {
             None
         } else {
-            Some(std::slice::from_raw_parts(self.x_build.add(lo), len))
+            Some((
+                std::slice::from_raw_parts(self.x_build.add(lo), len),
+                std::slice::from_raw_parts(self.x_near.add(lo), len),
+                std::slice::from_raw_parts(self.near_s2.add(lo), len),
+            ))
         };
         let mut max_disp2 = 0.0f64;
+        let mut near_out = false;
         for k in 0..len {
             let a = inv_m[k] * half;
             let vk = &mut v[k];
@@ -257,8 +282,9 @@ impl Raw {
             wk[0] += b * t[k][0];
             wk[1] += b * t[k][1];
             wk[2] += b * t[k][2];
-            if let Some(xb) = xb {
+            if let Some((xb, xn, s2)) = xb {
                 max_disp2 = max_disp2.max(norm2(sub(*xk, xb[k])));
+                near_out |= norm2(sub(*xk, xn[k])) > s2[k];
             }
             // Forces restart from gravity; the contacts accumulate onto them in phase 2.
             f[k] = scale(g, m[k]);
@@ -275,8 +301,88 @@ impl Raw {
         }
         if xb.is_none() {
             max_disp2 = f64::INFINITY;
+            near_out = true;
         }
-        max_disp2
+        (max_disp2, if near_out { 1.0 } else { 0.0 })
+    }
+
+    /// Sets the reach of the particles in `own` from their speeds: their radii plus their near
+    /// skins ([`near::near_skin`]).
+    ///
+    /// # Safety
+    /// The views are current; nobody writes these particles meanwhile, nor reads their reaches.
+    unsafe fn set_reach(&self, own: Range<usize>, dt: f64, skin: f64) {
+        if self.x_build.is_null() {
+            return;
+        }
+        for i in own {
+            *self.reach.add(i) = *self.r.add(i) + near::near_skin(norm(*self.v.add(i)), dt, skin);
+        }
+    }
+
+    /// Rebuilds the near list of `rows` (every entry with `all`) and records the positions and
+    /// near skins of the particles in `own` as those of its build.
+    ///
+    /// # Safety
+    /// The views are current and the reaches set; nobody writes positions or reaches
+    /// meanwhile, nor the histories and near entries of these rows, nor the build positions and
+    /// skins of `own`.
+    unsafe fn build_near(&self, rows: Range<usize>, own: Range<usize>, all: bool) {
+        let n = self.n;
+        let x = std::slice::from_raw_parts(self.x, n);
+        let reach: &[f64] = if self.x_build.is_null() {
+            &[]
+        } else {
+            std::slice::from_raw_parts(self.reach, n)
+        };
+        let all = all || self.x_build.is_null();
+        let start = std::slice::from_raw_parts(self.start, n + 1);
+        let nb = std::slice::from_raw_parts(self.nb, self.entries);
+        let (e0, e1) = (start[rows.start] as usize, start[rows.end] as usize);
+        let hist = std::slice::from_raw_parts_mut(self.hist.add(e0), e1 - e0);
+        let live = std::slice::from_raw_parts_mut(self.live.add(e0), e1 - e0);
+        let near_entries = std::slice::from_raw_parts_mut(self.near.add(e0), e1 - e0);
+        let near_len = std::slice::from_raw_parts_mut(self.near_len.add(rows.start), rows.len());
+        let list = near::Rows {
+            start,
+            nb,
+            base: e0,
+            row0: rows.start,
+        };
+        if self.pbox.any() {
+            near::build::<true>(
+                rows,
+                list,
+                x,
+                reach,
+                &self.pbox,
+                all,
+                near_entries,
+                near_len,
+                hist,
+                live,
+            );
+        } else {
+            near::build::<false>(
+                rows,
+                list,
+                x,
+                reach,
+                &self.pbox,
+                all,
+                near_entries,
+                near_len,
+                hist,
+                live,
+            );
+        }
+        if !self.x_build.is_null() {
+            for i in own {
+                *self.x_near.add(i) = *self.x.add(i);
+                let s = *self.reach.add(i) - *self.r.add(i);
+                *self.near_s2.add(i) = s * s;
+            }
+        }
     }
 
     /// Contacts of `rows` of the half list and wall contacts of the particles in `own`, added
@@ -312,21 +418,28 @@ impl Raw {
         let (e0, e1) = (start[rows.start] as usize, start[rows.end] as usize);
         let hist = std::slice::from_raw_parts_mut(self.hist.add(e0), e1 - e0);
         let live = std::slice::from_raw_parts_mut(self.live.add(e0), e1 - e0);
+        let near = Near {
+            entries: std::slice::from_raw_parts(self.near.add(e0), e1 - e0),
+            len: std::slice::from_raw_parts(self.near_len.add(rows.start), rows.len()),
+            row0: rows.start,
+        };
         // Two instances of the pair loop, so that the non-periodic one carries no image test;
         // the common law's contacts go four at a time where the law and every pair allow.
         if law.four_lanes() && materials.lanes_ready() {
             let periodic = self.pbox.any();
             pair_rows_lanes_dispatch(
-                periodic, materials, dt, rows, start, nb, hist, live, e0, view, &self.pbox, f_out,
-                t_out,
+                periodic, materials, dt, rows, start, nb, near, hist, live, e0, view, &self.pbox,
+                f_out, t_out,
             );
         } else if self.pbox.any() {
             pair_rows::<L, true>(
-                law, materials, dt, rows, start, nb, hist, live, e0, view, &self.pbox, f_out, t_out,
+                law, materials, dt, rows, start, nb, near, hist, live, e0, view, &self.pbox, f_out,
+                t_out,
             );
         } else {
             pair_rows::<L, false>(
-                law, materials, dt, rows, start, nb, hist, live, e0, view, &self.pbox, f_out, t_out,
+                law, materials, dt, rows, start, nb, near, hist, live, e0, view, &self.pbox, f_out,
+                t_out,
             );
         }
         let n_walls = self.n_walls;
@@ -362,6 +475,9 @@ pub(crate) fn add_contact_forces<H: Host, L: ContactLaw>(host: &mut H, law: &L) 
     let n = raw.n;
     // SAFETY: `host` is borrowed exclusively, so the views are current and ours alone.
     unsafe {
+        // Every entry: the positions may have moved anyhow since the last step. The next run
+        // builds its own near list at its first step.
+        raw.build_near(0..n, 0..0, true);
         let f = std::slice::from_raw_parts_mut(raw.f, n);
         let t = std::slice::from_raw_parts_mut(raw.t, n);
         raw.contacts(law, dt, 0..n, 0..n, f, t);
@@ -384,6 +500,8 @@ pub(crate) fn run_alone<H: Host, L: ContactLaw>(
 struct Slot {
     /// Largest squared displacement of its particles since the list build (f64 bits).
     disp: AtomicU64,
+    /// The same since the near build.
+    near: AtomicU64,
     /// First row of the half list it handles (its last is the next member's first).
     row_start: UnsafeCell<usize>,
     /// Lowest particle index it can write in phase 2: a row i only touches j > i, and walls
@@ -403,6 +521,7 @@ pub(crate) struct Board<'a, H, L> {
     n: usize,
     raw: UnsafeCell<Raw>,
     lead_disp: AtomicU64,
+    lead_near: AtomicU64,
     wall_moved: AtomicU64,
     /// Members 1..T; empty on the serial path, which so allocates nothing per call.
     others: Vec<Slot>,
@@ -411,6 +530,8 @@ pub(crate) struct Board<'a, H, L> {
     failure: UnsafeCell<Option<BlowUp>>,
     #[cfg(test)]
     fail_at: Option<(usize, u64)>,
+    #[cfg(test)]
+    near_all: bool,
     _host: PhantomData<&'a mut H>,
 }
 
@@ -426,6 +547,9 @@ thread_local! {
     /// from the run's start).
     pub(crate) static FAIL_AT: std::cell::Cell<Option<(usize, u64)>> =
         const { std::cell::Cell::new(None) };
+    /// Test hook: runs started on this thread keep every list entry in the near list, so that
+    /// a test can compare the near list's results with the whole list's.
+    pub(crate) static NEAR_ALL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
@@ -436,6 +560,7 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
         let others = (1..members)
             .map(|_| Slot {
                 disp: AtomicU64::new(0),
+                near: AtomicU64::new(0),
                 row_start: UnsafeCell::new(0),
                 low: UnsafeCell::new(0),
                 buf: UnsafeCell::new((vec![[0.0; 3]; n], vec![[0.0; 3]; n])),
@@ -450,12 +575,15 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             n,
             raw: UnsafeCell::new(raw),
             lead_disp: AtomicU64::new(0),
+            lead_near: AtomicU64::new(0),
             wall_moved: AtomicU64::new(0),
             others,
             abort: AtomicBool::new(false),
             failure: UnsafeCell::new(None),
             #[cfg(test)]
             fail_at: FAIL_AT.with(|f| f.take()),
+            #[cfg(test)]
+            near_all: NEAR_ALL.with(|f| f.get()),
             _host: PhantomData,
         };
         // SAFETY: nobody else sees the board yet.
@@ -524,17 +652,18 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             // SAFETY: own particles only; the leader alone touches the host and the walls.
             unsafe {
                 let raw = *self.raw.get();
-                let md = raw.kick_drift(own.clone(), dt, gravity);
+                let (md, nd) = raw.kick_drift(own.clone(), dt, gravity);
                 if t == 0 {
                     self.lead_disp.store(md.to_bits(), Ordering::Relaxed);
+                    self.lead_near.store(nd.to_bits(), Ordering::Relaxed);
                     let host = &mut *self.host;
                     let moved = host.move_walls();
                     self.wall_moved.store(moved.to_bits(), Ordering::Relaxed);
                     host.tick();
                 } else {
-                    self.others[t - 1]
-                        .disp
-                        .store(md.to_bits(), Ordering::Relaxed);
+                    let slot = &self.others[t - 1];
+                    slot.disp.store(md.to_bits(), Ordering::Relaxed);
+                    slot.near.store(nd.to_bits(), Ordering::Relaxed);
                 }
             }
             crew.meet()?;
@@ -545,10 +674,18 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
                 .chain([&self.lead_disp])
                 .map(|d| f64::from_bits(d.load(Ordering::Relaxed)))
                 .fold(0.0, f64::max);
+            let near_out = self
+                .others
+                .iter()
+                .map(|o| &o.near)
+                .chain([&self.lead_near])
+                .map(|d| f64::from_bits(d.load(Ordering::Relaxed)))
+                .fold(0.0, f64::max);
             let wall_moved = f64::from_bits(self.wall_moved.load(Ordering::Relaxed));
             // A moving wall uses up the skin too: rebuild before it can reach unlisted particles.
             // NaN compares false, so a blown-up particle does not trigger endless rebuilds.
-            if wall_moved > 0.25 * skin || max_disp2 > lim2 {
+            let rebuild = wall_moved > 0.25 * skin || max_disp2 > lim2;
+            if rebuild {
                 if t == 0 {
                     // SAFETY: the others wait at the meeting below and hold no references.
                     unsafe {
@@ -559,6 +696,26 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
                     }
                 }
                 crew.meet()?;
+            }
+            // The near list (`crate::near`) is rebuilt at a run's first step too: the caller may
+            // have moved particles between runs. Every member sees the same flags, so all decide
+            // alike.
+            if s == 0 || rebuild || near_out > 0.0 {
+                // SAFETY: each member sets its own particles' reaches; after the meeting, phase 2
+                // of the module documentation: positions and reaches are only read, and each
+                // member writes its own rows' near entries and histories and its own particles'
+                // build positions and skins. No meeting is needed before the force loop, which
+                // reads only the near entries of the member's own rows.
+                unsafe { (*self.raw.get()).set_reach(own.clone(), dt, skin) };
+                crew.meet()?;
+                unsafe {
+                    let raw = *self.raw.get();
+                    #[cfg(not(test))]
+                    let all = false;
+                    #[cfg(test)]
+                    let all = self.near_all;
+                    raw.build_near(self.rows(t), own.clone(), all);
+                }
             }
 
             #[cfg(test)]
@@ -657,6 +814,15 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             None => Ok(()),
         }
     }
+}
+
+/// The near list of the rows a force loop computes (`crate::near`): row i's entries are
+/// `entries[start[i] - base..][..len[i - row0]]`, each the index of a list entry.
+#[derive(Clone, Copy)]
+struct Near<'a> {
+    entries: &'a [u32],
+    len: &'a [u32],
+    row0: usize,
 }
 
 /// Read-only particle data for the force loops.
@@ -805,6 +971,7 @@ fn pair_rows_lanes_dispatch(
     rows: Range<usize>,
     start: &[u32],
     nb: &[u32],
+    near: Near,
     hist: &mut [History],
     live: &mut [u8],
     base: usize,
@@ -819,11 +986,11 @@ fn pair_rows_lanes_dispatch(
         unsafe {
             if periodic {
                 pair_rows_lanes_avx2::<true>(
-                    materials, dt, rows, start, nb, hist, live, base, p, pbox, f, t,
+                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
                 );
             } else {
                 pair_rows_lanes_avx2::<false>(
-                    materials, dt, rows, start, nb, hist, live, base, p, pbox, f, t,
+                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
                 );
             }
         }
@@ -831,11 +998,11 @@ fn pair_rows_lanes_dispatch(
     }
     if periodic {
         pair_rows_lanes::<true>(
-            materials, dt, rows, start, nb, hist, live, base, p, pbox, f, t,
+            materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
         );
     } else {
         pair_rows_lanes::<false>(
-            materials, dt, rows, start, nb, hist, live, base, p, pbox, f, t,
+            materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
         );
     }
 }
@@ -851,6 +1018,7 @@ unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool>(
     rows: Range<usize>,
     start: &[u32],
     nb: &[u32],
+    near: Near,
     hist: &mut [History],
     live: &mut [u8],
     base: usize,
@@ -860,7 +1028,7 @@ unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool>(
     t: &mut [V3],
 ) {
     pair_rows_lanes::<PERIODIC>(
-        materials, dt, rows, start, nb, hist, live, base, p, pbox, f, t,
+        materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
     );
 }
 
@@ -877,6 +1045,7 @@ fn pair_rows_lanes<const PERIODIC: bool>(
     rows: Range<usize>,
     start: &[u32],
     nb: &[u32],
+    near: Near,
     hist: &mut [History],
     live: &mut [u8],
     base: usize,
@@ -901,8 +1070,10 @@ fn pair_rows_lanes<const PERIODIC: bool>(
         let (xi, ri, mi, mati) = (x[i], r[i], m[i], mat[i]);
         let driven_i = inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
-        let (e0, e1) = (start[i] as usize, start[i + 1] as usize);
-        for e in e0..e1 {
+        let q0 = start[i] as usize - base;
+        let listed = &near.entries[q0..q0 + near.len[i - near.row0] as usize];
+        for &e in listed {
+            let e = e as usize;
             let j = nb[e] as usize;
             debug_assert!(j > i, "{i} -> {j} is not a half-list entry");
             assert!(j < n, "list entry {i} -> {j} beyond the {n} particles");
@@ -1012,6 +1183,7 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
     rows: Range<usize>,
     start: &[u32],
     nb: &[u32],
+    near: Near,
     hist: &mut [History],
     live: &mut [u8],
     base: usize,
@@ -1030,13 +1202,12 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
         let (xi, ri, mi, mati) = (x[i], r[i], m[i], mat[i]);
         let driven_i = inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
-        let (e0, e1) = (start[i] as usize, start[i + 1] as usize);
-        let row = nb[e0..e1]
-            .iter()
-            .zip(&mut hist[e0 - base..e1 - base])
-            .zip(&mut live[e0 - base..e1 - base]);
-        for ((&j, h), lv) in row {
-            let j = j as usize;
+        let q0 = start[i] as usize - base;
+        let listed = &near.entries[q0..q0 + near.len[i - near.row0] as usize];
+        for &e in listed {
+            let e = e as usize;
+            let j = nb[e] as usize;
+            let (h, lv) = (&mut hist[e - base], &mut live[e - base]);
             // A half list: the team's buffers are cleared only from a member's first row on.
             debug_assert!(j > i, "{i} -> {j} is not a half-list entry");
             assert!(j < n, "list entry {i} -> {j} beyond the {n} particles");

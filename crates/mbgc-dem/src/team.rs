@@ -123,7 +123,7 @@ impl Crew for SpinBarrier {
 #[cfg(test)]
 mod tests {
     use crate::contact::ModelClass;
-    use crate::step::FAIL_AT;
+    use crate::step::{FAIL_AT, NEAR_ALL};
     use crate::walls::box_planes;
     use crate::{BlowUp, Interaction, Materials, Particles, Scene, Simulation, Solid};
     use std::time::Duration;
@@ -203,5 +203,44 @@ mod tests {
         sim.set_threads(3);
         sim.run(120).unwrap();
         assert_eq!(sim.step, 120);
+    }
+
+    /// The state after a run as bits: positions, velocities and spins.
+    fn bits(sim: &Simulation) -> Vec<u64> {
+        let p = &sim.particles;
+        (0..p.len())
+            .flat_map(|i| p.x[i].into_iter().chain(p.v[i]).chain(p.w[i]))
+            .map(f64::to_bits)
+            .collect()
+    }
+
+    #[test]
+    fn the_near_list_gives_the_whole_lists_results_to_the_bit() {
+        // The lattice falls onto the floor and piles up: contacts open, close and slide, the
+        // particles' speeds and with them their near skins vary, and the Verlet list is rebuilt
+        // several times (which forces a near build) besides the near list's own rebuilds.
+        for threads in [1, 3] {
+            let run = |all: bool| {
+                let mut sim = sim();
+                sim.set_threads(threads);
+                NEAR_ALL.with(|f| f.set(all));
+                // In chunks, as experiments run: every run starts with a near build.
+                for _ in 0..8 {
+                    sim.run(250).unwrap();
+                }
+                NEAR_ALL.with(|f| f.set(false));
+                assert!(
+                    sim.neighbors.builds > 3,
+                    "only {} list builds",
+                    sim.neighbors.builds
+                );
+                bits(&sim)
+            };
+            let (near, whole) = (run(false), run(true));
+            assert!(
+                near == whole,
+                "{threads} thread(s): the near list changed the run"
+            );
+        }
     }
 }
