@@ -28,7 +28,8 @@
 //!   power-law damped normal models of seed 003, simplified JKR cohesion).
 //! - [`insertion`]: random sequential insertion of a poured cloud.
 //! - [`walls`]: analytic planes, rectangles, cylinders and orifice plates.
-//! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history.
+//! - [`neighbor`]: cell grid, sorting, half Verlet list with contact history (and the storage
+//!   of the step's near list of the pairs that can touch soon, built by the private `near`).
 //! - [`periodic`]: the period box, wrapping and nearest images.
 //! - [`sim`]: a simulation, its run loop and blow-up checks ([`blowup`]); the velocity-Verlet
 //!   step, serial or by a team of threads, is private to the crate; [`timestep`]: the Rayleigh
