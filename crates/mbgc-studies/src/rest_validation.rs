@@ -329,12 +329,14 @@ fn report(
     let _ = writeln!(
         w,
         "# The candidate rest rule on the shipped campaign's validation design\n\nRegenerate \
-         with `cargo run --release -- bench rest-validation --threads {} --report \
+         with `cargo run --release -- bench rest-validation --threads {} --out {} --report \
          docs/rest_validation.md` (reruns every done row of `{}` with its own seed under the \
-         candidate rule; runs kept in `{}`, so a killed study resumes).\n",
+         candidate rule, {} at a time; runs kept in the `--out` table, so a killed study \
+         resumes).\n",
         args.threads,
+        args.out.display(),
         args.design.display(),
-        args.out.display()
+        args.threads,
     );
     let _ = writeln!(
         w,
@@ -361,10 +363,10 @@ fn report(
     );
     let _ = writeln!(
         w,
-        "\nThe steps are the machine-independent part of the cost; the core-hours also carry \
-         the machine and its load at the time of each campaign, and the engine changed in \
-         between (the pair loop lost its bounds checks: 2.5 % fewer instructions, results bit \
-         for bit the same).\n"
+        "\nThe steps are the machine-independent part of the cost. The core-hours also carry \
+         the machine, its load and the engine of each campaign's day: only a reference rerun \
+         in the same session tells how much of their ratio is the code's \
+         (`docs/whole_run_cost.md`).\n"
     );
     let _ = writeln!(
         w,
