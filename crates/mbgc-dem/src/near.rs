@@ -93,7 +93,8 @@ pub(crate) fn build<const PERIODIC: bool>(
             }
             let cut = ri + reach[j];
             let le = e - base;
-            if all || norm2(d) < cut * cut {
+            // A NaN distance is kept, as the whole list's force loop takes it for a contact.
+            if all || !(norm2(d) >= cut * cut) {
                 near[kept] = e as u32;
                 kept += 1;
             } else if live[le] != 0 {

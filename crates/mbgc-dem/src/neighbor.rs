@@ -38,6 +38,9 @@ pub struct NeighborList {
     pub(crate) near_len: Vec<u32>,
     /// Positions at the last near build.
     pub(crate) x_near: Vec<V3>,
+    /// Whether the near list is valid for the particles as the last step left them: false after
+    /// a rebuild outside the step, which the step's next run then follows with a near build.
+    pub(crate) near_fresh: bool,
     /// Per particle: its squared near skin at the last near build (how far it may move).
     pub(crate) near_s2: Vec<f64>,
     /// Per particle: radius plus the near skin its speed asked for at the near build.
@@ -112,6 +115,7 @@ impl NeighborList {
     pub fn rebuild(&mut self, p: &mut Particles, wall_hist: &mut Vec<History>, n_walls: usize) {
         let n = p.len();
         self.builds += 1;
+        self.near_fresh = false;
         if n == 0 {
             self.start.clear();
             self.start.push(0);

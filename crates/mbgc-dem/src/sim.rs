@@ -604,6 +604,7 @@ impl Host for Simulation {
             dt: self.dt,
             gravity: self.gravity,
             skin: self.neighbors.skin,
+            near_fresh: self.neighbors.near_fresh,
         }
     }
 
@@ -639,5 +640,9 @@ impl Host for Simulation {
 
     fn check(&self) -> std::result::Result<(), BlowUp> {
         Simulation::check(self)
+    }
+
+    fn near_done(&mut self) {
+        self.neighbors.near_fresh = true;
     }
 }

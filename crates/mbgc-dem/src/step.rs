@@ -54,6 +54,8 @@ pub(crate) trait Host {
     fn tick(&mut self);
     fn step_count(&self) -> u64;
     fn check(&self) -> Result<(), BlowUp>;
+    /// Marks the near list valid for the state a finished run leaves.
+    fn near_done(&mut self);
 }
 
 #[derive(Clone, Copy)]
@@ -61,6 +63,8 @@ pub(crate) struct Params {
     pub dt: f64,
     pub gravity: V3,
     pub skin: f64,
+    /// Whether the near list is valid for the particles as they are ([`NeighborList`]).
+    pub near_fresh: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -284,7 +288,8 @@ impl Raw {
             wk[2] += b * t[k][2];
             if let Some((xb, xn, s2)) = xb {
                 max_disp2 = max_disp2.max(norm2(sub(*xk, xb[k])));
-                near_out |= norm2(sub(*xk, xn[k])) > s2[k];
+                // A NaN position asks for a near build, as the whole list would see it.
+                near_out |= !(norm2(sub(*xk, xn[k])) <= s2[k]);
             }
             // Forces restart from gravity; the contacts accumulate onto them in phase 2.
             f[k] = scale(g, m[k]);
@@ -644,7 +649,12 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
     /// Member `t`'s share of the run; returns early if the run is abandoned or a check failed.
     pub(crate) fn member<K: Crew>(&self, t: usize, crew: &K) -> Result<(), Abandoned> {
         let own = self.part(t);
-        let Params { dt, gravity, skin } = self.params;
+        let Params {
+            dt,
+            gravity,
+            skin,
+            near_fresh,
+        } = self.params;
         let lim2 = 0.25 * skin * skin;
         let steps = self.plan.steps;
         for s in 0..steps {
@@ -700,7 +710,7 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             // The near list (`crate::near`) is rebuilt at a run's first step too: the caller may
             // have moved particles between runs. Every member sees the same flags, so all decide
             // alike.
-            if s == 0 || rebuild || near_out > 0.0 {
+            if (s == 0 && !near_fresh) || rebuild || near_out > 0.0 {
                 // SAFETY: each member sets its own particles' reaches; after the meeting, phase 2
                 // of the module documentation: positions and reaches are only read, and each
                 // member writes its own rows' near entries and histories and its own particles'
@@ -772,6 +782,11 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
                     }
                 }
             }
+        }
+        if t == 0 {
+            // SAFETY: the leader alone touches the host; the near list is valid after every
+            // step, so the next run need not rebuild it unless the lists are rebuilt meanwhile.
+            unsafe { (*self.host).near_done() };
         }
         Ok(())
     }
