@@ -94,7 +94,8 @@ pub(crate) fn build<const PERIODIC: bool>(
             let cut = ri + reach[j];
             let le = e - base;
             // A NaN distance is kept, as the whole list's force loop takes it for a contact.
-            if all || !(norm2(d) >= cut * cut) {
+            let d2 = norm2(d);
+            if all || d2 < cut * cut || d2.is_nan() {
                 near[kept] = e as u32;
                 kept += 1;
             } else if live[le] != 0 {

@@ -289,7 +289,8 @@ impl Raw {
             if let Some((xb, xn, s2)) = xb {
                 max_disp2 = max_disp2.max(norm2(sub(*xk, xb[k])));
                 // A NaN position asks for a near build, as the whole list would see it.
-                near_out |= !(norm2(sub(*xk, xn[k])) <= s2[k]);
+                let d2 = norm2(sub(*xk, xn[k]));
+                near_out |= d2 > s2[k] || d2.is_nan();
             }
             // Forces restart from gravity; the contacts accumulate onto them in phase 2.
             f[k] = scale(g, m[k]);
