@@ -9,7 +9,9 @@
 //! 1. half kick and drift of its particles, their largest displacement since the list build, and
 //!    their forces reset to gravity; the leader moves the walls and counts the step. Meet. If the
 //!    skin is used up, the leader rebuilds the lists (reordering the particles) and publishes the
-//!    new array views while the others wait at a second meeting.
+//!    new array views while the others wait at a second meeting. If the near list (`near`) is
+//!    used up too, or the lists were rebuilt, each member sets its particles' reaches, they meet,
+//!    and each rebuilds the near list of its own rows.
 //! 2. contacts of its rows of the half list (rows balanced by list entries) and the wall
 //!    contacts of its particles. The leader accumulates into the particle forces, the others into
 //!    their own buffers, which they clear only from the lowest index they can write. Meet.
@@ -244,7 +246,7 @@ impl Raw {
     /// Half kick and drift of the particles in `own`, forces reset to gravity (to zero for
     /// driven particles, whose zero inverse mass makes the kick a no-op). Returns their largest squared
     /// displacement since the list build, and 1 if one of them has moved beyond its near skin
-    /// since the near build, else 0 (both infinite without a list).
+    /// since the near build, else 0 (infinite and 1 without a list).
     ///
     /// # Safety
     /// The views are current and nobody else accesses these particles meanwhile.
@@ -506,7 +508,7 @@ pub(crate) fn run_alone<H: Host, L: ContactLaw>(
 struct Slot {
     /// Largest squared displacement of its particles since the list build (f64 bits).
     disp: AtomicU64,
-    /// The same since the near build.
+    /// 1 if one of its particles has moved beyond its near skin since the near build, else 0.
     near: AtomicU64,
     /// First row of the half list it handles (its last is the next member's first).
     row_start: UnsafeCell<usize>,
