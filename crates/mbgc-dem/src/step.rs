@@ -357,33 +357,24 @@ impl Raw {
             base: e0,
             row0: rows.start,
         };
-        if self.pbox.any() {
-            near::build::<true>(
-                rows,
-                list,
-                x,
-                reach,
-                &self.pbox,
-                all,
-                near_entries,
-                near_len,
-                hist,
-                live,
-            );
+        // Two instances, so that the non-periodic one carries no image test.
+        let build = if self.pbox.any() {
+            near::build::<true>
         } else {
-            near::build::<false>(
-                rows,
-                list,
-                x,
-                reach,
-                &self.pbox,
-                all,
-                near_entries,
-                near_len,
-                hist,
-                live,
-            );
-        }
+            near::build::<false>
+        };
+        build(
+            rows,
+            list,
+            x,
+            reach,
+            &self.pbox,
+            all,
+            near_entries,
+            near_len,
+            hist,
+            live,
+        );
         if !self.x_build.is_null() {
             for i in own {
                 *self.x_near.add(i) = *self.x.add(i);
