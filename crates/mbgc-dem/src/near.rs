@@ -150,18 +150,25 @@ mod tests {
             base: 0,
             row0: 0,
         };
-        build::<false>(
-            0..4,
-            rows(),
-            &x,
-            &reach,
-            &PeriodicBox::NONE,
-            false,
-            &mut near,
-            &mut near_len,
-            &mut hist,
-            &mut live,
-        );
+        let run = |all: bool,
+                   near: &mut Vec<u32>,
+                   near_len: &mut Vec<u32>,
+                   hist: &mut Vec<History>,
+                   live: &mut Vec<u8>| {
+            build::<false>(
+                0..4,
+                rows(),
+                &x,
+                &reach,
+                &PeriodicBox::NONE,
+                all,
+                near,
+                near_len,
+                hist,
+                live,
+            )
+        };
+        run(false, &mut near, &mut near_len, &mut hist, &mut live);
         assert_eq!(near_len, [2, 0, 0, 0]);
         assert_eq!(&near[..2], &[0, 2]);
         assert!(
@@ -169,18 +176,7 @@ mod tests {
             "the separated pair's history is cleared"
         );
         // `all` keeps everything.
-        build::<false>(
-            0..4,
-            rows(),
-            &x,
-            &reach,
-            &PeriodicBox::NONE,
-            true,
-            &mut near,
-            &mut near_len,
-            &mut hist,
-            &mut live,
-        );
+        run(true, &mut near, &mut near_len, &mut hist, &mut live);
         assert_eq!(near_len[0], 3);
         assert_eq!(near, [0, 1, 2]);
     }

@@ -590,6 +590,17 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
         board
     }
 
+    /// The largest value the members posted this step in one of their slots (a displacement
+    /// or a near-skin use); NaN never wins, as in the serial path.
+    fn max_over_members(&self, slot: impl Fn(&Slot) -> &AtomicU64, lead: &AtomicU64) -> f64 {
+        self.others
+            .iter()
+            .map(slot)
+            .chain([lead])
+            .map(|d| f64::from_bits(d.load(Ordering::Relaxed)))
+            .fold(0.0, f64::max)
+    }
+
     /// The particles member `t` owns; fixed for the run (a rebuild reorders, never adds).
     fn part(&self, t: usize) -> Range<usize> {
         self.n * t / self.members..self.n * (t + 1) / self.members
@@ -671,20 +682,8 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
                 }
             }
             crew.meet()?;
-            let max_disp2 = self
-                .others
-                .iter()
-                .map(|o| &o.disp)
-                .chain([&self.lead_disp])
-                .map(|d| f64::from_bits(d.load(Ordering::Relaxed)))
-                .fold(0.0, f64::max);
-            let near_out = self
-                .others
-                .iter()
-                .map(|o| &o.near)
-                .chain([&self.lead_near])
-                .map(|d| f64::from_bits(d.load(Ordering::Relaxed)))
-                .fold(0.0, f64::max);
+            let max_disp2 = self.max_over_members(|o| &o.disp, &self.lead_disp);
+            let near_out = self.max_over_members(|o| &o.near, &self.lead_near);
             let wall_moved = f64::from_bits(self.wall_moved.load(Ordering::Relaxed));
             // A moving wall uses up the skin too: rebuild before it can reach unlisted particles.
             // NaN compares false, so a blown-up particle does not trigger endless rebuilds.
