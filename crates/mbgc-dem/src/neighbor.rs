@@ -60,6 +60,23 @@ pub struct NeighborList {
     wall_scratch: Vec<History>,
     new_nb: Vec<u32>,
     new_hist: Vec<History>,
+    fine: FineGrid,
+}
+
+/// The search grid of a closed domain: cells of half the sorting grid's size, aligned with it,
+/// holding each particle's position and radius in cell order. A particle searches only the
+/// fine cells its own largest cutoff r_i + skin + r_max reaches, where the sorting grid's cells
+/// (sized for the largest pair) would make the small particles of a wide size distribution test
+/// several times the partners they can have. The sorting grid still orders the particles, so
+/// the list, its order and every result stay what they were.
+#[derive(Debug, Default, Clone)]
+struct FineGrid {
+    start: Vec<u32>,
+    /// Per slot: the particle's index in the sorted order.
+    index: Vec<u32>,
+    /// Per slot: x, y, z and the radius.
+    pts: Vec<[f64; 4]>,
+    cursor: Vec<u32>,
 }
 
 impl NeighborList {
@@ -219,6 +236,11 @@ impl NeighborList {
         if self.start.len() == n + 1 {
             for i in 0..n {
                 for e in self.start[i] as usize..self.start[i + 1] as usize {
+                    // `live` promises the zero histories of most entries from one byte each,
+                    // where reading them would stream the whole history array.
+                    if self.live[e] == 0 {
+                        continue;
+                    }
                     let h = self.hist[e];
                     if h.is_zero() {
                         continue;
@@ -254,27 +276,26 @@ impl NeighborList {
         for k in 0..n {
             self.cell_of[k] = self.cell_of_sorted(k);
         }
+        // Fine cells: half the sorting cells, aligned with them. Halving the size is exact in
+        // floating point, so a particle's fine coordinate halved (rounded down) is its sorting
+        // coordinate, which the search relies on to skip the cells below its own.
+        let fsize = [0.5 * size[0], 0.5 * size[1], 0.5 * size[2]];
+        let fdims = [2 * dims[0], 2 * dims[1], 2 * dims[2]];
+        let fcoord = move |x: f64, k: usize| -> usize {
+            if fsize[k] > 0.0 {
+                (((x - lo[k]) / fsize[k]) as usize).min(fdims[k] - 1)
+            } else {
+                0
+            }
+        };
+        if !periodic {
+            self.fine.fill(&p.x, &p.r, fdims, fcoord);
+        }
 
-        // Forward half stencil: neighbour cells with a larger linear index, in increasing order,
-        // so every row comes out sorted.
-        const STENCIL: [(i64, i64, i64); 13] = [
-            (0, 0, 1),
-            (0, 1, -1),
-            (0, 1, 0),
-            (0, 1, 1),
-            (1, -1, -1),
-            (1, -1, 0),
-            (1, -1, 1),
-            (1, 0, -1),
-            (1, 0, 0),
-            (1, 0, 1),
-            (1, 1, -1),
-            (1, 1, 0),
-            (1, 1, 1),
-        ];
-        let stencil = &STENCIL;
         self.start.clear();
         self.new_nb.clear();
+        // From here on `live` describes the new list: only the carried histories are live.
+        self.live.clear();
         let skin = self.skin;
         let mut ci = 0usize;
         // Periodic search: the distinct cells around the current one with an index >= its own,
@@ -350,33 +371,16 @@ impl NeighborList {
                     }
                 }
             } else {
-                // Own cell: later particles only.
-                let end = self.cell_start[c + 1] as usize;
-                for j in i + 1..end {
-                    let cut = ri + p.r[j];
-                    if norm2(sub(xi, p.x[j])) < cut * cut {
-                        self.new_nb.push(j as u32);
-                    }
-                }
-                for &(dz, dy, dx) in stencil {
-                    let (jx, jy, jz) = (ix as i64 + dx, iy as i64 + dy, iz as i64 + dz);
-                    if jx < 0
-                        || jy < 0
-                        || jz < 0
-                        || jx >= dims[0] as i64
-                        || jy >= dims[1] as i64
-                        || jz >= dims[2] as i64
-                    {
-                        continue;
-                    }
-                    let cj = ((jz as usize * dims[1]) + jy as usize) * dims[0] + jx as usize;
-                    for j in self.cell_start[cj] as usize..self.cell_start[cj + 1] as usize {
-                        let cut = ri + p.r[j];
-                        if norm2(sub(xi, p.x[j])) < cut * cut {
-                            self.new_nb.push(j as u32);
-                        }
-                    }
-                }
+                self.fine.row(
+                    i,
+                    c,
+                    &xi,
+                    ri + r_max,
+                    p.r[i] + skin,
+                    dims,
+                    fcoord,
+                    &mut self.new_nb,
+                );
             }
             // Merge the carried histories of row i.
             let row = self.start[i] as usize;
@@ -384,6 +388,7 @@ impl NeighborList {
             for e in row..self.new_nb.len() {
                 self.new_hist[e] = History::default();
             }
+            self.live.resize(self.new_nb.len(), 0);
             let mut e = row;
             while ci < self.carried.len() && self.carried[ci].0 as usize == i {
                 let (_, b, h) = self.carried[ci];
@@ -392,6 +397,7 @@ impl NeighborList {
                 }
                 if e < self.new_nb.len() && self.new_nb[e] == b {
                     self.new_hist[e] = h;
+                    self.live[e] = 1;
                 }
                 ci += 1;
             }
@@ -400,9 +406,7 @@ impl NeighborList {
         self.new_hist.truncate(self.new_nb.len());
         std::mem::swap(&mut self.nb, &mut self.new_nb);
         std::mem::swap(&mut self.hist, &mut self.new_hist);
-        self.live.clear();
-        self.live
-            .extend(self.hist.iter().map(|h| u8::from(!h.is_zero())));
+        self.live.truncate(self.nb.len());
         self.x_build.clear();
         self.x_build.extend_from_slice(&p.x);
         // Sized for the step, which fills them (a near list lives no longer than its list).
@@ -419,6 +423,107 @@ impl NeighborList {
     fn cell_of_sorted(&self, k: usize) -> u32 {
         // partition_point over cell_start: the last cell whose start <= k.
         (self.cell_start.partition_point(|&s| s as usize <= k) - 1) as u32
+    }
+}
+
+impl FineGrid {
+    /// Sorts the particles (already in sorting-grid order) into the fine cells; each cell keeps
+    /// them in ascending index.
+    fn fill(
+        &mut self,
+        x: &[V3],
+        r: &[f64],
+        fdims: [usize; 3],
+        fcoord: impl Fn(f64, usize) -> usize,
+    ) {
+        let n_cells = fdims[0] * fdims[1] * fdims[2];
+        let cell =
+            |x: &V3| (fcoord(x[2], 2) * fdims[1] + fcoord(x[1], 1)) * fdims[0] + fcoord(x[0], 0);
+        self.start.clear();
+        self.start.resize(n_cells + 1, 0);
+        for x in x {
+            self.start[cell(x) + 1] += 1;
+        }
+        for c in 0..n_cells {
+            self.start[c + 1] += self.start[c];
+        }
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.start[..n_cells]);
+        self.index.resize(x.len(), 0);
+        self.pts.resize(x.len(), [0.0; 4]);
+        for (k, (x, &r)) in x.iter().zip(r).enumerate() {
+            let slot = &mut self.cursor[cell(x)];
+            self.index[*slot as usize] = k as u32;
+            self.pts[*slot as usize] = [x[0], x[1], x[2], r];
+            *slot += 1;
+        }
+    }
+
+    /// Appends row i of the half list to `out`, ascending: every j > i closer than
+    /// r_i + skin + r_j. `reach` is r_i + skin + r_max, `c` the sorting cell of particle i.
+    /// Partners j > i lie in sorting cells at or after c, so the fine cells before it are
+    /// skipped whole.
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        &self,
+        i: usize,
+        c: usize,
+        xi: &V3,
+        reach: f64,
+        ri_skin: f64,
+        dims: [usize; 3],
+        fcoord: impl Fn(f64, usize) -> usize,
+        out: &mut Vec<u32>,
+    ) {
+        let (cx, cy, cz) = (
+            c % dims[0],
+            (c / dims[0]) % dims[1],
+            c / (dims[0] * dims[1]),
+        );
+        let fdx = 2 * dims[0];
+        let fdy = 2 * dims[1];
+        let lo = |k: usize| fcoord(xi[k] - reach, k);
+        let hi = |k: usize| fcoord(xi[k] + reach, k);
+        let (ax, bx) = (lo(0), hi(0));
+        let (ay, by) = (lo(1), hi(1));
+        let first = out.len();
+        let i32_ = i as u32;
+        for fz in lo(2).max(2 * cz)..=hi(2) {
+            for fy in ay..=by {
+                let x0 = if fz / 2 > cz || fy / 2 > cy {
+                    ax
+                } else if fy / 2 == cy {
+                    ax.max(2 * cx)
+                } else {
+                    continue;
+                };
+                if x0 > bx {
+                    continue;
+                }
+                let row = (fz * fdy + fy) * fdx;
+                let (s, e) = (
+                    self.start[row + x0] as usize,
+                    self.start[row + bx + 1] as usize,
+                );
+                // Written without a branch: which candidates are partners is unpredictable,
+                // and a mispredicted branch costs more than the store.
+                out.reserve(e - s);
+                let spare = out.spare_capacity_mut();
+                let mut kept = 0;
+                for (&j, q) in self.index[s..e].iter().zip(&self.pts[s..e]) {
+                    let d = [xi[0] - q[0], xi[1] - q[1], xi[2] - q[2]];
+                    let cut = ri_skin + q[3];
+                    let near = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < cut * cut;
+                    // Every candidate is written to the next free slot, which only a partner
+                    // then keeps; kept <= candidates seen < e - s, within the reserve.
+                    spare[kept].write(j);
+                    kept += usize::from((j > i32_) & near);
+                }
+                // SAFETY: the slots 0..kept of the spare capacity were written in this pass.
+                unsafe { out.set_len(out.len() + kept) };
+            }
+        }
+        out[first..].sort_unstable();
     }
 }
 
@@ -462,6 +567,7 @@ mod tests {
                 let j = nl.nb[e] as usize;
                 let v = (p.id[i] * 1000 + p.id[j]) as f64;
                 nl.hist[e].shear = [v, 0.0, 0.0];
+                nl.live[e] = 1;
                 marks.insert((p.id[i], p.id[j]), v);
             }
         }
@@ -484,6 +590,43 @@ mod tests {
             }
         }
         assert_eq!(seen, marks.len());
+    }
+
+    /// A wide size distribution (radii over a factor 8) in a pile with empty space around it:
+    /// the fine search finds exactly the brute-force pairs, rows ascending above the diagonal.
+    #[test]
+    fn a_wide_size_distribution_gets_exactly_the_brute_force_list() {
+        use rand::RngExt;
+        let mut rng = crate::test_rng(11);
+        let mut p = Particles::new();
+        for k in 0..600 {
+            let r = 0.005 * 8f64.powf(rng.random::<f64>());
+            let spread = if k % 50 == 0 { 2.0 } else { 0.3 };
+            let x = [
+                spread * rng.random::<f64>(),
+                0.3 * rng.random::<f64>(),
+                -1.0 + spread * rng.random::<f64>(),
+            ];
+            p.add(x, r, 1000.0, 0).unwrap();
+        }
+        let skin = 0.01;
+        let mut nl = NeighborList::new(skin);
+        nl.rebuild(&mut p, &mut Vec::new(), 0);
+        let mut brute = 0;
+        for i in 0..p.len() {
+            let row = &nl.nb[nl.start[i] as usize..nl.start[i + 1] as usize];
+            assert!(row.windows(2).all(|w| w[0] < w[1]), "row {i}: {row:?}");
+            assert!(row.iter().all(|&j| j as usize > i), "row {i}: {row:?}");
+            for j in i + 1..p.len() {
+                let c = p.r[i] + p.r[j] + skin;
+                if norm2(sub(p.x[i], p.x[j])) < c * c {
+                    brute += 1;
+                    assert!(row.contains(&(j as u32)), "pair {i} {j} missing");
+                }
+            }
+        }
+        assert_eq!(nl.pairs(), brute);
+        assert!(brute > 600, "the test must see pairs: {brute}");
     }
 
     /// Every pair within the cutoff through its nearest image, listed once, in ascending rows of
