@@ -26,7 +26,8 @@ pub struct NeighborList {
     pub start: Vec<u32>,
     /// Partner indices of all rows, concatenated (see `start`).
     pub nb: Vec<u32>,
-    /// Contact history per list entry.
+    /// Contact history per list entry. Whoever makes a history non-zero sets its `live` flag:
+    /// a rebuild carries only the histories of live entries.
     pub hist: Vec<History>,
     /// Per list entry: 0 promises that its history is zero. Most entries are separated pairs;
     /// the force loop then skips them without touching their 48-byte histories.
@@ -68,7 +69,10 @@ pub struct NeighborList {
 /// fine cells its own largest cutoff r_i + skin + r_max reaches, where the sorting grid's cells
 /// (sized for the largest pair) would make the small particles of a wide size distribution test
 /// several times the partners they can have. The sorting grid still orders the particles, so
-/// the list, its order and every result stay what they were.
+/// every result stays what it was. The list too, but for one rounding edge in the new search's
+/// favour: when the sorting cell size rounds an ulp below the cutoff, the 13-cell search could
+/// miss a pair about one cell apart, which the fine cells list; with a positive skin such a
+/// pair is farther apart than touching, so no force or history changes.
 #[derive(Debug, Default, Clone)]
 struct FineGrid {
     start: Vec<u32>,
@@ -277,7 +281,8 @@ impl NeighborList {
             self.cell_of[k] = self.cell_of_sorted(k);
         }
         // Fine cells: half the sorting cells, aligned with them. Halving the size is exact in
-        // floating point, so a particle's fine coordinate halved (rounded down) is its sorting
+        // floating point (along an axis of two or more cells they are at least a cutoff wide,
+        // never subnormal; along an axis of one, every fine coordinate halves to 0 anyway), so a particle's fine coordinate halved (rounded down) is its sorting
         // coordinate, which the search relies on to skip the cells below its own.
         let fsize = [0.5 * size[0], 0.5 * size[1], 0.5 * size[2]];
         let fdims = [2 * dims[0], 2 * dims[1], 2 * dims[2]];
@@ -618,7 +623,7 @@ mod tests {
             assert!(row.windows(2).all(|w| w[0] < w[1]), "row {i}: {row:?}");
             assert!(row.iter().all(|&j| j as usize > i), "row {i}: {row:?}");
             for j in i + 1..p.len() {
-                let c = p.r[i] + p.r[j] + skin;
+                let c = p.r[i] + skin + p.r[j];
                 if norm2(sub(p.x[i], p.x[j])) < c * c {
                     brute += 1;
                     assert!(row.contains(&(j as u32)), "pair {i} {j} missing");
