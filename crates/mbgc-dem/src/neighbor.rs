@@ -282,8 +282,9 @@ impl NeighborList {
         }
         // Fine cells: half the sorting cells, aligned with them. Halving the size is exact in
         // floating point (along an axis of two or more cells they are at least a cutoff wide,
-        // never subnormal; along an axis of one, every fine coordinate halves to 0 anyway), so a particle's fine coordinate halved (rounded down) is its sorting
-        // coordinate, which the search relies on to skip the cells below its own.
+        // never subnormal; along an axis of one, every fine coordinate halves to 0 anyway), so
+        // a particle's fine coordinate halved (rounded down) is its sorting coordinate, which
+        // the search relies on to skip the cells below its own.
         let fsize = [0.5 * size[0], 0.5 * size[1], 0.5 * size[2]];
         let fdims = [2 * dims[0], 2 * dims[1], 2 * dims[2]];
         let fcoord = move |x: f64, k: usize| -> usize {
@@ -313,18 +314,17 @@ impl NeighborList {
         for i in 0..n {
             self.start.push(self.new_nb.len() as u32);
             let c = self.cell_of[i] as usize;
-            let (ix, iy, iz) = (
-                c % dims[0],
-                (c / dims[0]) % dims[1],
-                c / (dims[0] * dims[1]),
-            );
             let xi = p.x[i];
             let ri = p.r[i] + skin;
             if periodic {
                 if around_of != c {
                     around_of = c;
                     n_around = 0;
-                    let at = [ix, iy, iz];
+                    let at = [
+                        c % dims[0],
+                        (c / dims[0]) % dims[1],
+                        c / (dims[0] * dims[1]),
+                    ];
                     for dz in -1i64..=1 {
                         for dy in -1i64..=1 {
                             for dx in -1i64..=1 {
