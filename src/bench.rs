@@ -5,8 +5,8 @@ use clap::{Args, Subcommand};
 use mbgc_studies::{
     cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
     gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection,
-    rest_validation, restitution, sampling_quality, sensitivity_report, shear_box_check,
-    shear_box_vs_liggghts, shear_cell_report, stiffness_dependence,
+    rest_validation, restitution, rigid_limit_report, sampling_quality, sensitivity_report,
+    shear_box_check, shear_box_vs_liggghts, shear_cell_report, stiffness_dependence,
 };
 
 #[derive(Debug, Args)]
@@ -73,6 +73,9 @@ pub enum BenchCommand {
     /// docs/stiffness.md: the shear box along lines of K_p = E_p / (rho_p g d50), with and
     /// without cohesion, seed means, cost per run, and where each response stops changing.
     Stiffness(stiffness_dependence::Args),
+    /// docs/rigid_limit.md: from the stiffness lines, how a shear-box model answers beyond its
+    /// stiffness range (the rigid limit), written into a copy of the model.
+    RigidLimit(rigid_limit_report::Args),
 }
 
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
@@ -94,5 +97,6 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::Sensitivity(s) => sensitivity_report::run(s),
         BenchCommand::LiggghtsBackend(l) => liggghts_backend::run(l),
         BenchCommand::Stiffness(s) => stiffness_dependence::run(s),
+        BenchCommand::RigidLimit(r) => rigid_limit_report::run(r),
     }
 }

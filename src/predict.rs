@@ -19,7 +19,8 @@ pub struct PredictArgs {
     /// Table with (at least) the model's input columns.
     #[arg(long)]
     pub data: PathBuf,
-    /// Output CSV: the input rows with one column per response appended.
+    /// Output CSV: the input rows with, per response, its prediction and (where the model states
+    /// its error) `<response>_error`, the prediction's standard error in the response's unit.
     #[arg(long)]
     pub out: PathBuf,
     /// Standard output holds one JSON object; text goes to standard error.
@@ -85,19 +86,49 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
             ));
         }
     }
+    // The error each prediction carries (the response's unit), where the model states one:
+    // its error model or validation RMSE, and beyond its stiffness data the rigid limit's
+    // scatter too.
+    let errors: Vec<Option<Vec<f64>>> = model
+        .responses
+        .iter()
+        .map(|r| {
+            let e: Vec<Option<f64>> = (0..rows)
+                .map(|row| {
+                    let x: Vec<f64> = inputs.iter().map(|c| c[row]).collect();
+                    model.prediction_error(r, &x)
+                })
+                .collect();
+            e.iter()
+                .any(Option::is_some)
+                .then(|| e.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
+        })
+        .collect();
     let mut header = cols.header.clone();
-    for r in &model.responses {
+    for (r, e) in model.responses.iter().zip(&errors) {
         let mut name = r.name.clone();
         while header.contains(&name) {
             name = format!("{name}_predicted");
         }
-        header.push(name);
+        header.push(name.clone());
+        if e.is_some() {
+            let mut err = format!("{name}_error");
+            while header.contains(&err) {
+                err = format!("{err}_predicted");
+            }
+            header.push(err);
+        }
     }
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(&header)?;
     for (row, rec) in cols.records.iter().enumerate() {
         let mut fields = rec.clone();
-        fields.extend(preds.iter().map(|p| format!("{:?}", p[row])));
+        for (p, e) in preds.iter().zip(&errors) {
+            fields.push(format!("{:?}", p[row]));
+            if let Some(e) = e {
+                fields.push(format!("{:?}", e[row]));
+            }
+        }
         w.write_record(&fields)?;
     }
     let bytes = w.into_inner().context("writing CSV")?;

@@ -115,13 +115,16 @@ fn fit_predict_export_agree() {
     let mut rdr = csv::Reader::from_path(&pred_path).unwrap();
     assert_eq!(
         rdr.headers().unwrap().iter().collect::<Vec<_>>(),
-        ["E", "mu", "mu_r", "note", "y1", "y2"]
+        ["E", "mu", "mu_r", "note", "y1", "y1_error", "y2", "y2_error"]
     );
     let predicted: Vec<[f64; 2]> = rdr
         .records()
         .map(|r| {
             let r = r.unwrap();
-            [r[4].parse().unwrap(), r[5].parse().unwrap()]
+            // The error column is the test RMSE (the model has no error model).
+            let rmse = model.responses[0].test.unwrap().rmse;
+            assert_eq!(r[5].parse::<f64>().unwrap(), rmse);
+            [r[4].parse().unwrap(), r[6].parse().unwrap()]
         })
         .collect();
     for (row, p) in rows.iter().zip(&predicted) {

@@ -51,6 +51,7 @@ pub mod rest_detection;
 mod rest_tables;
 pub mod rest_validation;
 pub mod restitution;
+pub mod rigid_limit_report;
 pub mod sampling_quality;
 pub mod sensitivity_report;
 pub mod shear_box_check;

@@ -34,7 +34,8 @@ pub struct Args {
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = vec![1e4, 3e4, 1e5, 3e5, 1e6, 3e6]))]
     pub k: Vec<f64>,
     /// Points the lines go through (`bench shear-box-check`'s: a low, c middle, b high
-    /// friction at sigma_ln 0.15; a2, c2, b2 at 0.25); d50 8 mm, rho_p 2600.
+    /// friction at sigma_ln 0.15; a2, c2, b2 at 0.25; or r1 to r64, points of a Sobol design
+    /// over the shipped space's other parameters, see [`random_point`]); d50 8 mm, rho_p 2600.
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = ["a".to_string(), "b".into()]))]
     pub points: Vec<String>,
     /// Cohesion groups Bo = ced_pp / (rho_p g d50) of the lines (ced_pw = 0); 0: without
@@ -68,14 +69,63 @@ const HEADER: &str =
     "point\tbond\tk_p\tseed\tshear_angle\tbulk_density\tsettled\tsteps\tparticles\tseconds";
 /// The points a line may go through: `bench shear-box-check`'s, which share d50 and rho_p.
 const POINTS: [&str; 6] = ["a", "c", "b", "a2", "c2", "b2"];
+/// The random lines: `r1` to `r{RANDOM_POINTS}`.
+const RANDOM_POINTS: usize = 64;
+/// Seed of the random lines' Sobol design (fixed: `r3` is the same point in every study).
+const RANDOM_SEED: u64 = 40;
+/// The space the random lines are drawn from: the shipped base model's.
+const SHIPPED_SPACE: &str = include_str!("../../../examples/space_shear_box.toml");
+
+/// Point `rN` (1-based) of the random lines: row N of a scrambled Sobol design over the free
+/// parameters of the shipped space other than E_p and E_w (which the line sets), at d50 8 mm and
+/// rho_p 2600 like the named points. The named points share restitution 0.5, nu_p 0.3 and the
+/// wall frictions; these vary everything the shipped model does, so that the lines speak for
+/// its whole space.
+pub fn random_point(name: &str) -> Option<ParamSet> {
+    let n: usize = name.strip_prefix('r')?.parse().ok()?;
+    if !(1..=RANDOM_POINTS).contains(&n) {
+        return None;
+    }
+    let space =
+        mbgc::space::Space::from_toml_str(SHIPPED_SPACE, "examples/space_shear_box.toml").ok()?;
+    let sampler = mbgc::sampling::Method::Sobol.sampler();
+    let design = mbgc::sampling::extend_design(
+        sampler.as_ref(),
+        &mbgc::sampling::Points::new(space.dim()),
+        RANDOM_POINTS,
+        RANDOM_SEED,
+    )
+    .ok()?;
+    let x = space.to_physical(design.row(n - 1));
+    let pairs: Vec<(String, f64)> = space
+        .names()
+        .into_iter()
+        .zip(x)
+        .map(|(k, v)| match k {
+            "rho_p" => (k.to_string(), 2600.0),
+            "d50" => (k.to_string(), 8.0),
+            _ => (k.to_string(), v),
+        })
+        .collect();
+    Some(ParamSet::from_pairs(&pairs))
+}
+
+/// A named or a random point.
+pub(crate) fn line_point(name: &str) -> Option<ParamSet> {
+    if POINTS.contains(&name) {
+        point(name)
+    } else {
+        random_point(name)
+    }
+}
 
 /// One run of a line.
 #[derive(Clone, Debug, PartialEq)]
-struct Job {
-    point: String,
-    bond: f64,
-    k: f64,
-    seed: u64,
+pub(crate) struct Job {
+    pub(crate) point: String,
+    pub(crate) bond: f64,
+    pub(crate) k: f64,
+    pub(crate) seed: u64,
 }
 
 impl Job {
@@ -90,17 +140,13 @@ impl Job {
 
     /// The shear box and the parameters of this run.
     fn scene(&self) -> anyhow::Result<(ShearBox, ParamSet)> {
-        let base = POINTS
-            .contains(&self.point.as_str())
-            .then(|| point(&self.point))
-            .flatten()
-            .with_context(|| {
-                format!(
-                    "--points {}: expected a point among {}",
-                    self.point,
-                    POINTS.join(", ")
-                )
-            })?;
+        let base = line_point(&self.point).with_context(|| {
+            format!(
+                "--points {}: expected a point among {} or r1 to r{RANDOM_POINTS}",
+                self.point,
+                POINTS.join(", ")
+            )
+        })?;
         let get = |n: &str| base.get(n).with_context(|| format!("point without {n}"));
         let (rho, d50_mm) = (get("rho_p")?, get("d50")?);
         let weight = rho * G * d50_mm * 1e-3;
@@ -131,17 +177,17 @@ impl Job {
 
 /// A finished run.
 #[derive(Clone, Debug)]
-struct Row {
-    job: Job,
-    angle: f64,
-    density: f64,
-    settled: bool,
-    seconds: f64,
+pub(crate) struct Row {
+    pub(crate) job: Job,
+    pub(crate) angle: f64,
+    pub(crate) density: f64,
+    pub(crate) settled: bool,
+    pub(crate) seconds: f64,
 }
 
 /// The table's runs; a second row of a run (two studies writing one table) is left out with a
 /// warning, so that it does not count as another seed.
-fn read_rows(path: &std::path::Path) -> anyhow::Result<Vec<Row>> {
+pub(crate) fn read_rows(path: &std::path::Path) -> anyhow::Result<Vec<Row>> {
     let mut rows: Vec<Row> = Vec::new();
     for (k, c) in read_tsv(path, HEADER)?.into_iter().enumerate() {
         let num = |i: usize| -> anyhow::Result<f64> {
@@ -416,7 +462,7 @@ fn report(a: &Args, rows: &[Row]) -> String {
             .filter(|r| r.job.point == pt && r.job.bond.to_bits() == bond_bits)
             .collect();
         let pts = line_points(&rs);
-        let what = point(&pt).map_or(String::new(), |p| {
+        let what = line_point(&pt).map_or(String::new(), |p| {
             let g = |k: &str| p.get(k).unwrap_or(f64::NAN);
             format!(
                 "mu_pp {}, mu_r_pp {}, sigma_ln {}",
@@ -517,6 +563,26 @@ mod tests {
         let (sb, p) = plain.scene().unwrap();
         assert!(p.get("ced_pp").is_none());
         assert!(!sb.class.label().contains("sjkr"));
+    }
+
+    #[test]
+    fn random_lines_are_fixed_points_of_the_shipped_space() {
+        let space =
+            mbgc::space::Space::from_toml_str(SHIPPED_SPACE, "space_shear_box.toml").unwrap();
+        let (r1, r2) = (random_point("r1").unwrap(), random_point("r2").unwrap());
+        assert_eq!(
+            random_point("r1"),
+            Some(r1.clone()),
+            "the same point every time"
+        );
+        assert_ne!(r1.get("mu_pp"), r2.get("mu_pp"));
+        for p in space.parameters.iter().filter(|p| p.fixed.is_none()) {
+            let v = r1.get(&p.name).unwrap();
+            assert!(p.contains(v), "{} = {v}", p.name);
+        }
+        assert_eq!(r1.get("d50"), Some(8.0));
+        assert!(random_point("r0").is_none() && random_point("r65").is_none());
+        assert!(random_point("x1").is_none());
     }
 
     #[test]

@@ -65,12 +65,13 @@ pub fn ln_likelihood(p: &Problem, theta: &[f64]) -> f64 {
         return f64::NEG_INFINITY;
     }
     let pred = p.predictions(x);
+    let sds = p.target_sds(x);
     let mut l = 0.0;
-    for (t, g) in p.targets.iter().zip(&pred) {
-        if !g.is_finite() {
+    for ((t, g), sd) in p.targets.iter().zip(&pred).zip(&sds) {
+        if !g.is_finite() || !sd.is_finite() {
             return f64::NEG_INFINITY;
         }
-        l += ln_normal(t.value, *g, t.sd * t.sd + (sigma * g).powi(2));
+        l += ln_normal(t.value, *g, sd * sd + (sigma * g).powi(2));
     }
     l
 }

@@ -252,15 +252,17 @@ impl<'m> Problem<'m> {
                     .group
                     .monomial
                     .value(|n| values[parts.iter().position(|(m, _)| m == n).unwrap_or(0)]);
-                if !(v >= gd.domain[0] && v <= gd.domain[1]) {
+                let range = model.group_range(gd);
+                if !(v >= range[0] && v <= range[1]) {
                     return Err(Error::out_of_domain(
                         file,
                         "fixed",
                         format!(
                             "{} = {} = {v:.4e} from the fixed {} is not inside the model's \
                              range [{:.4e}, {:.4e}] ({}; outside it the equations \
-                             extrapolate): expected fixed values that put it inside, or a model \
-                             trained over it",
+                             extrapolate): expected fixed values that put it inside; for this \
+                             material, build a local model (`mbgc diagnose --build`) or extend \
+                             the campaign over it (`mbgc train --extends`)",
                             gd.group.name,
                             gd.group.monomial.text(),
                             parts
@@ -268,10 +270,26 @@ impl<'m> Problem<'m> {
                                 .map(|(n, _)| n.as_str())
                                 .collect::<Vec<_>>()
                                 .join(", "),
-                            gd.domain[0],
-                            gd.domain[1],
+                            range[0],
+                            range[1],
                             gd.group.what
                         ),
+                    ));
+                }
+                if !(v >= gd.domain[0] && v <= gd.domain[1]) {
+                    let edge = if v > gd.domain[1] {
+                        gd.domain[1]
+                    } else {
+                        gd.domain[0]
+                    };
+                    notes.push(format!(
+                        "{} = {v:.4e} lies {:.2} decades beyond the training runs' {} \
+                         {edge:.4e}: the model answers by its rigid limit (the equations at \
+                         {edge:.4e} plus the shift measured along lines of DEM runs, whose \
+                         scatter is added to each response's sd)",
+                        gd.group.name,
+                        (v / edge).log10().abs(),
+                        if v > edge { "stiffest" } else { "softest" },
                     ));
                 }
             }
@@ -391,6 +409,22 @@ impl<'m> Problem<'m> {
             .collect()
     }
 
+    /// The sd a target's residual is weighed with at `x` (all inputs): the measurement's, and
+    /// beyond the model's data in the stiffness group the rigid limit's scatter (NaN past its
+    /// reach).
+    pub fn target_sd(&self, t: &Target, x: &[f64]) -> f64 {
+        let extra = self
+            .model
+            .extrapolation_sd(&self.model.responses[t.response], x);
+        t.sd.hypot(extra)
+    }
+
+    /// The sd of every target at the free parameters `free` (see [`Problem::target_sd`]).
+    pub fn target_sds(&self, free: &[f64]) -> Vec<f64> {
+        let x = self.full(free);
+        self.targets.iter().map(|t| self.target_sd(t, &x)).collect()
+    }
+
     /// Model predictions of the measured responses (NaN where an equation is not finite).
     pub fn predictions(&self, free: &[f64]) -> Vec<f64> {
         let x = self.full(free);
@@ -434,7 +468,7 @@ impl<'m> Problem<'m> {
                     gd.group.name.clone(),
                     gd.group.monomial.text(),
                     self.model.group_value(&gd.group, &x),
-                    gd.domain,
+                    self.model.group_range(gd),
                 )
             })
             .collect()
@@ -445,7 +479,8 @@ impl<'m> Problem<'m> {
     fn group_excess(&self, g: usize, x: &[f64]) -> f64 {
         let gd = &self.model.groups[g];
         let v = self.model.group_value(&gd.group, x).ln();
-        let (lo, hi) = (gd.domain[0].ln(), gd.domain[1].ln());
+        let range = self.model.group_range(gd);
+        let (lo, hi) = (range[0].ln(), range[1].ln());
         if v > hi {
             v - hi
         } else if v < lo {
@@ -465,10 +500,11 @@ impl<'m> Problem<'m> {
             let (y, dy) = self
                 .model
                 .value_and_gradient(&self.model.responses[t.response], &x)?;
-            let r = (y - t.value) / t.sd;
+            let sd = self.target_sd(t, &x);
+            let r = (y - t.value) / sd;
             f += r * r;
             for (j, &k) in self.free.iter().enumerate() {
-                g[j] += 2.0 * r * dy[k] / t.sd;
+                g[j] += 2.0 * r * dy[k] / sd;
             }
         }
         // A group outside the range the model was fitted on is extrapolation, like an input
@@ -510,7 +546,8 @@ impl<'m> Problem<'m> {
         self.predictions(free)
             .iter()
             .zip(&self.targets)
-            .map(|(p, t)| (p - t.value) / t.sd)
+            .zip(self.target_sds(free))
+            .map(|((p, t), sd)| (p - t.value) / sd)
             .collect()
     }
 }

@@ -102,11 +102,12 @@ impl Surrogate {
                     .iter()
                     .filter_map(|gd| {
                         let v = mf.group_value(&gd.group, x);
-                        (v.is_finite() && !(v >= gd.domain[0] && v <= gd.domain[1])).then(|| {
+                        let range = mf.group_range(gd);
+                        (v.is_finite() && !(v >= range[0] && v <= range[1])).then(|| {
                             (
                                 format!("{} = {}", gd.group.name, gd.group.monomial.text()),
                                 v,
-                                gd.domain,
+                                range,
                             )
                         })
                     })
@@ -117,7 +118,8 @@ impl Surrogate {
                     .iter()
                     .map(|gd| {
                         let v = mo.group_value(&gd.group, x).ln();
-                        let (lo, hi) = (gd.domain[0].ln(), gd.domain[1].ln());
+                        let range = mo.group_range(gd);
+                        let (lo, hi) = (range[0].ln(), range[1].ln());
                         if v > hi {
                             (v - hi).powi(2)
                         } else if v < lo {

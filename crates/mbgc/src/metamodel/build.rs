@@ -926,6 +926,7 @@ pub fn fit(
         constants: fixed,
         constraints: Vec::new(),
         constraint_terms: Vec::new(),
+        rigid_limit: None,
     };
     if let Some(space) = &settings.space {
         model
@@ -1225,8 +1226,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_fit_in_groups_extends_to_the_absorbed_inputs() {
+    /// A model fitted in K = E / (rho d) to density = rho (0.5 + 0.02 ln K) and angle = 20 +
+    /// 15 mu, K from 125 to 2845, with its settings and table.
+    fn grouped_fixture() -> (Metamodel, FitSettings, TrainingTable) {
         let dir = tempfile::tempdir().unwrap();
         let data = dir.path().join("t.csv");
         let mut text = String::from("E,rho,d,mu,density,angle\n");
@@ -1269,6 +1271,12 @@ mod tests {
             .similarity(similarity);
         let table = TrainingTable::read_csv(&data, &inputs, &targets).unwrap();
         let m = fit(&table, &settings, |_, _| {}).unwrap().model;
+        (m, settings, table)
+    }
+
+    #[test]
+    fn a_fit_in_groups_extends_to_the_absorbed_inputs() {
+        let (m, settings, table) = grouped_fixture();
         let density = &m.responses[0];
         assert!(density.train.r2 > 0.999999, "{:?}", density.train);
         let g = density.grouped.as_ref().unwrap();
@@ -1325,5 +1333,98 @@ mod tests {
         let out = m.outside_domain(&[1e9, 2000.0, 4.0, 0.5]);
         assert!(out.iter().any(|o| o.0 == "K"), "{out:?}");
         assert!(m.outside_domain(&[1e7, 2000.0, 4.0, 0.5]).is_empty());
+    }
+
+    #[test]
+    fn the_rigid_limit_answers_beyond_the_data_with_the_lines_shift_and_scatter() {
+        use crate::metamodel::rigid_fit::{fit_rigid_limit, Line, RigidFit};
+        let (m, _, _) = grouped_fixture();
+        let hi = m.groups[0].domain[1];
+        // Lines at three frictions: beyond the stiffest data the solid fraction falls by
+        // (0.010 + 0.004 mu) per decade and the angle rises by 0.5 deg per decade.
+        let truth = |k: f64, mu: f64| -> [f64; 2] {
+            let dec = (k / hi).log10().max(0.0);
+            let phi = 0.5 + 0.02 * k.min(hi).ln() - (0.010 + 0.004 * mu) * dec;
+            [2000.0 * phi, 20.0 + 15.0 * mu + 0.5 * dec]
+        };
+        let lines: Vec<Line> = [0.2, 0.5, 0.8]
+            .iter()
+            .map(|&mu| Line {
+                label: format!("mu {mu}"),
+                inputs: vec![1e6, 2000.0, 4.0, mu],
+                runs: [1.0, 10.0, 100.0]
+                    .iter()
+                    .map(|f| (hi * f, truth(hi * f, mu).to_vec()))
+                    .collect(),
+            })
+            .collect();
+        let fit = RigidFit {
+            group: "K",
+            along: "E",
+            wall: None,
+            along_max: 1e12,
+            source: "test".into(),
+        };
+        let lm = fit_rigid_limit(&m, &fit, &lines).unwrap();
+        let lim = lm.rigid_limit.as_ref().unwrap();
+        assert!(
+            (lim.reach[1] / (100.0 * hi) - 1.0).abs() < 1e-9,
+            "{:?}",
+            lim.reach
+        );
+        assert_eq!(lim.reach[0], m.groups[0].domain[0], "no soft lines");
+        // Inside the data nothing changes, to the bit.
+        let inside = [8e6, 2000.0, 4.0, 0.5];
+        for r in &m.responses {
+            assert_eq!(
+                lm.predict_point(r, &inside).to_bits(),
+                m.predict_point(r, &inside).to_bits()
+            );
+            assert_eq!(lm.extrapolation_sd(r, &inside), 0.0);
+        }
+        // Thirty times stiffer than the data, at another friction: the equation at the edge plus
+        // the lines' shift, within the lines' scatter.
+        let x = [30.0 * hi * 8000.0, 2000.0, 4.0, 0.35];
+        assert!(
+            lm.outside_domain(&x).is_empty(),
+            "{:?}",
+            lm.outside_domain(&x)
+        );
+        assert!(!m.outside_domain(&x).is_empty());
+        let want = truth(30.0 * hi, 0.35);
+        for (r, resp) in lm.responses.iter().enumerate() {
+            let got = lm.predict_point(resp, &x);
+            let sd = lm.extrapolation_sd(resp, &x);
+            let w = want[r];
+            let fit_err = 1e-3 * w.abs();
+            assert!(
+                (got - w).abs() < 2.0 * sd + fit_err,
+                "{}: {got} {w} sd {sd}",
+                resp.name
+            );
+            let (v, g) = lm.value_and_gradient(resp, &x).unwrap();
+            assert_eq!(v.to_bits(), got.to_bits());
+            assert!(g.iter().all(|g| g.is_finite()));
+        }
+        // The density's scatter comes from the friction the shift depends on; the angle's shift
+        // is the same on every line.
+        let dens = &lm.responses[0];
+        assert!(lm.extrapolation_sd(dens, &x) > 0.0);
+        assert!(lm.extrapolation_sd(&lm.responses[1], &x) < 1e-9);
+        assert!(lm.error_at(dens, &x).unwrap() >= lm.extrapolation_sd(dens, &x));
+        // Past the stiffest line the model does not answer.
+        let far = [300.0 * hi * 8000.0, 2000.0, 4.0, 0.5];
+        assert!(lm.outside_domain(&far).iter().any(|o| o.0 == "K"));
+        assert!(lm.predict_point(dens, &far).is_nan());
+        // The limit is saved with the model.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.json");
+        lm.save(&path).unwrap();
+        let back = Metamodel::load(&path).unwrap();
+        assert_eq!(back.rigid_limit, lm.rigid_limit);
+        assert_eq!(
+            back.predict_point(dens, &x).to_bits(),
+            lm.predict_point(dens, &x).to_bits()
+        );
     }
 }

@@ -10,6 +10,8 @@ mod fit_settings;
 pub mod model;
 pub mod noise;
 mod rebase;
+pub mod rigid_fit;
+pub mod rigid_limit;
 pub mod table;
 mod training_table;
 
@@ -19,4 +21,5 @@ pub use build::{
 pub use error_model::ErrorModel;
 pub use fit_settings::FitSettings;
 pub use model::*;
+pub use rigid_limit::RigidLimit;
 pub use training_table::TrainingTable;

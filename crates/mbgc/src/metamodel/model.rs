@@ -2,6 +2,7 @@
 //! settings, seed and data hash, saved and loaded as JSON.
 
 use super::error_model::ErrorModel;
+use super::rigid_limit::{decades_beyond, Form, Place, RigidLimit};
 use super::training_table::TrainingTable;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::similarity::{Group, Monomial};
@@ -375,6 +376,23 @@ pub struct Metamodel {
     /// model's constants folded in).
     #[serde(skip)]
     pub(super) constraint_terms: Vec<(Vec<(usize, f64)>, f64)>,
+    /// How the model answers beyond its data in the stiffness group (the rigid limit, measured
+    /// by `mbgc bench rigid-limit`); without it the group's domain bounds the model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rigid_limit: Option<RigidLimit>,
+}
+
+/// A prediction beyond the data in the rigid-limit group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Beyond {
+    /// The point with the groups moved onto their domain's edge (where the equation is read).
+    pub clamped: Vec<f64>,
+    /// Where the point lies.
+    pub place: Place,
+    /// Prediction: the equation at `clamped` plus the curve's shift (NaN past the reach).
+    pub value: f64,
+    /// The curve's scatter there, in the response's unit: added to the model's own error.
+    pub sd: f64,
 }
 
 /// A parameter held at one value in every training run.
@@ -494,6 +512,22 @@ impl Metamodel {
             }
         }
         m.check_names_and_domains(&file)?;
+        if let Some(lim) = &m.rigid_limit {
+            lim.validate(&file)?;
+            let pairs = std::iter::once((&lim.group, &lim.along))
+                .chain(lim.wall.as_ref().map(|(g, a)| (g, a)));
+            for (g, a) in pairs {
+                if m.along_input(g, a).is_none() {
+                    return Err(Error::input(
+                        &file,
+                        "rigid_limit",
+                        format!(
+                            "a group of the model ({g}) and an input ({a}) that enters it alone                              with power 1"
+                        ),
+                    ));
+                }
+            }
+        }
         let mut m = m;
         let texts = std::mem::take(&mut m.constraints);
         m.set_constraints(&texts, &file)?;
@@ -783,7 +817,149 @@ impl Metamodel {
                 };
             }
         }
+        if self.rigid_limit.is_some() {
+            for (r, o) in out.iter_mut().enumerate() {
+                let point: Vec<f64> = x.iter().map(|c| c[r]).collect();
+                if let Some(b) = self.beyond(response, &point) {
+                    *o = b.value;
+                }
+            }
+        }
         out
+    }
+
+    /// The equation alone at one point, without the rigid limit.
+    pub(super) fn equation_at(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        let xt: Vec<Vec<f64>> = self
+            .inputs
+            .iter()
+            .zip(x)
+            .map(|(i, &v)| vec![i.transform.apply(v)])
+            .collect();
+        let mut one = [0.0];
+        if gp::eval::Evaluator::new().eval(&response.program, &xt, &mut one) {
+            one[0]
+        } else {
+            f64::NAN
+        }
+    }
+
+    /// The input `along` when it enters group `group` alone (in no other group) with power 1:
+    /// scaling it moves the point along that group only. Its index among the inputs.
+    pub fn along_input(&self, group: &str, along: &str) -> Option<usize> {
+        let gd = self.groups.iter().find(|g| g.group.name == group)?;
+        let power = gd.group.monomial.powers.iter().find(|(n, _)| n == along)?.1;
+        let elsewhere = self.groups.iter().any(|g| {
+            g.group.name != group && g.group.monomial.powers.iter().any(|(n, _)| n == along)
+        });
+        (power == 1.0 && !elsewhere)
+            .then(|| self.inputs.iter().position(|i| i.name == along))
+            .flatten()
+    }
+
+    /// Where a group's values make the model answer: its domain, or the rigid limit's reach for
+    /// the groups the limit extends.
+    pub fn group_range(&self, gd: &GroupDomain) -> [f64; 2] {
+        match &self.rigid_limit {
+            Some(lim)
+                if lim.group == gd.group.name
+                    || lim.wall.as_ref().is_some_and(|(g, _)| *g == gd.group.name) =>
+            {
+                [
+                    lim.reach[0].min(gd.domain[0]),
+                    lim.reach[1].max(gd.domain[1]),
+                ]
+            }
+            _ => gd.domain,
+        }
+    }
+
+    /// The prediction at a point beyond the data in the rigid limit's groups (`None`: inside,
+    /// or a model without a rigid limit): the equation on the domain's edge plus the measured
+    /// curve. Its value is NaN past the curves' reach.
+    pub fn beyond(&self, response: &ResponseModel, x: &[f64]) -> Option<Beyond> {
+        let lim = self.rigid_limit.as_ref()?;
+        let mut clamped = x.to_vec();
+        let mut place = Place {
+            decades: 0.0,
+            wall_decades: 0.0,
+        };
+        let mut reached = true;
+        let pairs = std::iter::once((&lim.group, &lim.along, false))
+            .chain(lim.wall.as_ref().map(|(g, a)| (g, a, true)));
+        for (g, a, wall) in pairs {
+            let (Some(gd), Some(k)) = (
+                self.groups.iter().find(|d| d.group.name == *g),
+                self.along_input(g, a),
+            ) else {
+                continue;
+            };
+            let value = self.group_value(&gd.group, x);
+            let d = decades_beyond(value, gd.domain);
+            if d == 0.0 {
+                continue;
+            }
+            reached &= lim.reaches(value);
+            let edge = if d > 0.0 { gd.domain[1] } else { gd.domain[0] };
+            clamped[k] = x[k] * (edge / value);
+            if wall {
+                place.wall_decades = d;
+            } else {
+                place.decades = d;
+            }
+        }
+        if place.inside() {
+            return None;
+        }
+        let nan = |clamped: Vec<f64>| Beyond {
+            clamped,
+            place,
+            value: f64::NAN,
+            sd: f64::NAN,
+        };
+        let Some((v, form, sd)) = lim.shift(&response.name, place).filter(|_| reached) else {
+            return Some(nan(clamped));
+        };
+        let f0 = self.equation_at(response, &clamped);
+        let factor = response
+            .grouped
+            .as_ref()
+            .and_then(|g| g.factor.as_ref())
+            .map_or(1.0, |m| {
+                m.value(|n| {
+                    self.inputs
+                        .iter()
+                        .position(|i| i.name == n)
+                        .map_or(f64::NAN, |k| clamped[k])
+                })
+            });
+        let shift = match form {
+            Form::Shift => v * factor,
+            Form::Slope => {
+                // The slope along the lines the curve was measured on, which move the wall
+                // with the particles; scaling an input by 10 moves its group one decade.
+                let (_, g) = self.equation_value_and_gradient(response, &clamped)?;
+                let along = std::iter::once((&lim.group, &lim.along))
+                    .chain(lim.wall.as_ref().map(|(g, a)| (g, a)))
+                    .filter_map(|(g, a)| self.along_input(g, a));
+                along
+                    .map(|k| g[k] * clamped[k] * std::f64::consts::LN_10)
+                    .sum::<f64>()
+                    * v
+            }
+        };
+        Some(Beyond {
+            clamped,
+            place,
+            value: f0 + shift,
+            sd: sd * factor,
+        })
+    }
+
+    /// The rigid limit's scatter at `x` for `response` (0 inside the data or without a limit;
+    /// NaN past the reach): what a prediction there adds to the model's own error.
+    pub fn extrapolation_sd(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        self.beyond(response, x).map_or(0.0, |b| b.sd)
     }
 
     /// The inputs of `x` scaled to [0, 1] over the model's space (0.5 for an input the model
@@ -808,8 +984,31 @@ impl Metamodel {
 
     /// The equation's own standard error at `x` (physical inputs in `inputs` order), from its
     /// error model; `None` when it has none.
+    ///
+    /// Beyond the data in the rigid limit's group it is read on the edge and the curve's
+    /// scatter is added (in quadrature); with no error model the validation RMSE stands for
+    /// it there (0 without one either), so that such a point always reports its larger error.
     pub fn error_at(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
-        response.error_model.as_ref().map(|e| e.sd(&self.unit(x)))
+        match self.beyond(response, x) {
+            Some(b) => {
+                let own = response
+                    .error_model
+                    .as_ref()
+                    .map(|e| e.sd(&self.unit(&b.clamped)))
+                    .or_else(|| response.validation.or(response.test).map(|v| v.rmse))
+                    .unwrap_or(0.0);
+                Some(own.hypot(b.sd))
+            }
+            None => response.error_model.as_ref().map(|e| e.sd(&self.unit(x))),
+        }
+    }
+
+    /// The error of a prediction at `x`: the equation's own error there ([`Metamodel::error_at`])
+    /// or, without an error model, its validation (else test) RMSE; beyond the data in the
+    /// rigid limit's group the limit's scatter is included. `None`: the model states no error.
+    pub fn prediction_error(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
+        self.error_at(response, x)
+            .or_else(|| response.validation.or(response.test).map(|v| v.rmse))
     }
 
     /// Fits each response's error model to its residuals on `validation` (a table of runs never
@@ -851,6 +1050,39 @@ impl Metamodel {
         response: &ResponseModel,
         x: &[f64],
     ) -> Option<(f64, Vec<f64>)> {
+        let Some(b) = self.beyond(response, x) else {
+            return self.equation_value_and_gradient(response, x);
+        };
+        if !b.value.is_finite() {
+            return None;
+        }
+        // The shift is linear between knots: central differences of relative step 1e-6 are
+        // exact up to round-off except on a knot, where they average the two sides.
+        let mut g = vec![0.0; x.len()];
+        for (k, gk) in g.iter_mut().enumerate() {
+            let h = 1e-6 * x[k].abs().max(1e-12);
+            let (mut lo, mut hi) = (x.to_vec(), x.to_vec());
+            lo[k] -= h;
+            hi[k] += h;
+            let (a, c) = (
+                self.predict_point(response, &lo),
+                self.predict_point(response, &hi),
+            );
+            *gk = if a.is_finite() && c.is_finite() {
+                (c - a) / (2.0 * h)
+            } else {
+                0.0
+            };
+        }
+        Some((b.value, g))
+    }
+
+    /// [`Metamodel::value_and_gradient`] of the equation alone.
+    pub(super) fn equation_value_and_gradient(
+        &self,
+        response: &ResponseModel,
+        x: &[f64],
+    ) -> Option<(f64, Vec<f64>)> {
         let xt: Vec<f64> = self
             .inputs
             .iter()
@@ -879,12 +1111,13 @@ impl Metamodel {
             .collect();
         for g in &self.groups {
             let value = self.group_value(&g.group, x);
+            let range = self.group_range(g);
             // A group is a product of powers: the same point computed along another path (a
             // file's digits read back, another order of factors) may differ in the last bits,
             // which must not put a training row outside its own domain.
-            let slack = 1e-12 * g.domain[0].abs().max(g.domain[1].abs());
-            if !(value >= g.domain[0] - slack && value <= g.domain[1] + slack) {
-                v.push((g.group.name.as_str(), value, g.domain));
+            let slack = 1e-12 * range[0].abs().max(range[1].abs());
+            if !(value >= range[0] - slack && value <= range[1] + slack) {
+                v.push((g.group.name.as_str(), value, range));
             }
         }
         v

@@ -1,0 +1,237 @@
+//! The rigid limit of a shear-box model (issue 40): from the stiffness lines
+//! (`mbgc bench stiffness`, runs beyond the model's stiffness range through points of its
+//! space), the curves by which the model answers for materials stiffer or softer than its
+//! campaign ran, written into a copy of the model, with a report of the curves and how each form
+//! predicts a left-out line.
+//!
+//! `mbgc bench rigid-limit --model models/shear_box.json --tables <stiffness tables> --out
+//! <model.json> --report docs/rigid_limit.md`
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+
+use super::stiffness_dependence::{line_point, read_rows, Row};
+use mbgc::metamodel::rigid_fit::{fit_rigid_limit, Line, RigidFit};
+use mbgc::metamodel::rigid_limit::Form;
+use mbgc::metamodel::Metamodel;
+
+/// `mbgc bench rigid-limit`.
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct Args {
+    /// The model to extend (a shear-box model fitted in K_p and K_w).
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub model: PathBuf,
+    /// Stiffness tables (`bench stiffness --table`), comma-separated.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', required = true))]
+    pub tables: Vec<PathBuf>,
+    /// The lines' cohesion group Bo (0: the lines without cohesion, for a model without it).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 0.0))]
+    pub bond: f64,
+    /// The largest E_p and E_w the model then takes (seed 004's top, Pa); K_p and K_w stay
+    /// bounded by the lines' reach.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 5e8))]
+    pub e_max: f64,
+    /// The model with its rigid limit (never the input model).
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub out: PathBuf,
+    /// Markdown report.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
+}
+
+/// The weight group of the lines' points (rho_p 2600, d50 8 mm): E = K_p times this.
+const WEIGHT: f64 = 2600.0 * 9.81 * 8e-3;
+
+/// Runs the study.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    mbgc::outputs::refuse_overwriting_inputs("--out", &a.out, &[("--model", &a.model)])?;
+    let model = Metamodel::load(&a.model)?;
+    let mut rows: Vec<Row> = Vec::new();
+    let mut source = Vec::new();
+    for t in &a.tables {
+        let bytes = std::fs::read(t).with_context(|| format!("reading {}", t.display()))?;
+        source.push(format!(
+            "{} ({:016x})",
+            t.display(),
+            mbgc::numeric::fnv1a64(&bytes)
+        ));
+        for r in read_rows(t)? {
+            if rows.iter().any(|o| o.job == r.job) {
+                eprintln!(
+                    "warning: {}: a second row of {:?}; left out",
+                    t.display(),
+                    r.job
+                );
+                continue;
+            }
+            rows.push(r);
+        }
+    }
+    rows.retain(|r| r.job.bond == a.bond);
+    let lines = lines(&model, &rows, a.bond)?;
+    let fit = RigidFit {
+        group: "K_p",
+        along: "E_p",
+        wall: Some(("K_w", "E_w")),
+        along_max: a.e_max,
+        source: source.join(", "),
+    };
+    let extended = fit_rigid_limit(&model, &fit, &lines)?;
+    extended.save(&a.out)?;
+    let text = report(a, &model, &extended, &lines);
+    crate::emit_report(
+        a.json,
+        a.report.as_deref(),
+        &text,
+        serde_json::json!({ "model": a.out, "lines": lines.len() }),
+    )
+}
+
+/// The lines of `rows` as the fit takes them: the model's inputs at each point and its runs.
+fn lines(model: &Metamodel, rows: &[Row], bond: f64) -> anyhow::Result<Vec<Line>> {
+    let mut names: Vec<&str> = rows.iter().map(|r| r.job.point.as_str()).collect();
+    names.sort();
+    names.dedup();
+    let resp = |name: &str| model.responses.iter().position(|r| r.name == name);
+    let (angle, density) = (resp("shear_angle"), resp("bulk_density"));
+    let mut out = Vec::new();
+    for name in names {
+        let p = line_point(name).with_context(|| format!("point {name}: not a known point"))?;
+        let inputs = model
+            .inputs
+            .iter()
+            .map(|i| match i.name.as_str() {
+                // Any stiffness: the fit moves the point along the group.
+                "E_p" | "E_w" => Ok(1e5 * WEIGHT),
+                "ced_pp" => Ok(bond * WEIGHT),
+                "ced_pw" => Ok(0.0),
+                n => p
+                    .get(n)
+                    .with_context(|| format!("point {name} has no {n}, an input of the model")),
+            })
+            .collect::<anyhow::Result<Vec<f64>>>()?;
+        let runs = rows
+            .iter()
+            .filter(|r| r.job.point == name)
+            .map(|r| {
+                let mut v = vec![f64::NAN; model.responses.len()];
+                if let Some(k) = angle {
+                    v[k] = r.angle;
+                }
+                if let Some(k) = density {
+                    v[k] = r.density;
+                }
+                (r.job.k, v)
+            })
+            .collect();
+        out.push(Line {
+            label: name.to_string(),
+            inputs,
+            runs,
+        });
+    }
+    Ok(out)
+}
+
+fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String {
+    let mut w = String::new();
+    let Some(lim) = &m.rigid_limit else {
+        return w;
+    };
+    let gd = before.groups.iter().find(|g| g.group.name == lim.group);
+    let domain = gd.map_or([f64::NAN; 2], |g| g.domain);
+    let _ = writeln!(
+        w,
+        "# The rigid limit of `{}`\n\nRegenerate with `cargo run --release -- bench rigid-limit \
+         --model {} --tables {} --bond {} --out {}{}` (reads the stiffness tables, a second).\n",
+        a.model.display(),
+        a.model.display(),
+        a.tables
+            .iter()
+            .map(|t| t.display().to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+        a.bond,
+        a.out.display(),
+        a.report
+            .as_ref()
+            .map_or(String::new(), |r| format!(" --report {}", r.display()))
+    );
+    let _ = writeln!(
+        w,
+        "The model's campaign ran {} from {:.4e} to {:.4e}. Beyond, it now answers from {:.4e} \
+         to {:.4e}: the equation on the edge of its range plus a curve measured along {} lines \
+         of DEM runs that vary only the stiffness (E_p = E_w) through points of the space ({}; \
+         rho_p 2600 kg/m3, d50 8 mm, the kinetic rest rule of the campaign). Each curve's \
+         scatter (sd) is added to the response's model error wherever it is used. Source: {}.\n",
+        lim.group,
+        domain[0],
+        domain[1],
+        lim.reach[0],
+        lim.reach[1],
+        lines.len(),
+        lim.lines.join(", "),
+        lim.source
+    );
+    let _ = writeln!(
+        w,
+        "Two forms are fitted per response and side; the one with the smaller error predicting \
+         each line's shifts from the other lines (leave one line out) is kept:\n\n- `shift`: \
+         the same shift for every material (the lines' mean);\n- `slope`: the equation's own \
+         slope at the edge (per decade of {}) times a length in decades, so a material whose \
+         response still moved at the edge moves on.\n\nThe bulk density is fitted as rho_p \
+         times a solid fraction: its shift and sd are in solid fraction, shown here times rho_p \
+         = 2600 kg/m3.\n",
+        lim.group
+    );
+    for c in &lim.curves {
+        let resp = m.responses.iter().find(|r| r.name == c.response);
+        let scale = resp
+            .and_then(|r| r.grouped.as_ref())
+            .and_then(|g| g.factor.as_ref())
+            .map_or(1.0, |_| 2600.0);
+        let loo = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.3}", v * scale));
+        let _ = writeln!(
+            w,
+            "## {}, {} than the data\n\nForm: **{}**. Leave-one-line-out error: shift {}, slope \
+             {}.\n\n| {} | decades beyond | lines | {} | sd |\n|---|---|---|---|---|",
+            c.response,
+            if c.stiff { "stiffer" } else { "softer" },
+            match c.form {
+                Form::Shift => "shift",
+                Form::Slope => "slope",
+            },
+            loo(c.leave_one_out.shift),
+            loo(c.leave_one_out.slope),
+            lim.group,
+            match c.form {
+                Form::Shift => "shift",
+                Form::Slope => "decades times the edge slope",
+            }
+        );
+        let edge = if c.stiff { domain[1] } else { domain[0] };
+        for k in &c.knots {
+            let value = match c.form {
+                Form::Shift => format!("{:+.3}", k.value * scale),
+                Form::Slope => format!("{:+.3}", k.value),
+            };
+            let _ = writeln!(
+                w,
+                "| {:.3e} | {:+.3} | {} | {value} | {:.3} |",
+                edge * 10f64.powf(k.decades),
+                k.decades,
+                k.lines,
+                k.sd * scale
+            );
+        }
+        let _ = writeln!(w);
+    }
+    w
+}

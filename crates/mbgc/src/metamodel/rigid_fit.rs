@@ -1,0 +1,219 @@
+//! Measuring a model's rigid limit ([`super::rigid_limit`]) from lines of DEM runs: each line
+//! holds a point of the space and varies only the stiffness group, from the model's domain edge
+//! outwards. The caller reads the runs; this takes them as data and returns the model with its
+//! limit.
+
+use super::model::Metamodel;
+use super::rigid_limit::{Curve, LineShifts, RigidLimit};
+use crate::error::{Error, Result};
+
+/// One line: the model's inputs at its point (any value of the input moved along the group)
+/// and its runs as `(group value, one value per model response, NaN where missing)`.
+#[derive(Clone, Debug)]
+pub struct Line {
+    /// The point's name.
+    pub label: String,
+    /// The model's inputs, in the model's order.
+    pub inputs: Vec<f64>,
+    /// The runs.
+    pub runs: Vec<(f64, Vec<f64>)>,
+}
+
+/// How the limit is measured and where it applies.
+#[derive(Clone, Debug)]
+pub struct RigidFit<'a> {
+    /// The group the lines vary (`K_p`).
+    pub group: &'a str,
+    /// The input that moves along it (`E_p`).
+    pub along: &'a str,
+    /// The wall's group and input, moved together with the particle's on the lines.
+    pub wall: Option<(&'a str, &'a str)>,
+    /// The largest value the inputs moved along may take (the space's top, e.g. seed 004's E
+    /// of 5e8 Pa): their domains grow to it, the groups' reach bounds them.
+    pub along_max: f64,
+    /// What the tables were, for the record.
+    pub source: String,
+}
+
+/// A run this close to the domain's edge (in decades) stands for the edge.
+pub const EDGE_DECADES: f64 = 0.01;
+
+/// The model with the rigid limit measured on `lines`.
+pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Result<Metamodel> {
+    let bad = |what: String| Error::invalid(format!("rigid limit: {what}"));
+    let gd = model
+        .groups
+        .iter()
+        .find(|g| g.group.name == fit.group)
+        .ok_or_else(|| bad(format!("the model has no group {}", fit.group)))?;
+    let k_along = model.along_input(fit.group, fit.along).ok_or_else(|| {
+        bad(format!(
+            "{} does not enter {} alone with power 1",
+            fit.along, fit.group
+        ))
+    })?;
+    let wall_along = match fit.wall {
+        Some((g, a)) => Some(
+            model
+                .along_input(g, a)
+                .ok_or_else(|| bad(format!("{a} does not enter {g} alone with power 1")))?,
+        ),
+        None => None,
+    };
+    if !(fit.along_max.is_finite() && fit.along_max > 0.0) {
+        return Err(bad(format!(
+            "the largest {} must be positive, got {}",
+            fit.along, fit.along_max
+        )));
+    }
+    let n_in = model.inputs.len();
+    if let Some(l) = lines.iter().find(|l| l.inputs.len() != n_in) {
+        return Err(bad(format!(
+            "line {}: {} inputs, the model has {n_in}",
+            l.label,
+            l.inputs.len()
+        )));
+    }
+    let mut curves = Vec::new();
+    let mut reach = gd.domain;
+    for (r, resp) in model.responses.iter().enumerate() {
+        for stiff in [false, true] {
+            let edge = gd.domain[usize::from(stiff)];
+            let shifts: Vec<LineShifts> = lines
+                .iter()
+                .filter_map(|l| line_shifts(model, l, r, k_along, wall_along, edge, stiff))
+                .collect();
+            if let Some(c) = Curve::fit(&resp.name, stiff, &shifts) {
+                let last = edge * 10f64.powf(c.knots.last().map_or(0.0, |k| k.decades));
+                if stiff {
+                    // Every response must answer up to the reach.
+                    reach[1] = if reach[1] == gd.domain[1] {
+                        last
+                    } else {
+                        reach[1].min(last)
+                    };
+                } else {
+                    reach[0] = if reach[0] == gd.domain[0] {
+                        last
+                    } else {
+                        reach[0].max(last)
+                    };
+                }
+                curves.push(c);
+            }
+        }
+    }
+    // A side some response has no curve for is not reached.
+    for stiff in [false, true] {
+        let all = model.responses.iter().all(|resp| {
+            curves
+                .iter()
+                .any(|c| c.response == resp.name && c.stiff == stiff)
+        });
+        if !all {
+            reach[usize::from(stiff)] = gd.domain[usize::from(stiff)];
+            curves.retain(|c| c.stiff != stiff);
+        }
+    }
+    if curves.is_empty() {
+        return Err(bad(format!(
+            "no response has two lines with runs at the edge of {} ({:.4e} or {:.4e}, within \
+             {EDGE_DECADES} decades) and at a common value beyond it",
+            fit.group, gd.domain[0], gd.domain[1]
+        )));
+    }
+    let mut m = model.clone();
+    for k in std::iter::once(k_along).chain(wall_along) {
+        m.inputs[k].domain[1] = m.inputs[k].domain[1].max(fit.along_max);
+    }
+    m.rigid_limit = Some(RigidLimit {
+        group: fit.group.to_string(),
+        along: fit.along.to_string(),
+        wall: fit.wall.map(|(g, a)| (g.to_string(), a.to_string())),
+        reach,
+        curves,
+        lines: lines.iter().map(|l| l.label.clone()).collect(),
+        source: fit.source.clone(),
+    });
+    Ok(m)
+}
+
+/// One line's shifts of response `r` beyond the edge `edge` (on the stiff or soft side), in the
+/// fitted response's unit; `None` without a run at the edge.
+fn line_shifts(
+    model: &Metamodel,
+    line: &Line,
+    r: usize,
+    k_along: usize,
+    wall_along: Option<usize>,
+    edge: f64,
+    stiff: bool,
+) -> Option<LineShifts> {
+    // The seed means at each group value (runs at the same value are replicates).
+    let mut means: Vec<(f64, f64, usize)> = Vec::new();
+    for (k, v) in &line.runs {
+        let v = v[r];
+        if !v.is_finite() || !k.is_finite() || *k <= 0.0 {
+            continue;
+        }
+        match means.iter_mut().find(|m| ((m.0 / k) - 1.0).abs() < 1e-9) {
+            Some(m) => {
+                m.1 += v;
+                m.2 += 1;
+            }
+            None => means.push((*k, v, 1)),
+        }
+    }
+    let means: Vec<(f64, f64)> = means.iter().map(|m| (m.0, m.1 / m.2 as f64)).collect();
+    let at_edge = means
+        .iter()
+        .filter(|m| (m.0 / edge).log10().abs() < EDGE_DECADES)
+        .min_by(|a, b| {
+            (a.0 / edge)
+                .log10()
+                .abs()
+                .total_cmp(&(b.0 / edge).log10().abs())
+        })?
+        .1;
+    // The model's inputs on the edge: the point's, the particle (and wall) moved along.
+    let gd = model.groups.iter().find(|g| {
+        g.group
+            .monomial
+            .powers
+            .iter()
+            .any(|(n, _)| *n == model.inputs[k_along].name)
+    })?;
+    let mut x = line.inputs.clone();
+    let scale = edge / model.group_value(&gd.group, &x);
+    x[k_along] *= scale;
+    if let Some(w) = wall_along {
+        x[w] *= scale;
+    }
+    let resp = &model.responses[r];
+    let factor = resp
+        .grouped
+        .as_ref()
+        .and_then(|g| g.factor.as_ref())
+        .map_or(1.0, |f| {
+            f.value(|n| {
+                model
+                    .inputs
+                    .iter()
+                    .position(|i| i.name == n)
+                    .map_or(f64::NAN, |k| x[k])
+            })
+        });
+    let (_, g) = model.equation_value_and_gradient(resp, &x)?;
+    let slope = g[k_along] * x[k_along] * std::f64::consts::LN_10
+        + wall_along.map_or(0.0, |w| g[w] * x[w] * std::f64::consts::LN_10);
+    let shifts: Vec<(f64, f64)> = means
+        .iter()
+        .map(|&(k, v)| ((k / edge).log10(), (v - at_edge) / factor))
+        .filter(|(d, _)| d.abs() >= EDGE_DECADES && (*d > 0.0) == stiff)
+        .collect();
+    Some(LineShifts {
+        label: line.label.clone(),
+        slope: slope / factor,
+        shifts,
+    })
+}

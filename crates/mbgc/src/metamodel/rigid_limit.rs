@@ -1,0 +1,439 @@
+//! How a model answers for materials stiffer (or softer) than its campaign ran: the rigid limit.
+//!
+//! Without cohesion the shear box sees E_p, rho_p and d50 only through K_p = E_p / (rho_p g d50).
+//! Seed 004's ranges put K_p between about 7e3 and 5e8, but a run's cost grows about as
+//! sqrt(K_p) while the responses approach a rigid limit (docs/stiffness.md), so a campaign covers
+//! a part of that range and the rest is answered here. Beyond the model's range in the group the
+//! equation is evaluated at the range's edge (the input `along`, E_p, scaled so that the group
+//! sits on the edge), and a measured curve adds what the response still does beyond it: a shift
+//! and its standard deviation, both functions of how many decades the group lies beyond the edge.
+//!
+//! The curves come from lines of DEM runs that vary only the group through points of the space
+//! (`mbgc bench stiffness`), and take one of two forms per response and side, whichever predicts
+//! a left-out line better:
+//! - `shift`: the same shift for every material (the mean over the lines);
+//! - `slope`: the equation's own slope at the edge (per decade) times a measured length in
+//!   decades, so a material whose response still moved at the edge moves on, one that had
+//!   stopped stays.
+//!
+//! The standard deviation at a knot is the lines' scatter about the curve: it holds how much
+//! the shift differs between materials and the runs' noise, and is added to the model's own
+//! error wherever the curve is used. Past the last measured knot the model does not answer.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// How a curve's shift depends on the material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Form {
+    /// The same shift (in the fitted, dimensionless response) for every material.
+    Shift,
+    /// The equation's slope per decade at the edge times the knot's value (in decades).
+    Slope,
+}
+
+/// A point of a curve: the group `decades` beyond the edge (negative: softer than the softest
+/// data), the curve's value there and the scatter of the lines about it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Knot {
+    /// log10(group / edge): positive beyond the largest value of the data, negative below the
+    /// smallest.
+    pub decades: f64,
+    /// The shift (form `shift`, in the fitted response's unit) or the length in decades (form
+    /// `slope`).
+    pub value: f64,
+    /// The lines' scatter about the curve, in the fitted response's unit.
+    pub sd: f64,
+    /// Lines measured here.
+    pub lines: usize,
+}
+
+/// One response's curve on one side of the data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Curve {
+    /// The response (a column of the model).
+    pub response: String,
+    /// `true`: beyond the largest value of the data; `false`: below the smallest.
+    pub stiff: bool,
+    /// The form chosen.
+    pub form: Form,
+    /// The knots away from the edge, ordered from it; the edge itself (shift 0, sd 0) is implied.
+    pub knots: Vec<Knot>,
+    /// Root mean square error of each form predicting a left-out line's shifts from the other
+    /// lines (in the fitted response's unit; `None` where a form cannot be fitted): what chose
+    /// the form.
+    pub leave_one_out: LeaveOneOut,
+}
+
+/// Leave-one-line-out errors of the two forms.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LeaveOneOut {
+    /// Of the `shift` form.
+    pub shift: Option<f64>,
+    /// Of the `slope` form.
+    pub slope: Option<f64>,
+}
+
+/// The rigid-limit treatment of one group of a model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RigidLimit {
+    /// The group the curves extend (`K_p`).
+    pub group: String,
+    /// The input moved along the group to clamp it to the edge (`E_p`: it enters no other group).
+    pub along: String,
+    /// The wall's group and input (`K_w`, `E_w`), clamped the same way: the lines move both
+    /// together, so a wall beyond its range adds the curve's scatter at its excess (no shift).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall: Option<(String, String)>,
+    /// The group's range where the model answers: the lines' softest and stiffest values.
+    pub reach: [f64; 2],
+    /// One curve per response and side measured.
+    pub curves: Vec<Curve>,
+    /// The lines the curves were measured on.
+    pub lines: Vec<String>,
+    /// The tables of runs they came from, with their FNV-1a 64 hashes.
+    pub source: String,
+}
+
+/// One line of DEM runs through a point of the space, as the fit sees it: its value at the
+/// edge, the equation's slope there, the response's scale factor, and its values beyond.
+#[derive(Clone, Debug)]
+pub struct LineShifts {
+    /// The line's name (the point it goes through).
+    pub label: String,
+    /// The equation's slope at the edge, per decade of the group, divided by `factor`.
+    pub slope: f64,
+    /// `(decades beyond the edge, measured value minus the value at the edge, divided by the
+    /// response's factor)`, with `decades` on one side only.
+    pub shifts: Vec<(f64, f64)>,
+}
+
+/// Decades are matched across lines to this precision (lines run at the same values of K).
+const SAME_DECADE: f64 = 1e-6;
+
+impl Curve {
+    /// Fits one response's curve on one side from its lines' shifts. Knots are the values of
+    /// the group at least two lines measured. `None`: no such value.
+    pub fn fit(response: &str, stiff: bool, lines: &[LineShifts]) -> Option<Curve> {
+        let mut xs: Vec<f64> = lines
+            .iter()
+            .flat_map(|l| l.shifts.iter().map(|s| s.0))
+            .filter(|x| x.is_finite() && (*x > 0.0) == stiff && *x != 0.0)
+            .collect();
+        xs.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+        xs.dedup_by(|a, b| (*a - *b).abs() < SAME_DECADE);
+        let at = |l: &LineShifts, x: f64| {
+            l.shifts
+                .iter()
+                .find(|s| (s.0 - x).abs() < SAME_DECADE && s.1.is_finite())
+                .map(|s| s.1)
+        };
+        let mut fits: [Vec<Knot>; 2] = [Vec::new(), Vec::new()];
+        let mut loo: [(f64, usize, bool); 2] = [(0.0, 0, true), (0.0, 0, true)];
+        for &x in &xs {
+            let here: Vec<(f64, f64)> = lines
+                .iter()
+                .filter_map(|l| at(l, x).map(|d| (l.slope, d)))
+                .collect();
+            if here.len() < 2 {
+                continue;
+            }
+            for (k, form) in [Form::Shift, Form::Slope].into_iter().enumerate() {
+                let Some((value, sd)) = knot(form, &here) else {
+                    loo[k].2 = false;
+                    continue;
+                };
+                fits[k].push(Knot {
+                    decades: x,
+                    value,
+                    sd,
+                    lines: here.len(),
+                });
+                for i in 0..here.len() {
+                    let rest: Vec<(f64, f64)> = here
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| *j != i)
+                        .map(|(_, p)| *p)
+                        .collect();
+                    match knot(form, &rest) {
+                        Some((v, _)) => {
+                            let pred = predict(form, v, here[i].0);
+                            loo[k].0 += (here[i].1 - pred).powi(2);
+                            loo[k].1 += 1;
+                        }
+                        None => loo[k].2 = false,
+                    }
+                }
+            }
+        }
+        let rmse = |(s, n, ok): (f64, usize, bool)| (ok && n > 0).then(|| (s / n as f64).sqrt());
+        let leave_one_out = LeaveOneOut {
+            shift: rmse(loo[0]),
+            slope: rmse(loo[1]),
+        };
+        let slope_wins = matches!(
+            (leave_one_out.shift, leave_one_out.slope),
+            (Some(a), Some(b)) if b < a
+        ) || (leave_one_out.shift.is_none() && leave_one_out.slope.is_some());
+        let (form, knots) = if slope_wins {
+            (Form::Slope, std::mem::take(&mut fits[1]))
+        } else {
+            (Form::Shift, std::mem::take(&mut fits[0]))
+        };
+        (!knots.is_empty()).then(|| Curve {
+            response: response.to_string(),
+            stiff,
+            form,
+            knots,
+            leave_one_out,
+        })
+    }
+
+    /// The curve's value and scatter `decades` beyond the edge, linear between the knots from
+    /// the edge (0, 0); `None` past the last knot.
+    pub fn at(&self, decades: f64) -> Option<(f64, f64)> {
+        let d = decades.abs();
+        let mut prev = (0.0, 0.0, 0.0);
+        for k in &self.knots {
+            let kd = k.decades.abs();
+            if d <= kd + SAME_DECADE {
+                let t = if kd > prev.0 {
+                    ((d - prev.0) / (kd - prev.0)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                return Some((
+                    prev.1 + t * (k.value - prev.1),
+                    prev.2 + t * (k.sd - prev.2),
+                ));
+            }
+            prev = (kd, k.value, k.sd);
+        }
+        None
+    }
+}
+
+/// A knot's value and scatter from `(slope, shift)` pairs of its lines; `None` when the form
+/// cannot be fitted (the slope form with every slope 0).
+fn knot(form: Form, pairs: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = pairs.len() as f64;
+    let value = match form {
+        Form::Shift => pairs.iter().map(|p| p.1).sum::<f64>() / n,
+        Form::Slope => {
+            let ss: f64 = pairs.iter().map(|p| p.0 * p.0).sum();
+            if ss <= 0.0 || !ss.is_finite() {
+                return None;
+            }
+            pairs.iter().map(|p| p.0 * p.1).sum::<f64>() / ss
+        }
+    };
+    let ss: f64 = pairs
+        .iter()
+        .map(|&(s, d)| (d - predict(form, value, s)).powi(2))
+        .sum();
+    let sd = if pairs.len() > 1 {
+        (ss / (n - 1.0)).sqrt()
+    } else {
+        0.0
+    };
+    Some((value, sd))
+}
+
+fn predict(form: Form, value: f64, slope: f64) -> f64 {
+    match form {
+        Form::Shift => value,
+        Form::Slope => slope * value,
+    }
+}
+
+/// Where a point lies along the limited group.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Place {
+    /// log10(group / nearest edge) of the particle group (0 inside the data's range).
+    pub decades: f64,
+    /// The same for the wall group (0 inside, or without one).
+    pub wall_decades: f64,
+}
+
+impl Place {
+    /// Inside the data's range in both groups: the equation answers alone.
+    pub fn inside(&self) -> bool {
+        self.decades == 0.0 && self.wall_decades == 0.0
+    }
+}
+
+/// Signed decades of `value` beyond `domain` (0 inside).
+pub fn decades_beyond(value: f64, domain: [f64; 2]) -> f64 {
+    if value > domain[1] {
+        (value / domain[1]).log10()
+    } else if value < domain[0] {
+        (value / domain[0]).log10()
+    } else {
+        0.0
+    }
+}
+
+impl RigidLimit {
+    /// The curve of `response` on the side of `decades`.
+    pub fn curve(&self, response: &str, decades: f64) -> Option<&Curve> {
+        self.curves
+            .iter()
+            .find(|c| c.response == response && c.stiff == (decades > 0.0))
+    }
+
+    /// Whether `value` of the group (or the wall's) lies within the curves' reach.
+    pub fn reaches(&self, value: f64) -> bool {
+        value >= self.reach[0] && value <= self.reach[1]
+    }
+
+    /// The shift (in the fitted response's unit; the caller multiplies a `slope` curve's value
+    /// by the equation's slope) and the scatter for `response` at `place`. `None` where a
+    /// curve is needed and there is none, or the place is past its last knot.
+    pub fn shift(&self, response: &str, place: Place) -> Option<(f64, Form, f64)> {
+        let (mut value, mut form, mut sd) = (0.0, Form::Shift, 0.0);
+        if place.decades != 0.0 {
+            let c = self.curve(response, place.decades)?;
+            let (v, s) = c.at(place.decades)?;
+            (value, form, sd) = (v, c.form, s);
+        }
+        if place.wall_decades != 0.0 && place.wall_decades.abs() > place.decades.abs() {
+            let c = self.curve(response, place.wall_decades)?;
+            let (_, s) = c.at(place.wall_decades)?;
+            sd = sd.max(s);
+        }
+        Some((value, form, sd))
+    }
+
+    /// Checks a limit read from a model file: finite ascending knots, a reach around nothing
+    /// impossible.
+    pub fn validate(&self, file: &str) -> Result<()> {
+        let bad = |field: String, what: &str| Err(Error::input(file, field, what.to_string()));
+        if !(self.reach[0] > 0.0 && self.reach[0] <= self.reach[1] && self.reach[1].is_finite()) {
+            return bad(
+                "rigid_limit.reach".into(),
+                "a positive range [min, max] of the group",
+            );
+        }
+        for (i, c) in self.curves.iter().enumerate() {
+            let mut last = 0.0;
+            for (j, k) in c.knots.iter().enumerate() {
+                let field = format!("rigid_limit.curves[{i}].knots[{j}]");
+                if !(k.value.is_finite() && k.sd.is_finite() && k.sd >= 0.0) {
+                    return bad(field, "a finite value and a sd of at least 0");
+                }
+                if (k.decades > 0.0) != c.stiff || k.decades.abs() <= last {
+                    return bad(
+                        field,
+                        "decades on the curve's side of the edge, moving away from it",
+                    );
+                }
+                last = k.decades.abs();
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(label: &str, slope: f64, shifts: &[(f64, f64)]) -> LineShifts {
+        LineShifts {
+            label: label.into(),
+            slope,
+            shifts: shifts.to_vec(),
+        }
+    }
+
+    #[test]
+    fn a_shift_proportional_to_the_edge_slope_is_fitted_by_the_slope_form() {
+        // Each line moves on by 0.8 decades of its own edge slope.
+        let lines: Vec<LineShifts> = [-10.0, -20.0, -40.0, -5.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| line(&format!("l{i}"), s, &[(0.7, 0.5 * s), (1.7, 0.8 * s)]))
+            .collect();
+        let c = Curve::fit("rho", true, &lines).unwrap();
+        assert_eq!(c.form, Form::Slope);
+        assert_eq!(c.knots.len(), 2);
+        assert!((c.knots[1].value - 0.8).abs() < 1e-12);
+        assert!(c.knots[1].sd < 1e-12);
+        let (v, sd) = c.at(1.2).unwrap();
+        assert!((v - 0.65).abs() < 1e-12, "halfway between the knots: {v}");
+        assert!(sd < 1e-12);
+        assert!(c.at(1.8).is_none(), "past the last knot");
+        // The same shifts for every line: the shift form wins.
+        let flat: Vec<LineShifts> = [-10.0, -20.0, -40.0]
+            .iter()
+            .map(|&s| line("f", s, &[(0.7, -3.0)]))
+            .collect();
+        let c = Curve::fit("rho", true, &flat).unwrap();
+        assert_eq!(c.form, Form::Shift);
+        assert_eq!(c.knots[0].value, -3.0);
+    }
+
+    #[test]
+    fn the_scatter_is_the_lines_spread_and_a_zero_slope_leaves_the_shift_form() {
+        let lines = [
+            line("a", 0.0, &[(1.0, 1.0), (-0.2, 5.0)]),
+            line("b", 0.0, &[(1.0, 3.0)]),
+        ];
+        let c = Curve::fit("angle", true, &lines).unwrap();
+        assert_eq!(c.form, Form::Shift);
+        assert_eq!(c.leave_one_out.slope, None);
+        assert_eq!(c.knots[0].value, 2.0);
+        assert!((c.knots[0].sd - 2f64.sqrt()).abs() < 1e-12);
+        // Only one line below the edge: no soft curve.
+        assert!(Curve::fit("angle", false, &lines).is_none());
+    }
+
+    #[test]
+    fn a_wall_beyond_the_particles_adds_scatter_but_no_shift() {
+        let c = Curve {
+            response: "r".into(),
+            stiff: true,
+            form: Form::Shift,
+            knots: vec![Knot {
+                decades: 2.0,
+                value: -10.0,
+                sd: 4.0,
+                lines: 3,
+            }],
+            leave_one_out: LeaveOneOut {
+                shift: Some(1.0),
+                slope: None,
+            },
+        };
+        let lim = RigidLimit {
+            group: "K_p".into(),
+            along: "E_p".into(),
+            wall: Some(("K_w".into(), "E_w".into())),
+            reach: [1.0, 100.0],
+            curves: vec![c],
+            lines: vec![],
+            source: String::new(),
+        };
+        let only_wall = Place {
+            decades: 0.0,
+            wall_decades: 1.0,
+        };
+        assert_eq!(lim.shift("r", only_wall), Some((0.0, Form::Shift, 2.0)));
+        let both = Place {
+            decades: 1.0,
+            wall_decades: 0.5,
+        };
+        assert_eq!(lim.shift("r", both), Some((-5.0, Form::Shift, 2.0)));
+        let soft = Place {
+            decades: -0.1,
+            wall_decades: 0.0,
+        };
+        assert_eq!(lim.shift("r", soft), None, "no soft curve");
+        assert_eq!(decades_beyond(1000.0, [1.0, 100.0]), 1.0);
+        assert_eq!(decades_beyond(50.0, [1.0, 100.0]), 0.0);
+        assert!(lim.validate("m.json").is_ok());
+    }
+}
