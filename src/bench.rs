@@ -7,6 +7,7 @@ use mbgc_studies::{
     gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection,
     rest_validation, restitution, rigid_limit_report, sampling_quality, sensitivity_report,
     shear_box_check, shear_box_vs_liggghts, shear_cell_report, stiffness_dependence,
+    stiffness_validation,
 };
 
 #[derive(Debug, Args)]
@@ -76,6 +77,9 @@ pub enum BenchCommand {
     /// docs/rigid_limit.md: from the stiffness lines, how a shear-box model answers beyond its
     /// stiffness range (the rigid limit), written into a copy of the model.
     RigidLimit(rigid_limit_report::Args),
+    /// docs/stiffness_validation.md: a random design over seed 004's box of E, rho_p and d50
+    /// (log-uniform in K_p), run once each and scored against a model, by band of K_p.
+    StiffnessValidation(stiffness_validation::Args),
 }
 
 pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
@@ -98,5 +102,6 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::LiggghtsBackend(l) => liggghts_backend::run(l),
         BenchCommand::Stiffness(s) => stiffness_dependence::run(s),
         BenchCommand::RigidLimit(r) => rigid_limit_report::run(r),
+        BenchCommand::StiffnessValidation(v) => stiffness_validation::run(v),
     }
 }

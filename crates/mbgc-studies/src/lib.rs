@@ -59,6 +59,7 @@ pub mod shear_box_fill;
 pub mod shear_box_vs_liggghts;
 pub mod shear_cell_report;
 pub mod stiffness_dependence;
+pub mod stiffness_validation;
 
 /// Writes a study's report atomically (its directory made first), then says where it went
 /// ([`report_written`]).

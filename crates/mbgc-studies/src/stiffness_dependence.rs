@@ -74,7 +74,7 @@ const RANDOM_POINTS: usize = 64;
 /// Seed of the random lines' Sobol design (fixed: `r3` is the same point in every study).
 const RANDOM_SEED: u64 = 40;
 /// The space the random lines are drawn from: the shipped base model's.
-const SHIPPED_SPACE: &str = include_str!("../../../examples/space_shear_box.toml");
+pub(crate) const SHIPPED_SPACE: &str = include_str!("../../../examples/space_shear_box.toml");
 
 /// Point `rN` (1-based) of the random lines: row N of a scrambled Sobol design over the free
 /// parameters of the shipped space other than E_p and E_w (which the line sets), at d50 8 mm and

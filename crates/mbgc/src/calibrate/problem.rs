@@ -261,8 +261,7 @@ impl<'m> Problem<'m> {
                             "{} = {} = {v:.4e} from the fixed {} is not inside the model's \
                              range [{:.4e}, {:.4e}] ({}; outside it the equations \
                              extrapolate): expected fixed values that put it inside; for this \
-                             material, build a local model (`mbgc diagnose --build`) or extend \
-                             the campaign over it (`mbgc train --extends`)",
+                             material, build a local model (`mbgc diagnose --build`)",
                             gd.group.name,
                             gd.group.monomial.text(),
                             parts

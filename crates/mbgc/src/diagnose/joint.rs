@@ -415,9 +415,10 @@ impl<'s> Joint<'s> {
                     if let Some((g, v, [lo, hi])) = m.groups_fixed_outside(&x).into_iter().next() {
                         return Err(format!(
                             "sample \"{}\": {g} is {v:.4e} from the set's fixed values and the \
-                             sample's PSD, outside {}'s range [{lo:.4e}, {hi:.4e}] (the range of \
-                             its training runs); change the fixed values it is made of, or use a \
-                             model trained over this range",
+                             sample's PSD, outside {}'s range [{lo:.4e}, {hi:.4e}] (its \
+                             training runs and the stiffness lines of its rigid limit); check \
+                             the fixed values it is made of, or build a local model for this \
+                             material (`mbgc diagnose --build`)",
                             s.name, m.label
                         ));
                     }

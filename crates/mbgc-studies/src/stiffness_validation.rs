@@ -1,0 +1,452 @@
+//! Does a shear-box model hold across seed 004's whole box of stiffness, density and size
+//! (issue 40)? A random design over E_p, E_w in [5e6, 5e8] Pa, rho_p in [250, 3000] kg/m3 and
+//! d50 in [0.4, 25.6] mm, log-uniform in K_p = E_p / (rho_p g d50) (the stiff end included), with
+//! every other parameter uniform over the shipped space; each row run once by the DEM (never
+//! trained on), then scored against a model: its error by band of K_p, over the replicate
+//! noise, and how often the stated error covers the miss; and the cost per run across K_p.
+//!
+//! `mbgc bench stiffness-validation --report docs/stiffness_validation.md`; every run is a row
+//! of `--table`, appended as it finishes, so a killed study resumes.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use anyhow::Context as _;
+use rand::RngExt as _;
+
+use super::rest_tables::{append, read_tsv};
+use super::stiffness_dependence::SHIPPED_SPACE;
+use mbgc::experiments::shear_box::{RestRule, ShearBox};
+use mbgc::experiments::{Experiment, ParamSet, RunOptions};
+use mbgc::metamodel::Metamodel;
+
+/// Standard gravity of the groups (m/s^2).
+const G: f64 = 9.81;
+/// Seed 004's Table 2 box of the parameters the groups are made of.
+const E: [f64; 2] = [5e6, 5e8];
+const RHO: [f64; 2] = [250.0, 3000.0];
+const D50_MM: [f64; 2] = [0.4, 25.6];
+
+/// `mbgc bench stiffness-validation`.
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct Args {
+    /// Rows of the design (a larger n extends it: the first rows stay).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 40))]
+    pub n: usize,
+    /// Seed of the design (row i's DEM seed is 1000 + i).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 40))]
+    pub seed: u64,
+    /// Runs at a time, one thread each.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1))]
+    pub jobs: usize,
+    /// Score the finished rows only; run nothing.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub no_run: bool,
+    /// The runs, one row each (appended as they finish).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value = "docs/data/stiffness/validation.tsv")
+    )]
+    pub table: PathBuf,
+    /// Models to score, comma-separated.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = ["models/shear_box.json".to_string()]))]
+    pub model: Vec<String>,
+    /// Markdown report.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub report: Option<PathBuf>,
+    /// Standard output holds one JSON object (where the report went); text goes to standard
+    /// error.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub json: bool,
+}
+
+/// The parameters of a row, in this order, then the responses and the cost.
+const PARAMS: [&str; 12] = [
+    "E_p", "E_w", "nu_p", "e_pp", "e_pw", "mu_pp", "mu_pw", "mu_r_pp", "mu_r_pw", "rho_p", "d50",
+    "sigma_ln",
+];
+
+fn header() -> String {
+    format!(
+        "row\tseed\t{}\tk_p\tshear_angle\tbulk_density\tsettled\tsteps\tparticles\tseconds",
+        PARAMS.join("\t")
+    )
+}
+
+/// The smallest and largest K_p of the box.
+pub fn k_range() -> [f64; 2] {
+    [
+        E[0] / (RHO[1] * G * D50_MM[1] * 1e-3),
+        E[1] / (RHO[0] * G * D50_MM[0] * 1e-3),
+    ]
+}
+
+/// The design's first `n` rows: K_p log-uniform over the box's range, then rho_p (uniform) and
+/// d50 (log-uniform) drawn until E_p = K_p rho_p g d50 lies in seed 004's range; E_w
+/// log-uniform; the rest uniform over the shipped space.
+pub fn design(n: usize, seed: u64) -> anyhow::Result<Vec<Vec<f64>>> {
+    let space = mbgc::space::Space::from_toml_str(SHIPPED_SPACE, "examples/space_shear_box.toml")?;
+    let mut rng = mbgc::sampling::rng(seed);
+    let [k_lo, k_hi] = k_range();
+    let mut rows = Vec::with_capacity(n);
+    for _ in 0..n {
+        let k = (k_lo.ln() + rng.random::<f64>() * (k_hi / k_lo).ln()).exp();
+        let (rho, d50, e) = loop {
+            let rho = RHO[0] + rng.random::<f64>() * (RHO[1] - RHO[0]);
+            let d50 = (D50_MM[0].ln() + rng.random::<f64>() * (D50_MM[1] / D50_MM[0]).ln()).exp();
+            let e = k * rho * G * d50 * 1e-3;
+            if (E[0]..=E[1]).contains(&e) {
+                break (rho, d50, e);
+            }
+        };
+        let e_w = (E[0].ln() + rng.random::<f64>() * (E[1] / E[0]).ln()).exp();
+        let row = PARAMS
+            .iter()
+            .map(|&name| {
+                Ok(match name {
+                    "E_p" => e,
+                    "E_w" => e_w,
+                    "rho_p" => rho,
+                    "d50" => d50,
+                    _ => {
+                        let p = space
+                            .get(name)
+                            .with_context(|| format!("the shipped space has no {name}"))?;
+                        p.from_unit(rng.random::<f64>())
+                    }
+                })
+            })
+            .collect::<anyhow::Result<Vec<f64>>>()?;
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// A finished run.
+#[derive(Clone, Debug)]
+struct Run {
+    row: usize,
+    params: Vec<f64>,
+    k: f64,
+    angle: f64,
+    density: f64,
+    settled: bool,
+    seconds: f64,
+}
+
+fn read_runs(path: &std::path::Path) -> anyhow::Result<Vec<Run>> {
+    let mut out: Vec<Run> = Vec::new();
+    for (i, c) in read_tsv(path, &header())?.into_iter().enumerate() {
+        let num = |j: usize| -> anyhow::Result<f64> {
+            c[j].parse().with_context(|| {
+                format!(
+                    "{}: line {}, field {}: expected a number, found {:?}",
+                    path.display(),
+                    i + 2,
+                    j + 1,
+                    c[j]
+                )
+            })
+        };
+        let row = num(0)? as usize;
+        if out.iter().any(|r| r.row == row) {
+            eprintln!(
+                "warning: {}: line {}: a second run of row {row}; left out",
+                path.display(),
+                i + 2
+            );
+            continue;
+        }
+        let p = PARAMS.len();
+        out.push(Run {
+            row,
+            params: (2..2 + p).map(num).collect::<anyhow::Result<_>>()?,
+            k: num(2 + p)?,
+            angle: num(3 + p)?,
+            density: num(4 + p)?,
+            settled: c[5 + p] == "1",
+            seconds: num(8 + p)?,
+        });
+    }
+    Ok(out)
+}
+
+/// Runs the study.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    if a.jobs == 0 {
+        anyhow::bail!("--jobs: expected at least 1");
+    }
+    let rows = design(a.n, a.seed)?;
+    let done: Vec<usize> = read_runs(&a.table)?.iter().map(|r| r.row).collect();
+    // Cheapest first (the cost grows with K_p): a study cut short has the soft rows done.
+    let mut todo: Vec<usize> = (0..rows.len()).filter(|i| !done.contains(i)).collect();
+    let k_of = |r: &[f64]| r[0] / (r[9] * G * r[10] * 1e-3);
+    todo.sort_by(|&i, &j| k_of(&rows[i]).total_cmp(&k_of(&rows[j])));
+    if !a.no_run {
+        eprintln!(
+            "stiffness validation: {} runs to do, {} at a time",
+            todo.len(),
+            a.jobs
+        );
+        let queue = Mutex::new(todo.into_iter().rev().collect::<Vec<_>>());
+        let write = Mutex::new(());
+        let failures = Mutex::new(Vec::<String>::new());
+        std::thread::scope(|s| {
+            for _ in 0..a.jobs {
+                s.spawn(|| {
+                    while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                        let result = run_row(a, &rows, i, &write);
+                        if let Err(e) = result {
+                            if let Ok(mut f) = failures.lock() {
+                                f.push(format!("row {i}: {e:#}"));
+                            }
+                        }
+                    }
+                });
+            }
+        });
+        let failures = failures.into_inner().unwrap_or_default();
+        for f in &failures {
+            eprintln!("failed: {f}");
+        }
+    }
+    let runs = read_runs(&a.table)?;
+    let mut text = String::new();
+    for m in &a.model {
+        let model = Metamodel::load(std::path::Path::new(m))?;
+        text.push_str(&report(a, m, &model, &runs));
+    }
+    crate::emit_report(
+        a.json,
+        a.report.as_deref(),
+        &text,
+        serde_json::json!({ "runs": runs.len() }),
+    )
+}
+
+fn run_row(a: &Args, rows: &[Vec<f64>], i: usize, write: &Mutex<()>) -> anyhow::Result<()> {
+    let p = &rows[i];
+    let pairs: Vec<(&str, f64)> = PARAMS.iter().copied().zip(p.iter().copied()).collect();
+    let sb = ShearBox {
+        // The rule of the shipped campaigns.
+        rest: RestRule::Kinetic,
+        ..ShearBox::default()
+    };
+    let seed = 1000 + i as u64;
+    let o = sb
+        .run(&ParamSet::from_pairs(&pairs), seed, &RunOptions::default())
+        .with_context(|| format!("row {i}"))?;
+    let k = p[0] / (p[9] * G * p[10] * 1e-3);
+    let line = format!(
+        "{i}\t{seed}\t{}\t{k:.6e}\t{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
+        p.iter()
+            .map(|v| format!("{v:?}"))
+            .collect::<Vec<_>>()
+            .join("\t"),
+        o.get("shear_angle").unwrap_or(f64::NAN),
+        o.get("bulk_density").unwrap_or(f64::NAN),
+        u8::from(o.diagnostics.settled),
+        o.diagnostics.steps,
+        o.diagnostics.particles,
+        o.diagnostics.wall_time_s
+    );
+    let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
+    eprintln!("{line}");
+    append(&a.table, &header(), &[line])
+}
+
+/// One scored row: the run, and per response (angle, density) the prediction and its stated
+/// error (NaN where the model does not answer).
+struct Scored<'a> {
+    run: &'a Run,
+    pred: [f64; 2],
+    err: [f64; 2],
+}
+
+fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
+    let mut w = String::new();
+    let [k_lo, k_hi] = k_range();
+    let _ = writeln!(
+        w,
+        "# `{label}` over seed 004's box of stiffness, density and size\n\nRegenerate with \
+         `cargo run --release -- bench stiffness-validation --n {} --seed {} --table {} --model \
+         {label}` (runs the rows not yet in the table, one core each, then scores).\n\nThe \
+         design: K_p log-uniform from {k_lo:.3e} to {k_hi:.3e} (E_p in [5e6, 5e8] Pa, rho_p in \
+         [250, 3000] kg/m3, d50 in [0.4, 25.6] mm), E_w log-uniform in [5e6, 5e8], every other \
+         parameter uniform over the shipped space; each row run once with the kinetic rest \
+         rule, never trained on. {} of {} rows run.\n",
+        a.n,
+        a.seed,
+        a.table.display(),
+        runs.len(),
+        a.n
+    );
+    let resp = |n: &str| model.responses.iter().find(|r| r.name == n);
+    let (Some(angle), Some(density)) = (resp("shear_angle"), resp("bulk_density")) else {
+        let _ = writeln!(
+            w,
+            "The model has no shear_angle and bulk_density: not scored.\n"
+        );
+        return w;
+    };
+    let names = model.input_names();
+    let scored: Vec<Scored> = runs
+        .iter()
+        .map(|r| {
+            let x: Vec<f64> = names
+                .iter()
+                .map(|n| {
+                    PARAMS
+                        .iter()
+                        .position(|p| p == n)
+                        .map_or(f64::NAN, |k| r.params[k])
+                })
+                .collect();
+            let inside = model.outside_domain(&x).is_empty();
+            let one = |rm| {
+                if inside {
+                    (
+                        model.predict_point(rm, &x),
+                        model.prediction_error(rm, &x).unwrap_or(f64::NAN),
+                    )
+                } else {
+                    (f64::NAN, f64::NAN)
+                }
+            };
+            let (a, b) = (one(angle), one(density));
+            Scored {
+                run: r,
+                pred: [a.0, b.0],
+                err: [a.1, b.1],
+            }
+        })
+        .collect();
+    let gd = model.groups.iter().find(|g| g.group.name == "K_p");
+    let domain = gd.map_or([f64::NAN; 2], |g| g.domain);
+    let range = gd.map_or([f64::NAN; 2], |g| model.group_range(g));
+    let noise = [angle.replicate_sd, density.replicate_sd];
+    let _ = writeln!(
+        w,
+        "The model's training runs span K_p {:.3e} to {:.3e}; it answers from {:.3e} to {:.3e}{}. \
+         Replicate noise (sd of one run): {} deg, {} kg/m3.\n",
+        domain[0],
+        domain[1],
+        range[0],
+        range[1],
+        if model.rigid_limit.is_some() {
+            " (its rigid limit)"
+        } else {
+            ""
+        },
+        noise[0].map_or("-".into(), |v| format!("{v:.3}")),
+        noise[1].map_or("-".into(), |v| format!("{v:.3}")),
+    );
+    let _ = writeln!(
+        w,
+        "| K_p band | rows | answered | angle RMSE (deg) | / noise | within 2 stated errors | \
+         density RMSE (kg/m3) | / noise | within 2 stated errors |\n|---|---|---|---|---|---|---|\
+         ---|---|"
+    );
+    let bands: [(&str, f64, f64); 4] = [
+        ("softer than the training runs", 0.0, domain[0]),
+        ("inside the training runs", domain[0], domain[1]),
+        ("up to 10x stiffer", domain[1], 10.0 * domain[1]),
+        ("more than 10x stiffer", 10.0 * domain[1], f64::INFINITY),
+    ];
+    let all = ("all", 0.0, f64::INFINITY);
+    for (name, lo, hi) in bands.iter().chain(std::iter::once(&all)) {
+        let rows: Vec<&Scored> = scored
+            .iter()
+            .filter(|s| s.run.k >= *lo && s.run.k < *hi)
+            .collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let answered = rows.iter().filter(|s| s.pred[1].is_finite()).count();
+        let mut cells = Vec::new();
+        for (r, sd) in noise.iter().enumerate() {
+            let obs = |s: &Scored| [s.run.angle, s.run.density][r];
+            let miss: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|s| s.pred[r].is_finite() && obs(s).is_finite())
+                .map(|s| (obs(s) - s.pred[r], s.err[r]))
+                .collect();
+            if miss.is_empty() {
+                cells.extend(["-".to_string(), "-".into(), "-".into()]);
+                continue;
+            }
+            let rmse = (miss.iter().map(|m| m.0 * m.0).sum::<f64>() / miss.len() as f64).sqrt();
+            let covered = miss.iter().filter(|m| m.0.abs() <= 2.0 * m.1).count();
+            cells.push(format!("{rmse:.3}"));
+            cells.push(sd.map_or("-".into(), |sd| format!("{:.2}", rmse / sd)));
+            cells.push(format!("{covered} of {}", miss.len()));
+        }
+        let _ = writeln!(
+            w,
+            "| {name} | {} | {answered} | {} |",
+            rows.len(),
+            cells.join(" | ")
+        );
+    }
+    let _ = writeln!(
+        w,
+        "\n\"Within 2 stated errors\": the miss is at most twice the error the model states at \
+         that point (`mbgc predict`'s `_error` column: its validation RMSE, which holds one run's \
+         noise, and beyond its stiffness data the rigid limit's scatter).\n"
+    );
+    let _ = writeln!(
+        w,
+        "## Cost per run across K_p\n\n| K_p | rows | seconds per run (mean) | not settled \
+         |\n|---|---|---|---|"
+    );
+    let decades = (k_lo.log10().floor() as i32)..=(k_hi.log10().floor() as i32);
+    for d in decades {
+        let (lo, hi) = (10f64.powi(d), 10f64.powi(d + 1));
+        let rs: Vec<&Run> = runs.iter().filter(|r| r.k >= lo && r.k < hi).collect();
+        if rs.is_empty() {
+            continue;
+        }
+        let _ = writeln!(
+            w,
+            "| 1e{d} to 1e{} | {} | {:.0} | {} |",
+            d + 1,
+            rs.len(),
+            rs.iter().map(|r| r.seconds).sum::<f64>() / rs.len() as f64,
+            rs.iter().filter(|r| !r.settled).count()
+        );
+    }
+    let _ = writeln!(w);
+    w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_design_fills_the_box_and_extends_with_its_first_rows_kept() {
+        let d = design(200, 40).unwrap();
+        let again = design(210, 40).unwrap();
+        assert_eq!(d[..], again[..200], "a larger n keeps the first rows");
+        let [k_lo, k_hi] = k_range();
+        let mut ks = Vec::new();
+        for r in &d {
+            assert!((E[0]..=E[1]).contains(&r[0]) && (E[0]..=E[1]).contains(&r[1]));
+            assert!((RHO[0]..=RHO[1]).contains(&r[9]));
+            assert!((D50_MM[0]..=D50_MM[1]).contains(&r[10]));
+            let k = r[0] / (r[9] * G * r[10] * 1e-3);
+            assert!(k >= k_lo * (1.0 - 1e-12) && k <= k_hi * (1.0 + 1e-12));
+            ks.push((k / k_lo).log10() / (k_hi / k_lo).log10());
+        }
+        // Log-uniform in K_p: each fifth of the decades holds about a fifth of the rows.
+        for q in 0..5 {
+            let n = ks
+                .iter()
+                .filter(|u| **u >= q as f64 / 5.0 && **u < (q + 1) as f64 / 5.0)
+                .count();
+            assert!((20..=60).contains(&n), "fifth {q}: {n} of 200");
+        }
+    }
+}
