@@ -169,8 +169,12 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
         "The model's campaign ran {} from {:.4e} to {:.4e}. Beyond, it now answers from {:.4e} \
          to {:.4e}: the equation on the edge of its range plus a curve measured along {} lines \
          of DEM runs that vary only the stiffness (E_p = E_w) through points of the space ({}; \
-         rho_p 2600 kg/m3, d50 8 mm, the kinetic rest rule of the campaign). Each curve's \
-         scatter (sd) is added to the response's model error wherever it is used. Source: {}.\n",
+         rho_p 2600 kg/m3, d50 8 mm, the kinetic rest rule of the campaign). A knot's scatter is \
+         the lines' rms deviation from the curve (n - 1 degrees of freedom); its sd is that \
+         with the runs' own noise taken off (one run's variance from the model's replicate sd, \
+         times 1 / runs at the edge + 1 / runs at the knot), because a prediction's error holds \
+         one run's noise already. The sd is added to the response's model error wherever the \
+         curve is used. Source: {}.\n",
         lim.group,
         domain[0],
         domain[1],
@@ -201,7 +205,8 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
         let _ = writeln!(
             w,
             "## {}, {} than the data\n\nForm: **{}**. Leave-one-line-out error: shift {}, slope \
-             {}.\n\n| {} | decades beyond | lines | {} | sd |\n|---|---|---|---|---|",
+             {}.\n\n| {} | decades beyond | lines | {} | scatter | sd (noise taken off) \
+             |\n|---|---|---|---|---|---|",
             c.response,
             if c.stiff { "stiffer" } else { "softer" },
             match c.form {
@@ -224,10 +229,11 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
             };
             let _ = writeln!(
                 w,
-                "| {:.3e} | {:+.3} | {} | {value} | {:.3} |",
+                "| {:.3e} | {:+.3} | {} | {value} | {:.3} | {:.3} |",
                 edge * 10f64.powf(k.decades),
                 k.decades,
                 k.lines,
+                k.scatter * scale,
                 k.sd * scale
             );
         }

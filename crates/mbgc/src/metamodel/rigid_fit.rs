@@ -139,7 +139,8 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
 }
 
 /// One line's shifts of response `r` beyond the edge `edge` (on the stiff or soft side), in the
-/// fitted response's unit; `None` without a run at the edge.
+/// fitted response's unit, with the variance the runs' noise gives each (from the model's
+/// replicate sd); `None` without a run at the edge.
 fn line_shifts(
     model: &Metamodel,
     line: &Line,
@@ -164,8 +165,9 @@ fn line_shifts(
             None => means.push((*k, v, 1)),
         }
     }
-    let means: Vec<(f64, f64)> = means.iter().map(|m| (m.0, m.1 / m.2 as f64)).collect();
-    let at_edge = means
+    let means: Vec<(f64, f64, usize)> =
+        means.iter().map(|m| (m.0, m.1 / m.2 as f64, m.2)).collect();
+    let &(_, at_edge, n_edge) = means
         .iter()
         .filter(|m| (m.0 / edge).log10().abs() < EDGE_DECADES)
         .min_by(|a, b| {
@@ -173,8 +175,7 @@ fn line_shifts(
                 .log10()
                 .abs()
                 .total_cmp(&(b.0 / edge).log10().abs())
-        })?
-        .1;
+        })?;
     // The model's inputs on the edge: the point's, the particle (and wall) moved along.
     let gd = model.groups.iter().find(|g| {
         g.group
@@ -206,14 +207,26 @@ fn line_shifts(
     let (_, g) = model.equation_value_and_gradient(resp, &x)?;
     let slope = g[k_along] * x[k_along] * std::f64::consts::LN_10
         + wall_along.map_or(0.0, |w| g[w] * x[w] * std::f64::consts::LN_10);
-    let shifts: Vec<(f64, f64)> = means
+    // One run's noise variance in the fitted unit; unknown noise is taken as none (the
+    // scatter then keeps it, which errs on the safe side).
+    let var = resp.replicate_sd.map_or(0.0, |sd| (sd / factor).powi(2));
+    let beyond: Vec<&(f64, f64, usize)> = means
         .iter()
-        .map(|&(k, v)| ((k / edge).log10(), (v - at_edge) / factor))
-        .filter(|(d, _)| d.abs() >= EDGE_DECADES && (*d > 0.0) == stiff)
+        .filter(|m| {
+            let d = (m.0 / edge).log10();
+            d.abs() >= EDGE_DECADES && (d > 0.0) == stiff
+        })
         .collect();
     Some(LineShifts {
         label: line.label.clone(),
         slope: slope / factor,
-        shifts,
+        shifts: beyond
+            .iter()
+            .map(|&&(k, v, _)| ((k / edge).log10(), (v - at_edge) / factor))
+            .collect(),
+        noise: beyond
+            .iter()
+            .map(|&&(_, _, n)| var * (1.0 / n_edge as f64 + 1.0 / n as f64))
+            .collect(),
     })
 }

@@ -16,9 +16,10 @@
 //!   decades, so a material whose response still moved at the edge moves on, one that had
 //!   stopped stays.
 //!
-//! The standard deviation at a knot is the lines' scatter about the curve: it holds how much
-//! the shift differs between materials and the runs' noise, and is added to the model's own
-//! error wherever the curve is used. Past the last measured knot the model does not answer.
+//! The standard deviation at a knot is the lines' scatter about the curve with the runs' own
+//! noise taken off: how much the shift differs between materials. It is added to the model's
+//! own error (which holds one run's noise) wherever the curve is used. Past the last measured
+//! knot the model does not answer.
 
 use serde::{Deserialize, Serialize};
 
@@ -44,8 +45,12 @@ pub struct Knot {
     /// The shift (form `shift`, in the fitted response's unit) or the length in decades (form
     /// `slope`).
     pub value: f64,
-    /// The lines' scatter about the curve, in the fitted response's unit.
+    /// The lines' scatter about the curve with the runs' own noise taken off (in the fitted
+    /// response's unit): how far a material's shift may lie from the curve. A prediction's
+    /// error holds one run's noise already.
     pub sd: f64,
+    /// The lines' scatter about the curve as measured, noise included.
+    pub scatter: f64,
     /// Lines measured here.
     pub lines: usize,
 }
@@ -108,6 +113,9 @@ pub struct LineShifts {
     /// `(decades beyond the edge, measured value minus the value at the edge, divided by the
     /// response's factor)`, with `decades` on one side only.
     pub shifts: Vec<(f64, f64)>,
+    /// The variance each shift has from the runs' noise alone (one run's variance times
+    /// 1 / runs at the edge + 1 / runs there), in the fitted unit squared; parallel to `shifts`.
+    pub noise: Vec<f64>,
 }
 
 /// Decades are matched across lines to this precision (lines run at the same values of K).
@@ -127,28 +135,32 @@ impl Curve {
         let at = |l: &LineShifts, x: f64| {
             l.shifts
                 .iter()
-                .find(|s| (s.0 - x).abs() < SAME_DECADE && s.1.is_finite())
-                .map(|s| s.1)
+                .zip(&l.noise)
+                .find(|(s, _)| (s.0 - x).abs() < SAME_DECADE && s.1.is_finite())
+                .map(|(s, v)| (s.1, *v))
         };
         let mut fits: [Vec<Knot>; 2] = [Vec::new(), Vec::new()];
         let mut loo: [(f64, usize, bool); 2] = [(0.0, 0, true), (0.0, 0, true)];
         for &x in &xs {
-            let here: Vec<(f64, f64)> = lines
+            let with_noise: Vec<(f64, f64, f64)> = lines
                 .iter()
-                .filter_map(|l| at(l, x).map(|d| (l.slope, d)))
+                .filter_map(|l| at(l, x).map(|(d, v)| (l.slope, d, v)))
                 .collect();
-            if here.len() < 2 {
+            if with_noise.len() < 2 {
                 continue;
             }
+            let here: Vec<(f64, f64)> = with_noise.iter().map(|p| (p.0, p.1)).collect();
+            let noise = with_noise.iter().map(|p| p.2).sum::<f64>() / here.len() as f64;
             for (k, form) in [Form::Shift, Form::Slope].into_iter().enumerate() {
-                let Some((value, sd)) = knot(form, &here) else {
+                let Some((value, scatter)) = knot(form, &here) else {
                     loo[k].2 = false;
                     continue;
                 };
                 fits[k].push(Knot {
                     decades: x,
                     value,
-                    sd,
+                    sd: (scatter * scatter - noise).max(0.0).sqrt(),
+                    scatter,
                     lines: here.len(),
                 });
                 for i in 0..here.len() {
@@ -321,7 +333,7 @@ impl RigidLimit {
             let mut last = 0.0;
             for (j, k) in c.knots.iter().enumerate() {
                 let field = format!("rigid_limit.curves[{i}].knots[{j}]");
-                if !(k.value.is_finite() && k.sd.is_finite() && k.sd >= 0.0) {
+                if !(k.value.is_finite() && k.sd.is_finite() && k.sd >= 0.0 && k.scatter >= 0.0) {
                     return bad(field, "a finite value and a sd of at least 0");
                 }
                 if (k.decades > 0.0) != c.stiff || k.decades.abs() <= last {
@@ -346,6 +358,7 @@ mod tests {
             label: label.into(),
             slope,
             shifts: shifts.to_vec(),
+            noise: vec![0.0; shifts.len()],
         }
     }
 
@@ -387,6 +400,17 @@ mod tests {
         assert_eq!(c.leave_one_out.slope, None);
         assert_eq!(c.knots[0].value, 2.0);
         assert!((c.knots[0].sd - 2f64.sqrt()).abs() < 1e-12);
+        // The runs' noise is taken off the scatter: a variance of 1.5 of the 2 measured.
+        let noisy: Vec<LineShifts> = lines
+            .iter()
+            .map(|l| LineShifts {
+                noise: vec![1.5; l.shifts.len()],
+                ..l.clone()
+            })
+            .collect();
+        let c = Curve::fit("angle", true, &noisy).unwrap();
+        assert!((c.knots[0].sd - 0.5f64.sqrt()).abs() < 1e-12);
+        assert!((c.knots[0].scatter - 2f64.sqrt()).abs() < 1e-12);
         // Only one line below the edge: no soft curve.
         assert!(Curve::fit("angle", false, &lines).is_none());
     }
@@ -401,6 +425,7 @@ mod tests {
                 decades: 2.0,
                 value: -10.0,
                 sd: 4.0,
+                scatter: 5.0,
                 lines: 3,
             }],
             leave_one_out: LeaveOneOut {
