@@ -283,32 +283,52 @@ fn bad_measurement_sets_name_the_file_the_sample_and_the_field() {
     assert!(e.contains("fixed.e_pp") && e.contains("set.toml"), "{e}");
 }
 
-/// A measurement set whose fixed values put a sample's stiffness group outside the model's
-/// training range is told which group, its value and the range (it used to end in "tmcmc: the
+/// A measurement set whose fixed values put a sample's stiffness group beyond the model's
+/// training runs is answered by the model's rigid limit when the stiffness lines reach it, and
+/// told which group, its value and the range when they do not (it used to end in "tmcmc: the
 /// likelihood is zero (-inf) at all 2000 prior samples").
 #[test]
-fn a_group_outside_the_model_is_named_not_a_zero_likelihood() {
+fn a_group_beyond_the_training_runs_is_answered_by_the_rigid_limit_or_named() {
     let dir = tempfile::tempdir().unwrap();
-    let set = std::fs::read_to_string(concat!(
+    let control = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/examples/measurements/control.toml"
     ))
     .unwrap()
-    .replace("E_p = 5e6", "E_p = 5e7")
-    .replace("E_w = 5e6", "E_w = 5e7")
     .replace("mu_r_pw = 0\n", "mu_r_pw = 0.3\n");
-    let path = dir.path().join("stiff.toml");
-    std::fs::write(&path, set).unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mbgc"))
-        .args(["diagnose", "--measurements", path.to_str().unwrap()])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
+    let run = |set: String| {
+        let path = dir.path().join("stiff.toml");
+        std::fs::write(&path, set).unwrap();
+        std::process::Command::new(env!("CARGO_BIN_EXE_mbgc"))
+            .args([
+                "diagnose",
+                "--measurements",
+                path.to_str().unwrap(),
+                "--model",
+                "models/shear_box.json",
+                "--samples",
+                "300",
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap()
+    };
+    // Ten times stiffer (K_p 2.5e5 to 9.8e5, beyond the runs' 1.94e5): answered.
+    let o = run(control
+        .replace("E_p = 5e6", "E_p = 5e7")
+        .replace("E_w = 5e6", "E_w = 5e7"));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("chi^2/dof"), "{text}");
+    // A hundred times stiffer and finer (K_p 3.9e7 at 0.5 mm): past the lines, named.
+    let o = run(control
+        .replace("E_p = 5e6", "E_p = 5e8")
+        .replace("E_w = 5e6", "E_w = 5e8")
+        .replace("d50_mm = 2,", "d50_mm = 0.5,"));
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        e.contains("K_p = 101.9 E_p / (rho_p d50) is 9.8016e5")
-            && e.contains("[9.8272e3, 1.9436e5]"),
+        e.contains("K_p = 101.9 E_p / (rho_p d50) is 3.9206e7") && e.contains("[6.5000e3, "),
         "{e}"
     );
     assert!(!e.contains("likelihood is zero"), "{e}");

@@ -235,8 +235,8 @@ fn train_runs_as_a_library_call_and_reports_to_its_observer() {
     assert!(train(&few, &log).unwrap_err().to_string().contains("--n 3"));
 }
 
-/// A material whose fixed values put the stiffness group outside the shipped model's range is
-/// told so by name, value and range (it used to read "the constraints [] cannot be met"), and
+/// A material whose fixed values put the stiffness group outside the shipped model's range (its
+/// training runs and the stiffness lines of its rigid limit) is told so by name, value and range (it used to read "the constraints [] cannot be met"), and
 /// names the model lacks are said to be missing, not listed as if expected.
 #[test]
 fn out_of_range_groups_and_unknown_names_are_explained() {
@@ -250,14 +250,20 @@ fn out_of_range_groups_and_unknown_names_are_explained() {
             .unwrap()
             .replace(
                 "sieve = \"sieve_gravel_8_16.csv\"",
-                "d50_mm = 2.0\nsigma_ln = 0.26",
-            );
+                "d50_mm = 0.5\nsigma_ln = 0.26",
+            )
+            .replace("E_p = 4e7", "E_p = 5e8")
+            .replace("E_w = 4e7", "E_w = 5e8");
+    // K_p 3.9e7: beyond the training runs (1.94e5) and the stiffness lines of the rigid limit.
     let fine = Material::from_toml_str(&gravel, "fine.toml").unwrap();
     let e = session::run(&fine, &model, "shear_box", &SessionOptions::default()).unwrap_err();
     let text = e.to_string();
     assert!(matches!(e, Error::OutOfDomain { .. }), "{e:?}");
+    let reach = model.group_range(&model.groups[0]);
     assert!(
-        text.contains("K_p = 101.9 E_p / (rho_p d50)") && text.contains("[9.8272e3, 1.9436e5]"),
+        text.contains("K_p = 101.9 E_p / (rho_p d50)")
+            && text.contains(&format!("[{:.4e}, {:.4e}]", reach[0], reach[1]))
+            && text.contains("mbgc diagnose --build"),
         "{text}"
     );
     let unknown = Material::from_toml_str(

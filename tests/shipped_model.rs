@@ -105,3 +105,87 @@ fn diagnose_names_the_hidden_cohesion_and_the_extended_model_recovers_it() {
         "{verdict}"
     );
 }
+
+/// Seed 004's box of E_p, E_w (5e6-5e8 Pa), rho_p (250-3000 kg/m3) and d50 (0.4-25.6 mm), every
+/// other parameter in the shipped model's ranges: at 32 seeded points, a point the model
+/// answers gets finite predictions, each with its error stated, and a calibration of its own
+/// predictions; a point it does not answer is refused by the group, its value and the range
+/// (issue 40). The share answered is what the model's stiffness range and rigid limit cover.
+#[test]
+fn every_point_of_seed_004s_box_is_answered_with_its_error_or_refused_by_name() {
+    use mbgc::calibrate::session::{self, SessionOptions};
+    use mbgc::material::Material;
+    use rand::RngExt as _;
+    let model = mbgc::metamodel::Metamodel::load(std::path::Path::new("models/shear_box.json"))
+        .expect("the shipped model loads");
+    let names = model.input_names();
+    let mut rng = mbgc::sampling::rng(40);
+    let log_uniform = |u: f64, lo: f64, hi: f64| (lo.ln() + u * (hi / lo).ln()).exp();
+    let (mut answered, mut refused) = (0, 0);
+    for point in 0..32 {
+        let x: Vec<f64> = model
+            .inputs
+            .iter()
+            .map(|i| {
+                let u: f64 = rng.random();
+                match i.name.as_str() {
+                    "E_p" | "E_w" => log_uniform(u, 5e6, 5e8),
+                    "rho_p" => 250.0 + u * 2750.0,
+                    "d50" => log_uniform(u, 0.4, 25.6),
+                    _ => i.domain[0] + u * (i.domain[1] - i.domain[0]),
+                }
+            })
+            .collect();
+        let outside = model.outside_domain(&x);
+        let mut fixed = String::from("[fixed]\n");
+        for (n, v) in names.iter().zip(&x) {
+            if !["mu_pp", "mu_r_pp", "d50", "sigma_ln"].contains(&n.as_str()) {
+                fixed.push_str(&format!("{n} = {v:?}\n"));
+            }
+        }
+        let at = |n: &str| x[names.iter().position(|m| m == n).unwrap()];
+        let psd = format!(
+            "[psd]\nd50_mm = {:?}\nsigma_ln = {:?}\n",
+            at("d50"),
+            at("sigma_ln")
+        );
+        if outside.is_empty() {
+            answered += 1;
+            let mut measured = String::from("[measured]\n");
+            for r in &model.responses {
+                let y = model.predict_point(r, &x);
+                let e = model.prediction_error(r, &x);
+                assert!(y.is_finite(), "point {point}: {} = {y} at {x:?}", r.name);
+                assert!(
+                    e.is_some_and(|e| e.is_finite() && e > 0.0),
+                    "point {point}: {} states no error ({e:?}) at {x:?}",
+                    r.name
+                );
+                measured.push_str(&format!("{} = {{ value = {y:?}, sd = 1.0 }}\n", r.name));
+            }
+            let text = format!("{measured}{psd}{fixed}");
+            let m = Material::from_toml_str(&text, "point.toml").unwrap();
+            let s = session::run(&m, &model, "shear_box", &SessionOptions::default())
+                .unwrap_or_else(|e| panic!("point {point}: calibrate: {e}\n{text}"));
+            assert!(!s.calibration.optima.is_empty());
+        } else {
+            refused += 1;
+            let (name, v, range) = outside[0];
+            assert!(
+                ["K_p", "K_w"].contains(&name),
+                "point {point}: only a stiffness group may be out of range, not {name} = {v}"
+            );
+            let text = format!("[measured]\nshear_angle = {{ value = 30, sd = 1 }}\n{psd}{fixed}");
+            let m = Material::from_toml_str(&text, "point.toml").unwrap();
+            let e = session::run(&m, &model, "shear_box", &SessionOptions::default())
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(name) && e.contains(&format!("{:.4e}", range[1])),
+                "point {point}: {e}"
+            );
+        }
+    }
+    eprintln!("{answered} of 32 points answered, {refused} refused by name");
+    assert!(answered > 0);
+}

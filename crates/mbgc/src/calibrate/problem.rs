@@ -240,13 +240,45 @@ impl<'m> Problem<'m> {
                 }
             }
         }
-        // A group whose inputs are all fixed must lie in its domain already.
+        // A group whose inputs are all fixed must lie in its domain already; one with free
+        // inputs must be able to reach it from their domains (or no start has a prediction).
         for gd in &model.groups {
             let parts = &gd.group.monomial.powers;
             let values: Option<Vec<f64>> = parts
                 .iter()
                 .map(|(n, _)| names.iter().position(|m| m == n).and_then(|k| fixed[k]))
                 .collect();
+            if values.is_none() {
+                let range = model.group_range(gd);
+                let (mut lo, mut hi) =
+                    (gd.group.monomial.coefficient, gd.group.monomial.coefficient);
+                for (n, p) in parts {
+                    let Some(k) = names.iter().position(|m| m == n) else {
+                        continue;
+                    };
+                    let [a, b] = fixed[k].map_or(model.inputs[k].domain, |v| [v, v]);
+                    let (a, b) = (a.powf(*p), b.powf(*p));
+                    lo *= a.min(b);
+                    hi *= a.max(b);
+                }
+                if hi < range[0] || lo > range[1] {
+                    return Err(Error::out_of_domain(
+                        file,
+                        "fixed",
+                        format!(
+                            "{} = {} can only lie in [{lo:.4e}, {hi:.4e}] with the fixed values \
+                             and the free ones in their domains, which misses the model's range \
+                             [{:.4e}, {:.4e}] ({}): expected fixed values that let it inside; \
+                             for this material, build a local model (`mbgc diagnose --build`)",
+                            gd.group.name,
+                            gd.group.monomial.text(),
+                            range[0],
+                            range[1],
+                            gd.group.what
+                        ),
+                    ));
+                }
+            }
             if let Some(values) = values {
                 let v = gd
                     .group
