@@ -19,10 +19,15 @@ pub struct PredictArgs {
     /// Table with (at least) the model's input columns.
     #[arg(long)]
     pub data: PathBuf,
-    /// Output CSV: the input rows with, per response, its prediction and (where the model states
-    /// its error) `<response>_error`, the prediction's standard error in the response's unit.
+    /// Output CSV: the input rows with, per response, its prediction (and with --errors its
+    /// error).
     #[arg(long)]
     pub out: PathBuf,
+    /// Also write `<response>_error` after each prediction, where the model states its error:
+    /// the prediction's standard error in the response's unit (its error model or validation
+    /// RMSE; beyond its stiffness data, the rigid limit's scatter added).
+    #[arg(long)]
+    pub errors: bool,
     /// Standard output holds one JSON object; text goes to standard error.
     #[arg(long)]
     pub json: bool,
@@ -99,8 +104,7 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
                     model.prediction_error(r, &x)
                 })
                 .collect();
-            e.iter()
-                .any(Option::is_some)
+            (a.errors && e.iter().any(Option::is_some))
                 .then(|| e.iter().map(|v| v.unwrap_or(f64::NAN)).collect())
         })
         .collect();

@@ -466,7 +466,20 @@ fn fixed_values_that_put_a_group_outside_are_named_as_outside() {
         .replace("nu_p = 0.25", "nu_p = 0.25\nrho_p = 1000");
     let material = dir.path().join("m.toml");
     std::fs::write(&material, text).unwrap();
-    let e = fails(&["calibrate", "--material", s(&material)]);
+    // The shipped model without its rigid limit, so that K_p 3.7e5 lies outside its range.
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("models/shear_box.json")).unwrap())
+            .unwrap();
+    json.as_object_mut().unwrap().remove("rigid_limit");
+    let model = dir.path().join("no_limit.json");
+    std::fs::write(&model, json.to_string()).unwrap();
+    let e = fails(&[
+        "calibrate",
+        "--material",
+        s(&material),
+        "--model",
+        s(&model),
+    ]);
     assert!(
         e.contains("K_p")
             && e.contains("is not inside the model's range")

@@ -115,18 +115,37 @@ fn fit_predict_export_agree() {
     let mut rdr = csv::Reader::from_path(&pred_path).unwrap();
     assert_eq!(
         rdr.headers().unwrap().iter().collect::<Vec<_>>(),
-        ["E", "mu", "mu_r", "note", "y1", "y1_error", "y2", "y2_error"]
+        ["E", "mu", "mu_r", "note", "y1", "y2"]
     );
     let predicted: Vec<[f64; 2]> = rdr
         .records()
         .map(|r| {
             let r = r.unwrap();
-            // The error column is the test RMSE (the model has no error model).
-            let rmse = model.responses[0].test.unwrap().rmse;
-            assert_eq!(r[5].parse::<f64>().unwrap(), rmse);
-            [r[4].parse().unwrap(), r[6].parse().unwrap()]
+            [r[4].parse().unwrap(), r[5].parse().unwrap()]
         })
         .collect();
+    // With --errors each prediction is followed by its error: here the test RMSE (the model
+    // has no error model).
+    let with_errors = dir.path().join("pred_errors.csv");
+    ok(&[
+        "predict",
+        "--model",
+        s(&model_path),
+        "--data",
+        s(&points),
+        "--out",
+        s(&with_errors),
+        "--errors",
+    ]);
+    let mut rdr = csv::Reader::from_path(&with_errors).unwrap();
+    assert_eq!(
+        rdr.headers().unwrap().iter().collect::<Vec<_>>(),
+        ["E", "mu", "mu_r", "note", "y1", "y1_error", "y2", "y2_error"]
+    );
+    let rmse = model.responses[0].test.unwrap().rmse;
+    for r in rdr.records() {
+        assert_eq!(r.unwrap()[5].parse::<f64>().unwrap(), rmse);
+    }
     for (row, p) in rows.iter().zip(&predicted) {
         let truth = [
             3.0 * row[0] / (1.0 + row[1]) + 0.2 * row[2].ln(),

@@ -390,6 +390,29 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
             cells.join(" | ")
         );
     }
+    let refused: Vec<String> = runs
+        .iter()
+        .filter_map(|r| {
+            let x: Vec<f64> = names
+                .iter()
+                .map(|n| {
+                    PARAMS
+                        .iter()
+                        .position(|p| p == n)
+                        .map_or(f64::NAN, |k| r.params[k])
+                })
+                .collect();
+            model.outside_domain(&x).first().map(|(n, v, d)| {
+                format!(
+                    "row {}: {n} = {v:.3e} outside [{:.3e}, {:.3e}]",
+                    r.row, d[0], d[1]
+                )
+            })
+        })
+        .collect();
+    if !refused.is_empty() {
+        let _ = writeln!(w, "\nNot answered: {}.", refused.join("; "));
+    }
     let _ = writeln!(
         w,
         "\n\"Within 2 stated errors\": the miss is at most twice the error the model states at \

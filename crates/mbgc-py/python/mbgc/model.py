@@ -231,7 +231,10 @@ class Model:
     def to_numpy(self) -> Dict[str, NumpyEquation]:
         """Each response's equation as a vectorised numpy function of the physical inputs
         (see :class:`~mbgc.numpy_equations.NumpyEquation` for how to call it). Agrees with
-        :meth:`predict` to the last bits (``exp``/``log``/``tanh`` are numpy's)."""
+        :meth:`predict` to the last bits (``exp``/``log``/``tanh`` are numpy's) wherever the
+        dimensionless groups lie in their training range; beyond it, where a model with a rigid
+        limit reads the equations on the range's edge and adds the measured shift, these are
+        the equations alone."""
         if self._numpy is None:
             inputs = self.info["inputs"]
             self._numpy = {
