@@ -172,8 +172,11 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
          rho_p 2600 kg/m3, d50 8 mm, the kinetic rest rule of the campaign). A knot's scatter is \
          the lines' rms deviation from the curve (n - 1 degrees of freedom); its sd is that \
          with the runs' own noise taken off (one run's variance from the model's replicate sd, \
-         times 1 / runs at the edge + 1 / runs at the knot), because a prediction's error holds \
-         one run's noise already. The sd is added to the response's model error wherever the \
+         times 1 / runs at the edge + 1 / runs at the knot, at its 95 % lower bound), because a \
+         prediction's error holds one run's noise already, plus the curve value's own \
+         uncertainty (scatter^2 / lines). The lines all lie at rho_p 2600 and d50 8 mm: their \
+         scatter says nothing of how the shift might depend on density or size beyond K_p. The \
+         sd is added to the response's model error wherever the \
          curve is used. Source: {}.\n",
         lim.group,
         domain[0],
@@ -205,7 +208,7 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
         let _ = writeln!(
             w,
             "## {}, {} than the data\n\nForm: **{}**. Leave-one-line-out error: shift {}, slope \
-             {}.\n\n| {} | decades beyond | lines | {} | scatter | sd (noise taken off) \
+             {}.\n\n| {} | decades beyond | lines | {} | scatter | sd \
              |\n|---|---|---|---|---|---|",
             c.response,
             if c.stiff { "stiffer" } else { "softer" },

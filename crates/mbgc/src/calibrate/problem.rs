@@ -335,17 +335,21 @@ impl<'m> Problem<'m> {
         }
         if !model.groups.is_empty() {
             notes.push(format!(
-                "the model is fitted in {}: each kept inside the range of its training data",
+                "the model is fitted in {}: each kept inside the range it answers in (its \
+                 training data's, or its rigid limit's reach)",
                 model
                     .groups
                     .iter()
-                    .map(|g| format!(
-                        "{} = {} in [{:.3e}, {:.3e}]",
-                        g.group.name,
-                        g.group.monomial.text(),
-                        g.domain[0],
-                        g.domain[1]
-                    ))
+                    .map(|g| {
+                        let r = model.group_range(g);
+                        format!(
+                            "{} = {} in [{:.3e}, {:.3e}]",
+                            g.group.name,
+                            g.group.monomial.text(),
+                            r[0],
+                            r[1]
+                        )
+                    })
                     .collect::<Vec<_>>()
                     .join(", ")
             ));

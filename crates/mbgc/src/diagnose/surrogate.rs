@@ -96,7 +96,16 @@ impl Surrogate {
                 .collect(),
             error,
             predict: Box::new(move |r, x| mp.predict_point(&mp.responses[r], x)),
-            error_at: Box::new(move |r, x| me.error_at(&me.responses[r], x)),
+            // Beyond the stiffness data the rigid limit's sd joins the error (over the
+            // validation RMSE when the model has no error model).
+            error_at: Box::new(move |r, x| {
+                let rm = &me.responses[r];
+                if me.extrapolation_sd(rm, x) != 0.0 {
+                    me.prediction_error(rm, x)
+                } else {
+                    me.error_at(rm, x)
+                }
+            }),
             fixed_outside: Box::new(move |x| {
                 mf.groups
                     .iter()

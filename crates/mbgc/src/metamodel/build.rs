@@ -1411,7 +1411,7 @@ mod tests {
         let dens = &lm.responses[0];
         assert!(lm.extrapolation_sd(dens, &x) > 0.0);
         assert!(lm.extrapolation_sd(&lm.responses[1], &x) < 1e-9);
-        assert!(lm.error_at(dens, &x).unwrap() >= lm.extrapolation_sd(dens, &x));
+        assert!(lm.prediction_error(dens, &x).unwrap() >= lm.extrapolation_sd(dens, &x));
         // Past the stiffest line the model does not answer.
         let far = [300.0 * hi * 8000.0, 2000.0, 4.0, 0.5];
         assert!(lm.outside_domain(&far).iter().any(|o| o.0 == "K"));

@@ -516,13 +516,22 @@ impl Metamodel {
             lim.validate(&file)?;
             let pairs = std::iter::once((&lim.group, &lim.along))
                 .chain(lim.wall.as_ref().map(|(g, a)| (g, a)));
+            for c in &lim.curves {
+                if !m.responses.iter().any(|r| r.name == c.response) {
+                    return Err(Error::input(
+                        &file,
+                        "rigid_limit.curves",
+                        format!("a response of the model, got \"{}\"", c.response),
+                    ));
+                }
+            }
             for (g, a) in pairs {
                 if m.along_input(g, a).is_none() {
                     return Err(Error::input(
                         &file,
                         "rigid_limit",
                         format!(
-                            "a group of the model ({g}) and an input ({a}) that enters it alone                              with power 1"
+                            "a group of the model ({g}) and an input ({a}) that enters it alone with power 1"
                         ),
                     ));
                 }
@@ -895,7 +904,10 @@ impl Metamodel {
                 continue;
             };
             let value = self.group_value(&gd.group, x);
-            let d = decades_beyond(value, gd.domain);
+            // The slack of `outside_domain`: a training row read back a last bit beyond its
+            // edge is inside, and answered by the equation alone.
+            let slack = 1e-12 * gd.domain[0].abs().max(gd.domain[1].abs());
+            let d = decades_beyond(value, [gd.domain[0] - slack, gd.domain[1] + slack]);
             if d == 0.0 {
                 continue;
             }
@@ -938,7 +950,9 @@ impl Metamodel {
             Form::Slope => {
                 // The slope along the lines the curve was measured on, which move the wall
                 // with the particles; scaling an input by 10 moves its group one decade.
-                let (_, g) = self.equation_value_and_gradient(response, &clamped)?;
+                let Some((_, g)) = self.equation_value_and_gradient(response, &clamped) else {
+                    return Some(nan(clamped));
+                };
                 let along = std::iter::once((&lim.group, &lim.along))
                     .chain(lim.wall.as_ref().map(|(g, a)| (g, a)))
                     .filter_map(|(g, a)| self.along_input(g, a));
@@ -985,30 +999,28 @@ impl Metamodel {
     /// The equation's own standard error at `x` (physical inputs in `inputs` order), from its
     /// error model; `None` when it has none.
     ///
-    /// Beyond the data in the rigid limit's group it is read on the edge and the curve's
-    /// scatter is added (in quadrature); with no error model the validation RMSE stands for
-    /// it there (0 without one either), so that such a point always reports its larger error.
+    /// Beyond the data in the rigid limit's group it is read on the edge and the curve's sd is
+    /// added (in quadrature).
     pub fn error_at(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
-        match self.beyond(response, x) {
-            Some(b) => {
-                let own = response
-                    .error_model
-                    .as_ref()
-                    .map(|e| e.sd(&self.unit(&b.clamped)))
-                    .or_else(|| response.validation.or(response.test).map(|v| v.rmse))
-                    .unwrap_or(0.0);
-                Some(own.hypot(b.sd))
-            }
-            None => response.error_model.as_ref().map(|e| e.sd(&self.unit(x))),
-        }
+        let e = response.error_model.as_ref()?;
+        Some(match self.beyond(response, x) {
+            Some(b) => e.sd(&self.unit(&b.clamped)).hypot(b.sd),
+            None => e.sd(&self.unit(x)),
+        })
     }
 
     /// The error of a prediction at `x`: the equation's own error there ([`Metamodel::error_at`])
     /// or, without an error model, its validation (else test) RMSE; beyond the data in the
     /// rigid limit's group the limit's scatter is included. `None`: the model states no error.
     pub fn prediction_error(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
-        self.error_at(response, x)
-            .or_else(|| response.validation.or(response.test).map(|v| v.rmse))
+        self.error_at(response, x).or_else(|| {
+            let rmse = response.validation.or(response.test).map(|v| v.rmse);
+            let extra = self.extrapolation_sd(response, x);
+            match rmse {
+                Some(r) => Some(r.hypot(extra)),
+                None => (extra != 0.0).then_some(extra),
+            }
+        })
     }
 
     /// Fits each response's error model to its residuals on `validation` (a table of runs never

@@ -75,6 +75,7 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
         )));
     }
     let mut curves = Vec::new();
+    let mut used: Vec<String> = Vec::new();
     let mut reach = gd.domain;
     for (r, resp) in model.responses.iter().enumerate() {
         for stiff in [false, true] {
@@ -83,6 +84,11 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
                 .iter()
                 .filter_map(|l| line_shifts(model, l, r, k_along, wall_along, edge, stiff))
                 .collect();
+            for l in shifts.iter().filter(|l| !l.shifts.is_empty()) {
+                if !used.contains(&l.label) {
+                    used.push(l.label.clone());
+                }
+            }
             if let Some(c) = Curve::fit(&resp.name, stiff, &shifts) {
                 let last = edge * 10f64.powf(c.knots.last().map_or(0.0, |k| k.decades));
                 if stiff {
@@ -132,7 +138,8 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
         wall: fit.wall.map(|(g, a)| (g.to_string(), a.to_string())),
         reach,
         curves,
-        lines: lines.iter().map(|l| l.label.clone()).collect(),
+        // Only the lines with a run at an edge and beyond it: the others measured nothing.
+        lines: used,
         source: fit.source.clone(),
     });
     Ok(m)
@@ -207,9 +214,12 @@ fn line_shifts(
     let (_, g) = model.equation_value_and_gradient(resp, &x)?;
     let slope = g[k_along] * x[k_along] * std::f64::consts::LN_10
         + wall_along.map_or(0.0, |w| g[w] * x[w] * std::f64::consts::LN_10);
-    // One run's noise variance in the fitted unit; unknown noise is taken as none (the
-    // scatter then keeps it, which errs on the safe side).
-    let var = resp.replicate_sd.map_or(0.0, |sd| (sd / factor).powi(2));
+    // One run's noise variance in the fitted unit, at its 95 % lower bound (only what surely
+    // is noise is taken off); unknown noise is taken as none (the scatter then keeps it, which
+    // errs on the safe side).
+    let var = resp.replicate_sd.map_or(0.0, |sd| {
+        (super::noise::lower_bound(sd, resp.replicate_pairs) / factor).powi(2)
+    });
     let beyond: Vec<&(f64, f64, usize)> = means
         .iter()
         .filter(|m| {

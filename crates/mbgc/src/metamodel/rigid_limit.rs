@@ -45,9 +45,9 @@ pub struct Knot {
     /// The shift (form `shift`, in the fitted response's unit) or the length in decades (form
     /// `slope`).
     pub value: f64,
-    /// The lines' scatter about the curve with the runs' own noise taken off (in the fitted
-    /// response's unit): how far a material's shift may lie from the curve. A prediction's
-    /// error holds one run's noise already.
+    /// How far a material's shift may lie from the curve (in the fitted response's unit): the
+    /// lines' scatter about it with the runs' own noise taken off (a prediction's error holds
+    /// one run's noise already), plus the curve value's own uncertainty (scatter^2 / lines).
     pub sd: f64,
     /// The lines' scatter about the curve as measured, noise included.
     pub scatter: f64,
@@ -156,10 +156,14 @@ impl Curve {
                     loo[k].2 = false;
                     continue;
                 };
+                // How far a new material's shift lies from the curve: the lines' spread less
+                // the runs' noise, plus the uncertainty of the curve's value from n lines.
+                let n = here.len() as f64;
+                let sd2 = (scatter * scatter - noise).max(0.0) + scatter * scatter / n;
                 fits[k].push(Knot {
                     decades: x,
                     value,
-                    sd: (scatter * scatter - noise).max(0.0).sqrt(),
+                    sd: sd2.sqrt(),
                     scatter,
                     lines: here.len(),
                 });
@@ -333,7 +337,12 @@ impl RigidLimit {
             let mut last = 0.0;
             for (j, k) in c.knots.iter().enumerate() {
                 let field = format!("rigid_limit.curves[{i}].knots[{j}]");
-                if !(k.value.is_finite() && k.sd.is_finite() && k.sd >= 0.0 && k.scatter >= 0.0) {
+                if !(k.value.is_finite()
+                    && k.sd.is_finite()
+                    && k.sd >= 0.0
+                    && k.scatter >= 0.0
+                    && k.decades.is_finite())
+                {
                     return bad(field, "a finite value and a sd of at least 0");
                 }
                 if (k.decades > 0.0) != c.stiff || k.decades.abs() <= last {
@@ -399,7 +408,8 @@ mod tests {
         assert_eq!(c.form, Form::Shift);
         assert_eq!(c.leave_one_out.slope, None);
         assert_eq!(c.knots[0].value, 2.0);
-        assert!((c.knots[0].sd - 2f64.sqrt()).abs() < 1e-12);
+        assert!((c.knots[0].scatter - 2f64.sqrt()).abs() < 1e-12);
+        assert!((c.knots[0].sd - 3f64.sqrt()).abs() < 1e-12);
         // The runs' noise is taken off the scatter: a variance of 1.5 of the 2 measured.
         let noisy: Vec<LineShifts> = lines
             .iter()
@@ -409,7 +419,8 @@ mod tests {
             })
             .collect();
         let c = Curve::fit("angle", true, &noisy).unwrap();
-        assert!((c.knots[0].sd - 0.5f64.sqrt()).abs() < 1e-12);
+        // 2 - 1.5 of spread and 2 / 2 of the mean's uncertainty.
+        assert!((c.knots[0].sd - 1.5f64.sqrt()).abs() < 1e-12);
         assert!((c.knots[0].scatter - 2f64.sqrt()).abs() < 1e-12);
         // Only one line below the edge: no soft curve.
         assert!(Curve::fit("angle", false, &lines).is_none());

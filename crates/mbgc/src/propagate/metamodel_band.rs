@@ -141,9 +141,15 @@ pub fn through_metamodel(
             )
         } else if let Some(rmse) = rmse {
             (
-                Some(vec![rmse; points.len()]),
+                // The rigid limit's sd joins it at draws beyond the stiffness data.
+                Some(
+                    points
+                        .iter()
+                        .map(|x| model.prediction_error(m, x).unwrap_or(rmse))
+                        .collect(),
+                ),
                 format!(
-                    "its {} RMSE {}",
+                    "its {} RMSE {} (beyond its stiffness data with the rigid limit's sd)",
                     if m.validation.is_some() {
                         "validation"
                     } else {
