@@ -416,8 +416,8 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
     let _ = writeln!(
         w,
         "\n\"Within 2 stated errors\": the miss is at most twice the error the model states at \
-         that point (`mbgc predict`'s `_error` column: its validation RMSE, which holds one run's \
-         noise, and beyond its stiffness data the rigid limit's scatter).\n"
+         that point (the `_error` column of `mbgc predict --errors`: its validation RMSE, \
+         which holds one run's noise, and beyond its stiffness data the rigid limit's sd).\n"
     );
     let _ = writeln!(
         w,
