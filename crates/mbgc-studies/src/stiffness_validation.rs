@@ -257,6 +257,19 @@ fn run_row(a: &Args, rows: &[Vec<f64>], i: usize, write: &Mutex<()>) -> anyhow::
     append(&a.table, &header(), &[line])
 }
 
+/// A run's parameters in the order of the model's inputs `names` (NaN for one it lacks).
+fn model_point(names: &[String], r: &Run) -> Vec<f64> {
+    names
+        .iter()
+        .map(|n| {
+            PARAMS
+                .iter()
+                .position(|p| p == n)
+                .map_or(f64::NAN, |k| r.params[k])
+        })
+        .collect()
+}
+
 /// One scored row: the run, and per response (angle, density) the prediction and its stated
 /// error (NaN where the model does not answer).
 struct Scored<'a> {
@@ -295,15 +308,7 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
     let scored: Vec<Scored> = runs
         .iter()
         .map(|r| {
-            let x: Vec<f64> = names
-                .iter()
-                .map(|n| {
-                    PARAMS
-                        .iter()
-                        .position(|p| p == n)
-                        .map_or(f64::NAN, |k| r.params[k])
-                })
-                .collect();
+            let x = model_point(&names, r);
             let inside = model.outside_domain(&x).is_empty();
             let one = |rm| {
                 if inside {
@@ -393,15 +398,7 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
     let refused: Vec<String> = runs
         .iter()
         .filter_map(|r| {
-            let x: Vec<f64> = names
-                .iter()
-                .map(|n| {
-                    PARAMS
-                        .iter()
-                        .position(|p| p == n)
-                        .map_or(f64::NAN, |k| r.params[k])
-                })
-                .collect();
+            let x = model_point(&names, r);
             model.outside_domain(&x).first().map(|(n, v, d)| {
                 format!(
                     "row {}: {n} = {v:.3e} outside [{:.3e}, {:.3e}]",

@@ -933,18 +933,7 @@ impl Metamodel {
             return Some(nan(clamped));
         };
         let f0 = self.equation_at(response, &clamped);
-        let factor = response
-            .grouped
-            .as_ref()
-            .and_then(|g| g.factor.as_ref())
-            .map_or(1.0, |m| {
-                m.value(|n| {
-                    self.inputs
-                        .iter()
-                        .position(|i| i.name == n)
-                        .map_or(f64::NAN, |k| clamped[k])
-                })
-            });
+        let factor = self.factor_at(response, &clamped);
         let shift = match form {
             Form::Shift => v * factor,
             Form::Slope => {
@@ -968,6 +957,23 @@ impl Metamodel {
             value: f0 + shift,
             sd: sd * factor,
         })
+    }
+
+    /// The dimensional factor of a response fitted dimensionless (rho_p for the bulk density,
+    /// fitted as a solid fraction) at `x`; 1 for a response fitted as it is.
+    pub(super) fn factor_at(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        response
+            .grouped
+            .as_ref()
+            .and_then(|g| g.factor.as_ref())
+            .map_or(1.0, |m| {
+                m.value(|n| {
+                    self.inputs
+                        .iter()
+                        .position(|i| i.name == n)
+                        .map_or(f64::NAN, |k| x[k])
+                })
+            })
     }
 
     /// The rigid limit's scatter at `x` for `response` (0 inside the data or without a limit;

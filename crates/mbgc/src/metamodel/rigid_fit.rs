@@ -198,19 +198,7 @@ fn line_shifts(
         x[w] *= scale;
     }
     let resp = &model.responses[r];
-    let factor = resp
-        .grouped
-        .as_ref()
-        .and_then(|g| g.factor.as_ref())
-        .map_or(1.0, |f| {
-            f.value(|n| {
-                model
-                    .inputs
-                    .iter()
-                    .position(|i| i.name == n)
-                    .map_or(f64::NAN, |k| x[k])
-            })
-        });
+    let factor = model.factor_at(resp, &x);
     let (_, g) = model.equation_value_and_gradient(resp, &x)?;
     let slope = g[k_along] * x[k_along] * std::f64::consts::LN_10
         + wall_along.map_or(0.0, |w| g[w] * x[w] * std::f64::consts::LN_10);
