@@ -200,6 +200,39 @@ pub(crate) fn read_tsv(path: &Path, header: &str) -> anyhow::Result<Vec<Vec<Stri
     Ok(rows)
 }
 
+/// Runs `f` on every item of `todo`, in order, `jobs` at a time (one thread each), and returns
+/// the failures as text (each prefixed by `label` of its item); `f` gets a lock to hold while it
+/// appends its line to a shared table.
+pub(crate) fn run_queue<T: Send>(
+    jobs: usize,
+    todo: Vec<T>,
+    label: impl Fn(&T) -> String + Sync,
+    f: impl Fn(&T, &std::sync::Mutex<()>) -> anyhow::Result<()> + Sync,
+) -> Vec<String> {
+    use std::sync::Mutex;
+    let queue = Mutex::new(todo.into_iter().rev().collect::<Vec<_>>());
+    let write = Mutex::new(());
+    let failures = Mutex::new(Vec::<String>::new());
+    std::thread::scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|| {
+                while let Some(item) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                    if let Err(e) = f(&item, &write) {
+                        if let Ok(mut v) = failures.lock() {
+                            v.push(format!("{}{e:#}", label(&item)));
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap_or_default();
+    for f in &failures {
+        eprintln!("failed: {f}");
+    }
+    failures
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,11 +12,10 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::sync::Mutex;
 
 use anyhow::Context as _;
 
-use super::rest_tables::{append, read_tsv};
+use super::rest_tables::{append, read_tsv, run_queue};
 use super::shear_box_check::point;
 use super::shear_box_fill::mean_se;
 use mbgc::dem::contact::ModelClass;
@@ -290,47 +289,34 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         j.scene()?;
     }
     eprintln!("stiffness: {} runs to do, {} at a time", todo.len(), a.jobs);
-    let queue = Mutex::new(todo.into_iter().rev().collect::<Vec<_>>());
-    let write = Mutex::new(());
-    let failures = Mutex::new(Vec::<String>::new());
-    std::thread::scope(|s| {
-        for _ in 0..a.jobs {
-            s.spawn(|| {
-                while let Some(j) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                    let result = j.scene().and_then(|(sb, p)| {
-                        let o = sb
-                            .run(&p, j.seed, &RunOptions::default())
-                            .with_context(|| format!("{j:?}"))?;
-                        let line = format!(
-                            "{}\t{}\t{}\t{}\t{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
-                            j.point,
-                            j.bond,
-                            j.k,
-                            j.seed,
-                            o.get("shear_angle").unwrap_or(f64::NAN),
-                            o.get("bulk_density").unwrap_or(f64::NAN),
-                            u8::from(o.diagnostics.settled),
-                            o.diagnostics.steps,
-                            o.diagnostics.particles,
-                            o.diagnostics.wall_time_s
-                        );
-                        let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
-                        eprintln!("{line}");
-                        append(&a.table, HEADER, &[line])
-                    });
-                    if let Err(e) = result {
-                        if let Ok(mut f) = failures.lock() {
-                            f.push(format!("{e:#}"));
-                        }
-                    }
-                }
-            });
-        }
-    });
-    let failures = failures.into_inner().unwrap_or_default();
-    for f in &failures {
-        eprintln!("failed: {f}");
-    }
+    let failures = run_queue(
+        a.jobs,
+        todo,
+        |_| String::new(),
+        |j, write| {
+            j.scene().and_then(|(sb, p)| {
+                let o = sb
+                    .run(&p, j.seed, &RunOptions::default())
+                    .with_context(|| format!("{j:?}"))?;
+                let line = format!(
+                    "{}\t{}\t{}\t{}\t{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
+                    j.point,
+                    j.bond,
+                    j.k,
+                    j.seed,
+                    o.get("shear_angle").unwrap_or(f64::NAN),
+                    o.get("bulk_density").unwrap_or(f64::NAN),
+                    u8::from(o.diagnostics.settled),
+                    o.diagnostics.steps,
+                    o.diagnostics.particles,
+                    o.diagnostics.wall_time_s
+                );
+                let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
+                eprintln!("{line}");
+                append(&a.table, HEADER, &[line])
+            })
+        },
+    );
     let rows = read_rows(&a.table)?;
     let text = report(a, &rows);
     crate::emit_report(

@@ -15,7 +15,7 @@ use std::sync::Mutex;
 use anyhow::Context as _;
 use rand::RngExt as _;
 
-use super::rest_tables::{append, read_tsv};
+use super::rest_tables::{append, read_tsv, run_queue};
 use super::stiffness_dependence::SHIPPED_SPACE;
 use mbgc::experiments::shear_box::{RestRule, ShearBox};
 use mbgc::experiments::{Experiment, ParamSet, RunOptions};
@@ -190,27 +190,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             todo.len(),
             a.jobs
         );
-        let queue = Mutex::new(todo.into_iter().rev().collect::<Vec<_>>());
-        let write = Mutex::new(());
-        let failures = Mutex::new(Vec::<String>::new());
-        std::thread::scope(|s| {
-            for _ in 0..a.jobs {
-                s.spawn(|| {
-                    while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                        let result = run_row(a, &rows, i, &write);
-                        if let Err(e) = result {
-                            if let Ok(mut f) = failures.lock() {
-                                f.push(format!("row {i}: {e:#}"));
-                            }
-                        }
-                    }
-                });
-            }
-        });
-        let failures = failures.into_inner().unwrap_or_default();
-        for f in &failures {
-            eprintln!("failed: {f}");
-        }
+        run_queue(
+            a.jobs,
+            todo,
+            |i| format!("row {i}: "),
+            |&i, write| run_row(a, &rows, i, write),
+        );
     }
     let runs = read_runs(&a.table)?;
     let mut text = String::new();
