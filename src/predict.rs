@@ -138,6 +138,28 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
     let bytes = w.into_inner().context("writing CSV")?;
     write_atomic(&a.out, &bytes)?;
     let nan = preds.iter().flatten().filter(|v| !v.is_finite()).count();
+    // Rows beyond the stiffness data that the rigid limit answers: worth knowing, since their
+    // error is the limit's scatter on top of the equation's.
+    let limited = (0..rows)
+        .filter(|&row| {
+            let x: Vec<f64> = inputs.iter().map(|c| c[row]).collect();
+            model
+                .responses
+                .iter()
+                .any(|r| model.beyond(r, &x).is_some_and(|b| b.value.is_finite()))
+        })
+        .count();
+    if limited > 0 {
+        eprintln!(
+            "note: {limited} of {rows} rows lie beyond the model's stiffness data and are answered \
+             by its rigid limit (the equation on the data's edge plus a measured shift){}",
+            if a.errors {
+                ""
+            } else {
+                "; --errors writes each prediction's error"
+            }
+        );
+    }
     if !outside.is_empty() {
         eprintln!(
             "warning: {} of {rows} rows lie outside the model's valid domain (extrapolation); first: {}",
@@ -154,6 +176,7 @@ pub fn run(a: &PredictArgs) -> anyhow::Result<()> {
         "rows": rows,
         "responses": model.responses.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(),
         "outside_domain": outside.len(),
+        "rigid_limit": limited,
         "non_finite": nan,
     }))
 }

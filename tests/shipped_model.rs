@@ -189,3 +189,94 @@ fn every_point_of_seed_004s_box_is_answered_with_its_error_or_refused_by_name() 
     eprintln!("{answered} of 32 points answered, {refused} refused by name");
     assert!(answered > 0);
 }
+
+/// Beyond the data the rigid limit's scatter varies with the parameters, so L-BFGS minimises
+/// -2 ln L = chi^2 + 2 sum ln(sd / measured sd), and its gradient must be that function's: a
+/// central difference of the objective checks it, inside the data the term must vanish.
+#[test]
+fn beyond_the_data_the_objective_is_minus_two_ln_l_with_its_gradient() {
+    use mbgc::calibrate::Problem;
+    use mbgc::material::Material;
+    let model = mbgc::metamodel::Metamodel::load(std::path::Path::new("models/shear_box.json"))
+        .expect("the shipped model loads");
+    let names = model.input_names();
+    for (e, beyond) in [(2e7, false), (2e8, true)] {
+        // rho_p 2600, d50 8 mm: K_p 9.8e4 at E 2e7 (inside), 9.8e5 at 2e8 (beyond the edge).
+        let x: Vec<f64> = model
+            .inputs
+            .iter()
+            .map(|i| match i.name.as_str() {
+                "E_p" | "E_w" => e,
+                "rho_p" => 2600.0,
+                "d50" => 8.0,
+                _ => 0.5 * (i.domain[0] + i.domain[1]),
+            })
+            .collect();
+        let mut text = String::from("[measured]\n");
+        for r in &model.responses {
+            // Off the prediction, so that the residuals and their gradient are not zero.
+            let y = model.predict_point(r, &x) * 1.01;
+            text.push_str(&format!("{} = {{ value = {y:?}, sd = 0.5 }}\n", r.name));
+        }
+        let at = |n: &str| x[names.iter().position(|m| m == n).unwrap()];
+        text.push_str(&format!(
+            "[psd]\nd50_mm = 8.0\nsigma_ln = {:?}\n[fixed]\n",
+            at("sigma_ln")
+        ));
+        for (n, v) in names.iter().zip(&x) {
+            if !["mu_pp", "rho_p", "d50", "sigma_ln"].contains(&n.as_str()) {
+                text.push_str(&format!("{n} = {v:?}\n"));
+            }
+        }
+        let m = Material::from_toml_str(&text, "point.toml").unwrap();
+        let p = Problem::new(&model, &m).unwrap();
+        assert_eq!(p.free_names(), vec!["mu_pp", "rho_p"]);
+        let free = [at("mu_pp") * 1.1, 2500.0];
+        let (f, g) = p.objective(&free).expect("finite");
+        let chi2: f64 = p.residuals(&free).iter().map(|r| r * r).sum();
+        let sd_term = p.sd_term(&free);
+        assert!(
+            (f - chi2 - sd_term).abs() < 1e-9 * f,
+            "{f} vs {chi2} + {sd_term}"
+        );
+        if beyond {
+            assert!(sd_term > 0.1, "the limit's scatter counts: {sd_term}");
+        } else {
+            assert_eq!(sd_term, 0.0);
+        }
+        for j in 0..2 {
+            let h = 1e-5 * free[j];
+            let (mut lo, mut hi) = (free, free);
+            lo[j] -= h;
+            hi[j] += h;
+            let fd = (p.objective(&hi).unwrap().0 - p.objective(&lo).unwrap().0) / (2.0 * h);
+            assert!(
+                (g[j] - fd).abs() <= 1e-3 * fd.abs().max(1e-6 * f / free[j]),
+                "E {e}, parameter {j}: gradient {} against the difference {fd}",
+                g[j]
+            );
+        }
+    }
+}
+
+/// The limit's reach is stored in K_p's values; the wall's group is read at the same decades
+/// beyond its own edges (its data's edges differ from the particles' by a fraction of a percent).
+#[test]
+fn the_wall_group_reaches_as_many_decades_beyond_its_edges_as_the_particle_group() {
+    let model = mbgc::metamodel::Metamodel::load(std::path::Path::new("models/shear_box.json"))
+        .expect("the shipped model loads");
+    let lim = model
+        .rigid_limit
+        .as_ref()
+        .expect("the shipped model has a rigid limit");
+    let (wall, _) = lim.wall.as_ref().expect("and a wall group");
+    let group = |n: &str| model.groups.iter().find(|g| g.group.name == n).unwrap();
+    let (kp, kw) = (group(&lim.group), group(wall));
+    assert_ne!(kp.domain, kw.domain, "the test needs edges that differ");
+    let (rp, rw) = (model.group_range(kp), model.group_range(kw));
+    assert_eq!(rp, lim.reach);
+    for s in 0..2 {
+        let (dp, dw) = (rp[s] / kp.domain[s], rw[s] / kw.domain[s]);
+        assert!((dp / dw - 1.0).abs() < 1e-12, "side {s}: {dp} vs {dw}");
+    }
+}

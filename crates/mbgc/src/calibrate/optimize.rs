@@ -91,6 +91,9 @@ pub struct Optimum {
     /// chi^2 = sum of squared normalised residuals, the constraint penalty excluded: below about 1
     /// per measured response, the model matches the measurements within their sd.
     pub chi2: f64,
+    /// 2 sum ln(sd / measured sd): what the rigid limit's scatter adds to -2 ln L beyond the
+    /// model's data (0 inside). Optima are ranked by chi^2 plus this.
+    pub sd_term: f64,
     /// Sum of squared constraint and group-domain violations (0: feasible).
     pub violation: f64,
     /// The model's predictions of the measured responses, in [`Problem::targets`] order.
@@ -143,11 +146,13 @@ pub fn local(p: &Problem, u0: &[f64], max_iters: u64) -> Option<Optimum> {
     let violation = p.violation(&x);
     let residuals = p.residuals(&x);
     let chi2 = residuals.iter().map(|r| r * r).sum();
-    debug_assert!(chi2 <= chi2_total + 1e-9);
+    let sd_term = p.sd_term(&x);
+    debug_assert!(chi2 + sd_term <= chi2_total + 1e-9);
     Some(Optimum {
         predictions: p.predictions(&x),
         x,
         chi2,
+        sd_term,
         violation,
         residuals,
         starts: 1,
@@ -266,7 +271,8 @@ pub fn calibrate(p: &Problem, n_starts: usize, seed: u64) -> Calibration {
             .filter_map(|u| local(p, u, 500))
             .collect()
     };
-    found.sort_by(|a, b| (a.chi2 + a.violation * 1e6).total_cmp(&(b.chi2 + b.violation * 1e6)));
+    let rank = |o: &Optimum| o.chi2 + o.sd_term + o.violation * 1e6;
+    found.sort_by(|a, b| rank(a).total_cmp(&rank(b)));
     // Cluster: an optimum within 2 % of the box (unit distance) of a kept one, with a chi^2
     // within 1e-3 of it, is the same solution.
     let unit = |x: &[f64]| -> Vec<f64> {
@@ -275,10 +281,10 @@ pub fn calibrate(p: &Problem, n_starts: usize, seed: u64) -> Calibration {
             .map(|(j, v)| (v - p.lower[j]) / (p.upper[j] - p.lower[j]))
             .collect()
     };
-    let best_chi2 = found.first().map_or(f64::INFINITY, |o| o.chi2);
+    let best = found.first().map_or(f64::INFINITY, |o| o.chi2 + o.sd_term);
     let good: Vec<&Optimum> = found
         .iter()
-        .filter(|o| o.chi2 <= best_chi2 + 1.0 && o.violation < 1e-8)
+        .filter(|o| o.chi2 + o.sd_term <= best + 1.0 && o.violation < 1e-8)
         .collect();
     let solution_ranges = (0..n)
         .map(|j| Range {

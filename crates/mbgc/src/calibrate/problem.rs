@@ -541,6 +541,24 @@ impl<'m> Problem<'m> {
             for (j, &k) in self.free.iter().enumerate() {
                 g[j] += 2.0 * r * dy[k] / sd;
             }
+            // Beyond the data in the rigid limit's group the sd varies with the parameters: the
+            // Gaussian's normalisation 2 ln sd then enters -2 ln L, else a free parameter could
+            // lower chi^2 by moving where the limit's scatter is large. Measured from the target's
+            // own sd, so it is 0 (and the objective unchanged) inside the data.
+            if sd > t.sd {
+                f += 2.0 * (sd / t.sd).ln();
+                for (j, &k) in self.free.iter().enumerate() {
+                    let h = self.model.difference_step(k, x[k]);
+                    let (mut lo, mut hi) = (x.clone(), x.clone());
+                    lo[k] -= h;
+                    hi[k] += h;
+                    let dsd = (self.target_sd(t, &hi) - self.target_sd(t, &lo)) / (2.0 * h);
+                    if dsd.is_finite() {
+                        // d/dsd (r^2 + 2 ln sd) = (2 - 2 r^2) / sd.
+                        g[j] += (2.0 - 2.0 * r * r) * dsd / sd;
+                    }
+                }
+            }
         }
         // A group outside the range the model was fitted on is extrapolation, like an input
         // outside its bounds: kept out by a penalty on its log.
@@ -574,6 +592,22 @@ impl<'m> Problem<'m> {
             }
         }
         Some((f, g))
+    }
+
+    /// 2 sum ln(sd / measured sd) over the targets: the part of the objective (-2 ln L up to a
+    /// constant) that the rigid limit's scatter adds beyond the data; 0 inside.
+    pub fn sd_term(&self, free: &[f64]) -> f64 {
+        self.targets
+            .iter()
+            .zip(self.target_sds(free))
+            .map(|(t, sd)| {
+                if sd > t.sd {
+                    2.0 * (sd / t.sd).ln()
+                } else {
+                    0.0
+                }
+            })
+            .sum()
     }
 
     /// Normalised residuals `(prediction - measured) / sd`.

@@ -120,7 +120,7 @@ pub fn text(s: &Session, rest: &str) -> String {
         }
         line!(
             out,
-            "Range of each parameter over the equally good optima (chi2 within 1 of the best):"
+            "Range of each parameter over the equally good optima (-2 ln L within 1 of the best):"
         );
         for r in &cal.solution_ranges {
             line!(out, "  {} in [{:.4}, {:.4}]", r.name, r.min, r.max);

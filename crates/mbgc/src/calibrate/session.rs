@@ -312,19 +312,20 @@ pub fn run(
 }
 
 impl Session {
-    /// The best optimum (lowest chi^2): the calibrated parameter set.
+    /// The best optimum (lowest chi^2, plus the rigid limit's sd term beyond the model's
+    /// data): the calibrated parameter set.
     pub fn best(&self) -> &Optimum {
         &self.calibration.optima[0]
     }
 
-    /// The optima as good as the best (chi^2 within 1): points of one solution set when the
+    /// The optima as good as the best (-2 ln L within 1): points of one solution set when the
     /// data cannot fix every parameter.
     pub fn equally_good(&self) -> Vec<&Optimum> {
-        let limit = self.best().chi2 + 1.0;
+        let limit = self.best().chi2 + self.best().sd_term + 1.0;
         self.calibration
             .optima
             .iter()
-            .filter(|o| o.chi2 <= limit)
+            .filter(|o| o.chi2 + o.sd_term <= limit)
             .collect()
     }
 
@@ -506,7 +507,7 @@ impl Session {
                     "params": params,
                     "predicted": predicted,
                     "fits": self.fits(o),
-                    "objective": o.chi2,
+                    "objective": o.chi2 + o.sd_term,
                     "constraint_violation": o.violation,
                     "starts": o.starts,
                 })

@@ -870,13 +870,19 @@ impl Metamodel {
     /// the groups the limit extends.
     pub fn group_range(&self, gd: &GroupDomain) -> [f64; 2] {
         match &self.rigid_limit {
-            Some(lim)
-                if lim.group == gd.group.name
-                    || lim.wall.as_ref().is_some_and(|(g, _)| *g == gd.group.name) =>
-            {
+            Some(lim) if lim.group == gd.group.name => [
+                lim.reach[0].min(gd.domain[0]),
+                lim.reach[1].max(gd.domain[1]),
+            ],
+            Some(lim) if lim.wall.as_ref().is_some_and(|(g, _)| *g == gd.group.name) => {
+                // The reach is stored in the particle group's values; the wall's curves are
+                // read at the same decades beyond its own edges.
+                let Some(p) = self.groups.iter().find(|d| d.group.name == lim.group) else {
+                    return gd.domain;
+                };
                 [
-                    lim.reach[0].min(gd.domain[0]),
-                    lim.reach[1].max(gd.domain[1]),
+                    (gd.domain[0] * lim.reach[0] / p.domain[0]).min(gd.domain[0]),
+                    (gd.domain[1] * lim.reach[1] / p.domain[1]).max(gd.domain[1]),
                 ]
             }
             _ => gd.domain,
@@ -911,7 +917,8 @@ impl Metamodel {
             if d == 0.0 {
                 continue;
             }
-            reached &= lim.reaches(value);
+            let range = self.group_range(gd);
+            reached &= value >= range[0] && value <= range[1];
             let edge = if d > 0.0 { gd.domain[1] } else { gd.domain[0] };
             clamped[k] = x[k] * (edge / value);
             if wall {
@@ -1074,11 +1081,11 @@ impl Metamodel {
         if !b.value.is_finite() {
             return None;
         }
-        // The shift is linear between knots: central differences of relative step 1e-6 are
-        // exact up to round-off except on a knot, where they average the two sides.
+        // The shift is linear between knots: central differences are exact up to round-off
+        // except on a knot, where they average the two sides.
         let mut g = vec![0.0; x.len()];
         for (k, gk) in g.iter_mut().enumerate() {
-            let h = 1e-6 * x[k].abs().max(1e-12);
+            let h = self.difference_step(k, x[k]);
             let (mut lo, mut hi) = (x.to_vec(), x.to_vec());
             lo[k] -= h;
             hi[k] += h;
@@ -1093,6 +1100,18 @@ impl Metamodel {
             };
         }
         Some((b.value, g))
+    }
+
+    /// The step of a central difference in input `k` at `value`: 1e-6 of the value, or of a
+    /// thousandth of the input's domain where the value is near 0 (a friction at 0 would
+    /// otherwise get a step lost in round-off).
+    pub fn difference_step(&self, k: usize, value: f64) -> f64 {
+        let width = self
+            .inputs
+            .get(k)
+            .map_or(0.0, |i| (i.domain[1] - i.domain[0]).abs());
+        let scale = value.abs().max(1e-3 * width);
+        1e-6 * if scale > 0.0 { scale } else { 1.0 }
     }
 
     /// [`Metamodel::value_and_gradient`] of the equation alone.

@@ -300,11 +300,6 @@ impl RigidLimit {
             .find(|c| c.response == response && c.stiff == (decades > 0.0))
     }
 
-    /// Whether `value` of the group (or the wall's) lies within the curves' reach.
-    pub fn reaches(&self, value: f64) -> bool {
-        value >= self.reach[0] && value <= self.reach[1]
-    }
-
     /// The shift (in the fitted response's unit; the caller multiplies a `slope` curve's value
     /// by the equation's slope) and the scatter for `response` at `place`. `None` where a
     /// curve is needed and there is none, or the place is past its last knot.
