@@ -24,7 +24,8 @@ class Calibration:
     """One calibration of a material against one model: what ``mbgc calibrate`` reports.
 
     ``solutions`` holds every distinct optimum, best first: every model input (fixed ones
-    included), the predicted responses, the objective (chi^2), whether it ``fits`` the
+    included), the predicted responses, the objective (chi^2; beyond the model's stiffness
+    data -2 ln L, chi^2 plus 2 sum ln(sd / measured sd)), whether it ``fits`` the
     measurements (chi^2 within the 95 % level) and how many starts reached it. Optima that do
     not fit are local minima (:attr:`local_minima`); several that fit mean the answer is not
     unique. With ``bayes=True``, :attr:`posterior` holds the TMCMC draws and

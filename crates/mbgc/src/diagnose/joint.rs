@@ -416,7 +416,8 @@ impl<'s> Joint<'s> {
                         return Err(format!(
                             "sample \"{}\": {g} is {v:.4e} from the set's fixed values and the \
                              sample's PSD, outside {}'s range [{lo:.4e}, {hi:.4e}] (its \
-                             training runs and the stiffness lines of its rigid limit); check \
+                             training runs, and a rigid limit's stiffness lines where it has \
+                             one); check \
                              the fixed values it is made of, or build a local model for this \
                              material (`mbgc diagnose --build`)",
                             s.name, m.label
