@@ -8,10 +8,12 @@ mu_pp and mu_r_pp are left unknown: the files fix every other parameter of the m
     python3 docs/data/diagnose/issue35/to_measurements.py
 """
 
-import csv
 import math
 import os
-import statistics
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import sets  # noqa: E402  (docs/data/diagnose/sets.py)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "../../../.."))
@@ -28,30 +30,10 @@ RESPONSES = ["shear_angle", "bulk_density"]
 
 def main():
     for name, ced, what, e_p in SETS:
-        table = os.path.join(HERE, f"{name}.csv")
-        if not os.path.exists(table):
-            print(f"{table}: not made yet; run make_sets.sh")
+        by_d = sets.read(HERE, name, 3)
+        if by_d is None:
             continue
-        with open(table, newline="") as f:
-            rows = [r for r in csv.DictReader(f) if r["status"] == "done"]
-        by_d = {}
-        for r in rows:
-            by_d.setdefault(float(r["d50"]), []).append(r)
-        with open(os.path.join(HERE, f"{name}_design.csv"), newline="") as f:
-            planned = sum(1 for _ in csv.DictReader(f))
-        if len(rows) < planned or any(len(v) < 3 for v in by_d.values()):
-            print(f"{table}: {len(rows)} of {planned} runs done; run make_sets.sh to finish")
-            continue
-        means, pooled = {}, {}
-        for resp in RESPONSES:
-            var, dof = 0.0, 0
-            for d, runs in by_d.items():
-                vals = [float(r[resp]) for r in runs if not math.isnan(float(r[resp]))]
-                if len(vals) == len(runs):
-                    means[(d, resp)] = statistics.fmean(vals)
-                    var += statistics.variance(vals) * (len(vals) - 1)
-                    dof += len(vals) - 1
-            pooled[resp] = (math.sqrt(var / dof), dof) if dof else (float("nan"), 0)
+        means, pooled = sets.summarise(by_d, RESPONSES)
         sd = {resp: pooled[resp][0] / math.sqrt(3) for resp in RESPONSES}
         out = os.path.join(ROOT, "examples", "measurements", f"issue35_{name}.toml")
         with open(out, "w") as f:
@@ -81,17 +63,7 @@ def main():
                     "# The range a local model built by --build varies the cohesion over.\n"
                     "bounds = { ced_pp = [0, 1e5] }\n"
                 )
-            for d in sorted(by_d):
-                f.write(
-                    f'\n[[sample]]\nname = "{d:g} mm"\nexperiment = "shear-box"\n'
-                    f"psd = {{ d50_mm = {d:g}, sigma_ln = 0.12 }}\n"
-                )
-                for resp in RESPONSES:
-                    if (d, resp) in means:
-                        f.write(
-                            f"measured.{resp} = {{ value = {means[(d, resp)]:.2f}, "
-                            f"sd = {sd[resp]:.2f} }}\n"
-                        )
+            sets.write_samples(f, by_d, means, sd, RESPONSES)
         print(f"wrote {out}")
 
 

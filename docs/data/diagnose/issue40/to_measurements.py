@@ -7,10 +7,12 @@ parameter of the material, as a user who knows the material's stiffness and dens
     python3 docs/data/diagnose/issue40/to_measurements.py
 """
 
-import csv
 import math
 import os
-import statistics
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import sets  # noqa: E402  (docs/data/diagnose/sets.py)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "../../../.."))
@@ -24,46 +26,12 @@ RESPONSES = ["shear_angle", "bulk_density"]
 RUNS = 3
 
 
-def read(name):
-    """The finished runs by d50, or None (with a message) while the set is incomplete."""
-    table = os.path.join(HERE, f"{name}.csv")
-    if not os.path.exists(table):
-        print(f"{table}: not made yet; run make_sets.sh")
-        return None
-    with open(table, newline="") as f:
-        rows = [r for r in csv.DictReader(f) if r["status"] == "done"]
-    with open(os.path.join(HERE, f"{name}_design.csv"), newline="") as f:
-        planned = sum(1 for _ in csv.DictReader(f))
-    by_d = {}
-    for r in rows:
-        by_d.setdefault(float(r["d50"]), []).append(r)
-    if len(rows) < planned or any(len(v) < RUNS for v in by_d.values()):
-        print(f"{table}: {len(rows)} of {planned} runs done; run make_sets.sh to finish")
-        return None
-    return by_d
-
-
-def summarise(by_d):
-    """Per (d50, response) the mean; per response the pooled sd of one run and its dof."""
-    means, pooled = {}, {}
-    for resp in RESPONSES:
-        var, dof = 0.0, 0
-        for d, runs in by_d.items():
-            vals = [float(r[resp]) for r in runs]
-            if all(math.isfinite(v) for v in vals):
-                means[(d, resp)] = statistics.fmean(vals)
-                var += statistics.variance(vals) * (len(vals) - 1)
-                dof += len(vals) - 1
-        pooled[resp] = (math.sqrt(var / dof), dof) if dof else (float("nan"), 0)
-    return means, pooled
-
-
 def main():
     for name, (e_p, rho, what) in SETS.items():
-        by_d = read(name)
+        by_d = sets.read(HERE, name, RUNS)
         if by_d is None:
             continue
-        means, pooled = summarise(by_d)
+        means, pooled = sets.summarise(by_d, RESPONSES)
         sd = {resp: pooled[resp][0] / math.sqrt(RUNS) for resp in RESPONSES}
         k = [float(e_p) / (float(rho) * 9.81 * d * 1e-3) for d in sorted(by_d)]
         out = os.path.join(ROOT, "examples", "measurements", f"issue40_{name}.toml")
@@ -88,17 +56,7 @@ def main():
                 "# Walls are not cohesive: the cohesion candidate fits the particle-particle energy\n"
                 "# density only.\n[candidates.sjkr]\nfixed = { ced_pw = 0 }\n"
             )
-            for d in sorted(by_d):
-                f.write(
-                    f'\n[[sample]]\nname = "{d:g} mm"\nexperiment = "shear-box"\n'
-                    f"psd = {{ d50_mm = {d:g}, sigma_ln = 0.12 }}\n"
-                )
-                for resp in RESPONSES:
-                    if (d, resp) in means:
-                        f.write(
-                            f"measured.{resp} = {{ value = {means[(d, resp)]:.2f}, "
-                            f"sd = {sd[resp]:.2f} }}\n"
-                        )
+            sets.write_samples(f, by_d, means, sd, RESPONSES)
         print(f"wrote {out}")
 
 
