@@ -285,8 +285,8 @@ fn bad_measurement_sets_name_the_file_the_sample_and_the_field() {
 
 /// A measurement set whose fixed values put a sample's stiffness group beyond the model's
 /// training runs is answered by the model's rigid limit when the stiffness lines reach it, and
-/// told which group, its value and the range when they do not (it used to end in "tmcmc: the
-/// likelihood is zero (-inf) at all 2000 prior samples").
+/// one beyond the space is told which input, its value and the range (it used to end in
+/// "tmcmc: the likelihood is zero (-inf) at all 2000 prior samples").
 #[test]
 fn a_group_beyond_the_training_runs_is_answered_by_the_rigid_limit_or_named() {
     let dir = tempfile::tempdir().unwrap();
@@ -320,15 +320,24 @@ fn a_group_beyond_the_training_runs_is_answered_by_the_rigid_limit_or_named() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(text.contains("chi^2/dof"), "{text}");
-    // A hundred times stiffer and finer (K_p 3.9e7 at 0.5 mm): past the lines, named.
+    // A hundred times stiffer and finer (K_p 3.9e7 at 0.5 mm, seed 004's E of 5e8): answered
+    // too, the lines reach 5.2e8.
     let o = run(control
         .replace("E_p = 5e6", "E_p = 5e8")
         .replace("E_w = 5e6", "E_w = 5e8")
         .replace("d50_mm = 2,", "d50_mm = 0.5,"));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("chi^2/dof"), "{text}");
+    // Ten times stiffer still, beyond seed 004's space (E 5e9): named, with the range.
+    let o = run(control
+        .replace("E_p = 5e6", "E_p = 5e9")
+        .replace("E_w = 5e6", "E_w = 5e9")
+        .replace("d50_mm = 2,", "d50_mm = 0.5,"));
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        e.contains("K_p = 101.9 E_p / (rho_p d50) is 3.9206e7") && e.contains("[6.5000e3, "),
+        e.contains("E_p = 5000000000") && e.contains("[2500000, 500000000]"),
         "{e}"
     );
     assert!(!e.contains("likelihood is zero"), "{e}");

@@ -236,8 +236,9 @@ fn train_runs_as_a_library_call_and_reports_to_its_observer() {
 }
 
 /// A material whose fixed values put the stiffness group outside the shipped model's range (its
-/// training runs and the stiffness lines of its rigid limit) is told so by name, value and range (it used to read "the constraints [] cannot be met"), and
-/// names the model lacks are said to be missing, not listed as if expected.
+/// training runs and the stiffness lines of its rigid limit) is told so by name, value and range
+/// (it used to read "the constraints [] cannot be met"), and names the model lacks are said to
+/// be missing, not listed as if expected.
 #[test]
 fn out_of_range_groups_and_unknown_names_are_explained() {
     let model = Metamodel::load(Path::new(concat!(
@@ -250,12 +251,13 @@ fn out_of_range_groups_and_unknown_names_are_explained() {
             .unwrap()
             .replace(
                 "sieve = \"sieve_gravel_8_16.csv\"",
-                "d50_mm = 0.5\nsigma_ln = 0.26",
+                "d50_mm = 25.6\nsigma_ln = 0.26",
             )
-            .replace("E_p = 4e7", "E_p = 5e8")
-            .replace("E_w = 4e7", "E_w = 5e8");
-    // K_p 3.9e7: beyond the training runs (1.94e5) and the stiffness lines of the rigid limit.
-    let fine = Material::from_toml_str(&gravel, "fine.toml").unwrap();
+            .replace("E_p = 4e7", "E_p = 2.5e6\nrho_p = 3000")
+            .replace("E_w = 4e7", "E_w = 2.5e6");
+    // K_p 3.3e3, the softest corner of the model's inputs: below the training runs (9.8e3) and
+    // the softest stiffness line of the rigid limit (the lines reach the top of seed 004's box).
+    let fine = Material::from_toml_str(&gravel, "coarse_soft.toml").unwrap();
     let e = session::run(&fine, &model, "shear_box", &SessionOptions::default()).unwrap_err();
     let text = e.to_string();
     assert!(matches!(e, Error::OutOfDomain { .. }), "{e:?}");

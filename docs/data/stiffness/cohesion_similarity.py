@@ -137,6 +137,58 @@ def main():
                                 err[i].append(e)
             rms = [math.sqrt(sum(x * x for x in e) / len(e)) for e in err]
             print(f"| {n} | {alpha:.2f} | {rms[0]:.2f} | {rms[1]:.2f} | {len(err[0])} |")
+    lines_test()
+
+
+def lines_test():
+    """The DEM test beyond the edge: on random lines r1-r8, the cohesion effect at the edge
+    (C_pp 600, K_p 1.94e5) against K_p 1e6 at the same C_pp K_p^(-2/3) (C_pp 1790) and at the
+    same C_pp (600), each minus the same line's run without cohesion at that K_p."""
+    table = os.path.join(ROOT, "docs", "data", "stiffness", "runs_bond_lines.tsv")
+    if not os.path.exists(table):
+        return
+    runs = {}
+    for t in (table, os.path.join(ROOT, "docs", "data", "stiffness", "runs_random.tsv")):
+        with open(t, newline="") as f:
+            for r in csv.DictReader(f, delimiter="\t"):
+                if r["seed"] == "1":
+                    key = (r["point"], float(r["bond"]), float(r["k_p"]))
+                    runs[key] = (float(r["shear_angle"]), float(r["bulk_density"]))
+    cases = [("edge, C_pp 600", 600.0, 194000.0), ("1e6, C_pp 1790 (same C_pp K_p^-2/3)", 1790.0, 1e6),
+             ("1e6, C_pp 600 (same C_pp)", 600.0, 1e6)]
+    print()
+    print("Cohesion effect on the random lines (one run each, minus the line's run without cohesion "
+          "at the same K_p): shear_angle deg / bulk_density kg/m3")
+    print()
+    print("| line | " + " | ".join(c[0] for c in cases) + " |")
+    print("|---|" + "---|" * len(cases))
+    diffs = {1: ([], []), 2: ([], [])}
+    for i in range(1, 9):
+        p = f"r{i}"
+        eff = []
+        for _, bo, k in cases:
+            a, b = runs.get((p, bo, k)), runs.get((p, 0.0, k))
+            eff.append(None if a is None or b is None else (a[0] - b[0], a[1] - b[1]))
+        if eff[0] is None:
+            continue
+        cells = ["-" if e is None else f"{e[0]:+.2f} / {e[1]:+.1f}" for e in eff]
+        print(f"| {p} | " + " | ".join(cells) + " |")
+        for c in (1, 2):
+            if eff[c] is not None:
+                diffs[c][0].append(eff[c][0] - eff[0][0])
+                diffs[c][1].append(eff[c][1] - eff[0][1])
+    print()
+    for c in (1, 2):
+        n = len(diffs[c][0])
+        if n < 2:
+            continue
+        for q, unit in ((0, "deg"), (1, "kg/m3")):
+            v = diffs[c][q]
+            mean = sum(v) / n
+            sd = math.sqrt(sum((x - mean) ** 2 for x in v) / (n - 1))
+            rms = math.sqrt(sum(x * x for x in v) / n)
+            print(f"- {cases[c][0]} minus the edge, {['shear_angle', 'bulk_density'][q]}: mean "
+                  f"{mean:+.2f} {unit} (se {sd / math.sqrt(n):.2f}), rms {rms:.2f}, {n} lines")
 
 
 if __name__ == "__main__":
