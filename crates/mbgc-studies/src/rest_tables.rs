@@ -233,6 +233,20 @@ pub(crate) fn run_queue<T: Send>(
     failures
 }
 
+/// The outcome columns that end a shear-box row of the stiffness tables: shear angle, bulk
+/// density, settled (0/1), steps, particles and wall seconds, tab-separated.
+pub(crate) fn outcome_columns(o: &mbgc::experiments::Outcome) -> String {
+    format!(
+        "{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
+        o.get("shear_angle").unwrap_or(f64::NAN),
+        o.get("bulk_density").unwrap_or(f64::NAN),
+        u8::from(o.diagnostics.settled),
+        o.diagnostics.steps,
+        o.diagnostics.particles,
+        o.diagnostics.wall_time_s
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

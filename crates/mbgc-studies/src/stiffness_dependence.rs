@@ -15,7 +15,7 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 
-use super::rest_tables::{append, read_tsv, run_queue};
+use super::rest_tables::{append, outcome_columns, read_tsv, run_queue};
 use super::shear_box_check::point;
 use super::shear_box_fill::mean_se;
 use mbgc::dem::contact::ModelClass;
@@ -299,17 +299,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                     .run(&p, j.seed, &RunOptions::default())
                     .with_context(|| format!("{j:?}"))?;
                 let line = format!(
-                    "{}\t{}\t{}\t{}\t{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
+                    "{}\t{}\t{}\t{}\t{}",
                     j.point,
                     j.bond,
                     j.k,
                     j.seed,
-                    o.get("shear_angle").unwrap_or(f64::NAN),
-                    o.get("bulk_density").unwrap_or(f64::NAN),
-                    u8::from(o.diagnostics.settled),
-                    o.diagnostics.steps,
-                    o.diagnostics.particles,
-                    o.diagnostics.wall_time_s
+                    outcome_columns(&o)
                 );
                 let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
                 eprintln!("{line}");

@@ -15,7 +15,7 @@ use std::sync::Mutex;
 use anyhow::Context as _;
 use rand::RngExt as _;
 
-use super::rest_tables::{append, read_tsv, run_queue};
+use super::rest_tables::{append, outcome_columns, read_tsv, run_queue};
 use super::stiffness_dependence::SHIPPED_SPACE;
 use mbgc::experiments::shear_box::{RestRule, ShearBox};
 use mbgc::experiments::{Experiment, ParamSet, RunOptions};
@@ -225,17 +225,12 @@ fn run_row(a: &Args, rows: &[Vec<f64>], i: usize, write: &Mutex<()>) -> anyhow::
         .with_context(|| format!("row {i}"))?;
     let k = p[0] / (p[9] * G * p[10] * 1e-3);
     let line = format!(
-        "{i}\t{seed}\t{}\t{k:.6e}\t{:.6}\t{:.4}\t{}\t{}\t{}\t{:.3}",
+        "{i}\t{seed}\t{}\t{k:.6e}\t{}",
         p.iter()
             .map(|v| format!("{v:?}"))
             .collect::<Vec<_>>()
             .join("\t"),
-        o.get("shear_angle").unwrap_or(f64::NAN),
-        o.get("bulk_density").unwrap_or(f64::NAN),
-        u8::from(o.diagnostics.settled),
-        o.diagnostics.steps,
-        o.diagnostics.particles,
-        o.diagnostics.wall_time_s
+        outcome_columns(&o)
     );
     let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
     eprintln!("{line}");
