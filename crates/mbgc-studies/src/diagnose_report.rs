@@ -1,4 +1,4 @@
-//! `mbgc bench diagnose`: `docs/diagnose.md`, the diagnosis of twelve synthetic measurement sets
+//! `mbgc bench diagnose`: `docs/diagnose.md`, the diagnosis of fifteen synthetic measurement sets
 //! made with mbgc's own DEM (a hidden cohesion, a hidden rolling resistance, a control with no
 //! hidden effect, a weaker cohesion, and that with the rolling friction unknown; then issue 35's
 //! control and three cohesions with both frictions unknown, on the shipped global models alone),
@@ -57,7 +57,7 @@ const GLOBAL: &[&str] = &[
 /// default).
 const SHIPPED: &[&str] = &["models/shear_box.json", "models/shear_box_sjkr.json"];
 
-const CASES: [Case; 12] = [
+const CASES: [Case; 15] = [
     Case {
         file: "examples/measurements/hidden_cohesion_strong.toml",
         title: "Hidden cohesion in four sieve fractions",
@@ -128,6 +128,24 @@ const CASES: [Case; 12] = [
         file: "examples/measurements/issue40_fine_b.toml",
         title: "Fine, beyond the training runs: E 50 MPa, rho_p 1500, no cohesion",
         truth: None,
+        models: SHIPPED,
+    },
+    Case {
+        file: "examples/measurements/issue40_fine_c_sjkr.toml",
+        title: "Fine, beyond the training runs: E 5 MPa, rho_p 1000, cohesion 1e4 J/m3",
+        truth: Some(("sjkr", "ced_pp", 1e4)),
+        models: SHIPPED,
+    },
+    Case {
+        file: "examples/measurements/issue40_fine_a_sjkr.toml",
+        title: "Fine, beyond the training runs: E 20 MPa, rho_p 2600, cohesion 2.5e4 J/m3",
+        truth: Some(("sjkr", "ced_pp", 2.5e4)),
+        models: SHIPPED,
+    },
+    Case {
+        file: "examples/measurements/issue40_fine_c_sjkr_strong.toml",
+        title: "Fine, beyond the training runs: E 5 MPa, rho_p 1000, cohesion 1.4e4 J/m3",
+        truth: Some(("sjkr", "ced_pp", 1.4e4)),
         models: SHIPPED,
     },
 ];
@@ -271,7 +289,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     let text = format!(
-        "# Diagnosing a missing effect: twelve synthetic cases\n\n\
+        "# Diagnosing a missing effect: fifteen synthetic cases\n\n\
          Regenerate with\n\n```\ncargo run --release -- bench diagnose --report {}\n```\n\n\
          (seconds: no DEM; {} TMCMC samples per stage, seed {}).\n\n{}\n\n\
          ## Summary\n\n{summary}\n{body}",
@@ -316,8 +334,12 @@ fractions of 0.5-2 mm, at three stiffnesses and densities (E 5, 20 and 50 MPa; r
 and 1500 kg/m3), made by `docs/data/diagnose/issue40/make_sets.sh` (seed 40, three runs per \
 fraction). Their K_p = E / (rho_p g d50), 2.5e5 to 6.8e6, lies beyond the shipped base \
 model's training runs (9.8e3-1.94e5): it answers by its rigid limit (docs/rigid_limit.md), \
-with the limit's scatter in its error. The cohesive model has no rigid limit yet, so sjkr is \
-not evaluated there.\n\n\
+with the limit's scatter in its error. So does the cohesive model (docs/rigid_limit_sjkr.md), \
+which reads its cohesion there at C_pp (E*_edge / E*)^(2/3), the cohesion a contact on its \
+stiffness edge pulls with (docs/cohesion_stiffness.md).\n\n\
+Cases 13-15 (issue 40) are the materials of cases 10 and 11 with a hidden cohesion between the \
+particles (walls not cohesive): ced_pp 1e4 and 2.5e4 J/m3, read at the edge as C_pp 430-680 \
+and 310-490 of the model's 0-978, and 1.4e4 J/m3 on the material of case 10 (600-950).\n\n\
 The models. Cases 1, 3 and 4 (rolling friction known, 0.3) use two versions of a local model \
 around the material, its known values fixed (recorded in the model files as constants). Version \
 1, `models/diagnose_local.json`, is the class without cohesion (`mbgc train --space \

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 
 use super::stiffness_dependence::{line_point, read_rows, Row};
-use mbgc::metamodel::rigid_fit::{fit_rigid_limit, Line, RigidFit};
+use mbgc::metamodel::rigid_fit::{fit_cohesion, fit_rigid_limit, CohesionLine, Line, RigidFit};
 use mbgc::metamodel::rigid_limit::Form;
 use mbgc::metamodel::Metamodel;
 
@@ -30,6 +30,11 @@ pub struct Args {
     /// The lines' cohesion group Bo (0: the lines without cohesion, for a model without it).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 0.0))]
     pub bond: f64,
+    /// Stiffness tables with cohesion lines (runs with C_pp on the edge and at the same
+    /// C_pp K_p^(-2/3) beyond it), comma-separated: for a cohesive model, the scatter of
+    /// reading its cohesion at the edge. The runs without cohesion come from `--tables`.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
+    pub cohesion_tables: Vec<PathBuf>,
     /// The largest E_p and E_w the model then takes (seed 004's top, Pa); K_p and K_w stay
     /// bounded by the lines' reach.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 5e8))]
@@ -53,9 +58,89 @@ const WEIGHT: f64 = 2600.0 * 9.81 * 8e-3;
 pub fn run(a: &Args) -> anyhow::Result<()> {
     mbgc::outputs::refuse_overwriting_inputs("--out", &a.out, &[("--model", &a.model)])?;
     let model = Metamodel::load(&a.model)?;
+    let (all_rows, source) = read_tables(&a.tables)?;
+    let rows: Vec<Row> = all_rows
+        .iter()
+        .filter(|r| r.job.bond == a.bond)
+        .cloned()
+        .collect();
+    let lines = lines(&model, &rows, a.bond)?;
+    let fit = RigidFit {
+        group: "K_p",
+        along: "E_p",
+        wall: Some(("K_w", "E_w")),
+        along_max: a.e_max,
+        source: source.join(", "),
+    };
+    let mut extended = fit_rigid_limit(&model, &fit, &lines)?;
+    if !a.cohesion_tables.is_empty() {
+        if a.bond != 0.0 {
+            anyhow::bail!(
+                "--cohesion-tables with --bond {}: the stiffness curves of a cohesive model are \
+                 the lines without cohesion (--bond 0), its cohesion is carried to the edge",
+                a.bond
+            );
+        }
+        let (coh_rows, coh_source) = read_tables(&a.cohesion_tables)?;
+        let mut both: Vec<Row> = all_rows
+            .iter()
+            .filter(|r| r.job.bond == 0.0)
+            .cloned()
+            .collect();
+        both.extend(coh_rows.into_iter().filter(|r| r.job.bond > 0.0));
+        let coh_lines = cohesion_lines(&model, &both)?;
+        let measured = format!(
+            "lines {} ({}; the runs without cohesion from {})",
+            coh_lines
+                .iter()
+                .map(|l| l.label.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            coh_source.join(", "),
+            source.join(", ")
+        );
+        let pp = fit_cohesion(
+            &extended,
+            "C_pp",
+            "ced_pp",
+            ["E_p", "E_p"],
+            &coh_lines,
+            measured,
+        )?;
+        let mut cohesion = vec![pp.clone()];
+        if extended.along_input("C_pw", "ced_pw").is_some() {
+            // The lines' walls were not cohesive: the wall's similarity is the particles'
+            // physics with the wall contact's modulus, its scatter taken over unmeasured.
+            cohesion.push(mbgc::metamodel::rigid_limit::Cohesion {
+                group: "C_pw".into(),
+                along: "ced_pw".into(),
+                contact: ["E_p".into(), "E_w".into()],
+                measured: "not measured (the lines' walls were not cohesive): the scatter of \
+                           C_pp"
+                    .into(),
+                ..pp
+            });
+        }
+        if let Some(l) = extended.rigid_limit.as_mut() {
+            l.cohesion = cohesion;
+        }
+    }
+    extended.save(&a.out)?;
+    let text = report(a, &model, &extended, &lines);
+    crate::emit_report(
+        a.json,
+        a.report.as_deref(),
+        &text,
+        serde_json::json!({ "model": a.out, "lines": lines.len() }),
+    )
+}
+
+/// The rows of `tables` (a second row of the same run left out with a warning) and each
+/// table's name and hash.
+fn read_tables(tables: &[PathBuf]) -> anyhow::Result<(Vec<Row>, Vec<String>)> {
     let mut rows: Vec<Row> = Vec::new();
     let mut source = Vec::new();
-    for t in &a.tables {
+    for t in tables {
         let bytes = std::fs::read(t).with_context(|| format!("reading {}", t.display()))?;
         source.push(format!(
             "{} ({:016x})",
@@ -74,24 +159,63 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             rows.push(r);
         }
     }
-    rows.retain(|r| r.job.bond == a.bond);
-    let lines = lines(&model, &rows, a.bond)?;
-    let fit = RigidFit {
-        group: "K_p",
-        along: "E_p",
-        wall: Some(("K_w", "E_w")),
-        along_max: a.e_max,
-        source: source.join(", "),
-    };
-    let extended = fit_rigid_limit(&model, &fit, &lines)?;
-    extended.save(&a.out)?;
-    let text = report(a, &model, &extended, &lines);
-    crate::emit_report(
-        a.json,
-        a.report.as_deref(),
-        &text,
-        serde_json::json!({ "model": a.out, "lines": lines.len() }),
-    )
+    Ok((rows, source))
+}
+
+/// The model's inputs at a line's point: any stiffness (the fits move it along the group),
+/// the cohesion between particles `bond` times the weight, walls not cohesive.
+fn point_inputs(model: &Metamodel, name: &str, bond: f64) -> anyhow::Result<Vec<f64>> {
+    let p = line_point(name).with_context(|| format!("point {name}: not a known point"))?;
+    model
+        .inputs
+        .iter()
+        .map(|i| match i.name.as_str() {
+            "E_p" | "E_w" => Ok(1e5 * WEIGHT),
+            "ced_pp" => Ok(bond * WEIGHT),
+            "ced_pw" => Ok(0.0),
+            n => p
+                .get(n)
+                .with_context(|| format!("point {name} has no {n}, an input of the model")),
+        })
+        .collect()
+}
+
+/// The model's responses of one row (NaN for those the tables do not hold).
+fn row_values(model: &Metamodel, r: &Row) -> Vec<f64> {
+    model
+        .responses
+        .iter()
+        .map(|resp| match resp.name.as_str() {
+            "shear_angle" => r.angle,
+            "bulk_density" => r.density,
+            _ => f64::NAN,
+        })
+        .collect()
+}
+
+/// The cohesion lines of `rows` (with and without cohesion) as the fit takes them.
+fn cohesion_lines(model: &Metamodel, rows: &[Row]) -> anyhow::Result<Vec<CohesionLine>> {
+    let mut names: Vec<&str> = rows
+        .iter()
+        .filter(|r| r.job.bond > 0.0)
+        .map(|r| r.job.point.as_str())
+        .collect();
+    names.sort();
+    names.dedup();
+    names
+        .into_iter()
+        .map(|name| {
+            Ok(CohesionLine {
+                label: name.to_string(),
+                inputs: point_inputs(model, name, 0.0)?,
+                runs: rows
+                    .iter()
+                    .filter(|r| r.job.point == name)
+                    .map(|r| (r.job.k, r.job.bond, row_values(model, r)))
+                    .collect(),
+            })
+        })
+        .collect()
 }
 
 /// The lines of `rows` as the fit takes them: the model's inputs at each point and its runs.
@@ -99,37 +223,13 @@ fn lines(model: &Metamodel, rows: &[Row], bond: f64) -> anyhow::Result<Vec<Line>
     let mut names: Vec<&str> = rows.iter().map(|r| r.job.point.as_str()).collect();
     names.sort();
     names.dedup();
-    let resp = |name: &str| model.responses.iter().position(|r| r.name == name);
-    let (angle, density) = (resp("shear_angle"), resp("bulk_density"));
     let mut out = Vec::new();
     for name in names {
-        let p = line_point(name).with_context(|| format!("point {name}: not a known point"))?;
-        let inputs = model
-            .inputs
-            .iter()
-            .map(|i| match i.name.as_str() {
-                // Any stiffness: the fit moves the point along the group.
-                "E_p" | "E_w" => Ok(1e5 * WEIGHT),
-                "ced_pp" => Ok(bond * WEIGHT),
-                "ced_pw" => Ok(0.0),
-                n => p
-                    .get(n)
-                    .with_context(|| format!("point {name} has no {n}, an input of the model")),
-            })
-            .collect::<anyhow::Result<Vec<f64>>>()?;
+        let inputs = point_inputs(model, name, bond)?;
         let runs = rows
             .iter()
             .filter(|r| r.job.point == name)
-            .map(|r| {
-                let mut v = vec![f64::NAN; model.responses.len()];
-                if let Some(k) = angle {
-                    v[k] = r.angle;
-                }
-                if let Some(k) = density {
-                    v[k] = r.density;
-                }
-                (r.job.k, v)
-            })
+            .map(|r| (r.job.k, row_values(model, r)))
             .collect();
         out.push(Line {
             label: name.to_string(),
@@ -150,15 +250,16 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
     let _ = writeln!(
         w,
         "# The rigid limit of `{}`\n\nRegenerate with `cargo run --release -- bench rigid-limit \
-         --model {} --tables {} --bond {} --out {}{}` (reads the stiffness tables, a second).\n",
+         --model {} --tables {} --bond {}{} --out {}{}` (reads the stiffness tables, a second).\n",
         a.model.display(),
         a.model.display(),
-        a.tables
-            .iter()
-            .map(|t| t.display().to_string())
-            .collect::<Vec<_>>()
-            .join(","),
+        join(&a.tables),
         a.bond,
+        if a.cohesion_tables.is_empty() {
+            String::new()
+        } else {
+            format!(" --cohesion-tables {}", join(&a.cohesion_tables))
+        },
         a.out.display(),
         a.report
             .as_ref()
@@ -242,5 +343,60 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
         }
         let _ = writeln!(w);
     }
+    for c in &lim.cohesion {
+        let _ = writeln!(
+            w,
+            "## {} beyond the stiffness edge\n\nA material beyond the edge is read on it with \
+             {} times (E*_edge / E*)^(2/3), E* the modulus of a contact between {} and {} \
+             (docs/cohesion_stiffness.md). The scatter of that similarity was measured at {} = \
+             {} on the edge: on each line, the cohesion effect (the run with cohesion minus the \
+             run without) at K_p beyond the edge with the carried cohesion, minus the effect on \
+             the edge. A knot's sd is the lines' rms difference with the four runs' noise taken \
+             off, plus its own uncertainty (rms^2 / lines); it is added to a prediction's error \
+             in proportion to the carried cohesion over {}, and beyond the last knot in \
+             proportion to the decades. No shift is applied (the mean and its standard error are \
+             shown for that). Source: {}.\n\n| response | K_p | decades beyond | lines | mean \
+             difference | se | sd |\n|---|---|---|---|---|---|---|",
+            c.group,
+            c.group,
+            c.contact[0],
+            c.contact[1],
+            c.group,
+            c.reference,
+            c.reference,
+            c.measured
+        );
+        for cc in &c.curves {
+            let scale = m
+                .responses
+                .iter()
+                .find(|r| r.name == cc.response)
+                .and_then(|r| r.grouped.as_ref())
+                .and_then(|g| g.factor.as_ref())
+                .map_or(1.0, |_| 2600.0);
+            for k in &cc.knots {
+                let _ = writeln!(
+                    w,
+                    "| {} | {:.3e} | {:+.3} | {} | {:+.3} | {:.3} | {:.3} |",
+                    cc.response,
+                    domain[1] * 10f64.powf(k.decades),
+                    k.decades,
+                    k.lines,
+                    k.mean * scale,
+                    k.se * scale,
+                    k.sd * scale
+                );
+            }
+        }
+        let _ = writeln!(w);
+    }
     w
+}
+
+fn join(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|t| t.display().to_string())
+        .collect::<Vec<_>>()
+        .join(",")
 }

@@ -280,10 +280,57 @@ impl<'m> Problem<'m> {
                 }
             }
             if let Some(values) = values {
-                let v = gd
+                let own = gd
                     .group
                     .monomial
                     .value(|n| values[parts.iter().position(|(m, _)| m == n).unwrap_or(0)]);
+                // A cohesion group beyond the stiffness edge is read at its carried value,
+                // which the contact's moduli decide too: known when they are fixed, else the
+                // search keeps it inside.
+                let carried = model.rigid_limit.as_ref().and_then(|l| {
+                    let c = l.cohesion.iter().find(|c| c.group == gd.group.name)?;
+                    let mut point: Vec<f64> = model
+                        .inputs
+                        .iter()
+                        .map(|i| 0.5 * (i.domain[0] + i.domain[1]))
+                        .collect();
+                    for (k, f) in fixed.iter().enumerate() {
+                        if let Some(v) = f {
+                            point[k] = *v;
+                        }
+                    }
+                    let known = |n: &str| {
+                        names
+                            .iter()
+                            .position(|m| m == n)
+                            .is_some_and(|k| fixed[k].is_some())
+                    };
+                    let stiffness: Vec<&str> = std::iter::once(l.along.as_str())
+                        .chain(l.wall.as_ref().map(|(_, a)| a.as_str()))
+                        .chain(c.contact.iter().map(String::as_str))
+                        .collect();
+                    Some(
+                        stiffness
+                            .iter()
+                            .all(|n| known(n))
+                            .then(|| model.group_read_value(&gd.group, &point)),
+                    )
+                });
+                let v = match carried {
+                    Some(Some(v)) => v,
+                    Some(None) => continue,
+                    None => own,
+                };
+                if v != own {
+                    notes.push(format!(
+                        "{} = {own:.4e} is read at the stiffness edge as {v:.4e}: beyond the \
+                         training runs' stiffness a cohesive contact pulls as one on the edge \
+                         with the cohesion times (E*_edge / E*)^(2/3), E* the contact's \
+                         modulus (docs/cohesion_stiffness.md); the similarity's measured \
+                         scatter is added to each response's sd",
+                        gd.group.name
+                    ));
+                }
                 let range = model.group_range(gd);
                 if !(v >= range[0] && v <= range[1]) {
                     return Err(Error::out_of_domain(
@@ -502,7 +549,7 @@ impl<'m> Problem<'m> {
                 (
                     gd.group.name.clone(),
                     gd.group.monomial.text(),
-                    self.model.group_value(&gd.group, &x),
+                    self.model.group_read_value(&gd.group, &x),
                     self.model.group_range(gd),
                 )
             })
@@ -513,7 +560,7 @@ impl<'m> Problem<'m> {
     /// range, negative below, 0 inside.
     fn group_excess(&self, g: usize, x: &[f64]) -> f64 {
         let gd = &self.model.groups[g];
-        let v = self.model.group_value(&gd.group, x).ln();
+        let v = self.model.group_read_value(&gd.group, x).ln();
         let range = self.model.group_range(gd);
         let (lo, hi) = (range[0].ln(), range[1].ln());
         if v > hi {

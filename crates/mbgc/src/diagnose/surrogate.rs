@@ -110,7 +110,7 @@ impl Surrogate {
                 mf.groups
                     .iter()
                     .filter_map(|gd| {
-                        let v = mf.group_value(&gd.group, x);
+                        let v = mf.group_read_value(&gd.group, x);
                         let range = mf.group_range(gd);
                         (v.is_finite() && !(v >= range[0] && v <= range[1])).then(|| {
                             (
@@ -126,7 +126,7 @@ impl Surrogate {
                 mo.groups
                     .iter()
                     .map(|gd| {
-                        let v = mo.group_value(&gd.group, x).ln();
+                        let v = mo.group_read_value(&gd.group, x).ln();
                         let range = mo.group_range(gd);
                         let (lo, hi) = (range[0].ln(), range[1].ln());
                         if v > hi {

@@ -1427,4 +1427,135 @@ mod tests {
             lm.predict_point(dens, &x).to_bits()
         );
     }
+
+    #[test]
+    fn a_cohesion_group_is_carried_to_the_stiffness_edge_with_its_scatter() {
+        use crate::metamodel::rigid_fit::{fit_cohesion, CohesionLine};
+        use crate::metamodel::rigid_limit::{Curve, Form, Knot, LeaveOneOut, RigidLimit};
+        // y = 10 + C with C = ced / (rho d), K = E / (rho d) from 125 to 2845, C from 0 to 100.
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("t.csv");
+        let mut text = String::from("E,rho,d,ced,y\n");
+        for r in 0..40 {
+            let e = 1e6 * (1.0 + 0.566 * r as f64);
+            let ced = 8000.0 * 100.0 * (r as f64 * 0.618).fract();
+            text.push_str(&format!("{e},2000,4,{ced},{}\n", 10.0 + ced / 8000.0));
+        }
+        std::fs::write(&data, text).unwrap();
+        let group = |name: &str, top: &str| Group {
+            name: name.into(),
+            what: name.into(),
+            monomial: Monomial {
+                coefficient: 1.0,
+                powers: vec![(top.into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
+            },
+        };
+        let inputs: Vec<String> = ["E", "rho", "d", "ced"].map(String::from).to_vec();
+        let settings = FitSettings::new(inputs.clone(), vec!["y".into()])
+            .test_fraction(0.0)
+            .config(gp::Config {
+                population: 200,
+                generations: 3,
+                ..gp::Config::default()
+            })
+            .similarity(Similarity {
+                groups: vec![group("K", "E"), group("C", "ced")],
+                scaled: vec![],
+            });
+        let table = TrainingTable::read_csv(&data, &inputs, &["y".to_string()]).unwrap();
+        let mut m = fit(&table, &settings, |_, _| {}).unwrap().model;
+        m.responses[0].replicate_sd = None;
+        let hi = m.groups[0].domain[1];
+        let c_hi = m.groups[1].domain[1];
+        let y = &m.responses[0];
+        assert!(y.train.rmse < 1e-6, "{:?}", y.train);
+        m.rigid_limit = Some(RigidLimit {
+            group: "K".into(),
+            along: "E".into(),
+            wall: None,
+            reach: [m.groups[0].domain[0], 1000.0 * hi],
+            curves: vec![Curve {
+                response: "y".into(),
+                stiff: true,
+                form: Form::Shift,
+                knots: vec![Knot {
+                    decades: 3.0,
+                    value: 0.0,
+                    sd: 0.0,
+                    scatter: 0.0,
+                    lines: 2,
+                }],
+                leave_one_out: LeaveOneOut {
+                    shift: Some(0.0),
+                    slope: None,
+                },
+            }],
+            lines: vec![],
+            source: "test".into(),
+            cohesion: vec![],
+        });
+        // The space's E and ced reach beyond the data's; the groups bound the model.
+        m.inputs[0].domain[1] = 1e12;
+        m.inputs[3].domain[1] = 1e12;
+        // Lines that follow the similarity exactly (the cohesion effect at K beyond the edge
+        // with C_e (K / K_e)^(2/3) is the edge's) and one that keeps its effect at the same C.
+        let truth = |k: f64, c: f64| 10.0 + c * (hi / k.max(hi)).powf(2.0 / 3.0);
+        let line = |label: &str, kept: f64| CohesionLine {
+            label: label.into(),
+            inputs: vec![1e6, 2000.0, 4.0, 0.0],
+            runs: [(hi, 0.0), (hi, 50.0), (8.0 * hi, 0.0), (8.0 * hi, 200.0)]
+                .iter()
+                .map(|&(k, c)| (k, c, vec![truth(k, c) + kept * c / 200.0]))
+                .collect(),
+        };
+        let lines = [line("a", 0.0), line("b", 0.0)];
+        let coh = fit_cohesion(&m, "C", "ced", ["E", "E"], &lines, "t".into()).unwrap();
+        assert_eq!(coh.reference, 50.0);
+        let k = &coh.curves[0].knots[0];
+        assert!((k.decades - 8f64.log10()).abs() < 1e-12);
+        assert!(k.sd < 1e-9 && k.mean.abs() < 1e-9, "{k:?}");
+        let off = [line("a", 0.0), line("b", 4.0)];
+        let coh_off = fit_cohesion(&m, "C", "ced", ["E", "E"], &off, "t".into()).unwrap();
+        let k = &coh_off.curves[0].knots[0];
+        // Line b gains 3 over the edge (4 at C 200 less 1 at C 50).
+        assert!(
+            (k.mean - 1.5).abs() < 1e-9 && (k.sd - 6.75f64.sqrt()).abs() < 1e-9,
+            "{k:?}"
+        );
+        let mut coh = coh;
+        coh.curves[0].knots[0].sd = 0.5;
+        m.rigid_limit.as_mut().unwrap().cohesion = vec![coh];
+
+        // Eight times stiffer than the data: the contact area a quarter, the cohesion read at
+        // C / 4. A C twice the data's top is read inside it.
+        let c = 2.0 * c_hi;
+        let x = [8.0 * hi * 8000.0, 2000.0, 4.0, c * 8000.0];
+        let y = &m.responses[0];
+        let got = m.predict_point(y, &x);
+        assert!((got - (10.0 + c / 4.0)).abs() < 1e-6, "{got}");
+        assert!(
+            m.outside_domain(&x).is_empty(),
+            "{:?}",
+            m.outside_domain(&x)
+        );
+        // The scatter at the carried C over the reference, the knot's sd at its decades.
+        let sd = m.extrapolation_sd(y, &x);
+        assert!((sd - 0.5 * (c / 4.0) / 50.0).abs() < 1e-9, "{sd}");
+        // Twice the decades, twice the sd per unit of carried cohesion.
+        let x2 = [64.0 * hi * 8000.0, 2000.0, 4.0, c * 8000.0];
+        let sd2 = m.extrapolation_sd(y, &x2);
+        assert!((sd2 - 2.0 * 0.5 * (c / 16.0) / 50.0).abs() < 1e-9, "{sd2}");
+        // No cohesion, no scatter; inside the stiffness data, C is its own.
+        assert_eq!(m.extrapolation_sd(y, &[x[0], 2000.0, 4.0, 0.0]), 0.0);
+        let inside = [0.5 * hi * 8000.0, 2000.0, 4.0, c * 8000.0];
+        assert!(m.outside_domain(&inside).iter().any(|o| o.0 == "C"));
+        // A C that stays beyond the data at the edge is refused by name.
+        let far = [8.0 * hi * 8000.0, 2000.0, 4.0, 5.0 * c_hi * 8000.0];
+        assert!(m.outside_domain(&far).iter().any(|o| o.0 == "C"));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.json");
+        m.save(&path).unwrap();
+        let back = Metamodel::load(&path).unwrap();
+        assert_eq!(back.rigid_limit, m.rigid_limit);
+    }
 }

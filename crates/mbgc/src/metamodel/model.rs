@@ -2,7 +2,7 @@
 //! settings, seed and data hash, saved and loaded as JSON.
 
 use super::error_model::ErrorModel;
-use super::rigid_limit::{decades_beyond, Form, Place, RigidLimit};
+use super::rigid_limit::{decades_beyond, Form, Place, RigidLimit, COHESION_POWER};
 use super::training_table::TrainingTable;
 use crate::error::{read_to_string, write_atomic, Error, Result};
 use crate::similarity::{Group, Monomial};
@@ -382,6 +382,30 @@ pub struct Metamodel {
     pub rigid_limit: Option<RigidLimit>,
 }
 
+/// Where a point beyond the data in the rigid-limit groups is read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reading {
+    /// The point with the stiffness inputs on the edge and the cohesion carried there.
+    pub clamped: Vec<f64>,
+    /// Where the point lies.
+    pub place: Place,
+    /// Inside the limit's reach (else it does not answer).
+    pub reached: bool,
+    /// The cohesion groups carried.
+    pub cohesion: Vec<Carried>,
+}
+
+/// One cohesion group carried to the edge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Carried {
+    /// Its index in the limit's `cohesion`.
+    pub cohesion: usize,
+    /// The input moved (`ced_pp`).
+    pub input: usize,
+    /// Decades of the contact's stiffness beyond the edge.
+    pub decades: f64,
+}
+
 /// A prediction beyond the data in the rigid-limit group.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Beyond {
@@ -525,6 +549,32 @@ impl Metamodel {
                     ));
                 }
             }
+            for (i, c) in lim.cohesion.iter().enumerate() {
+                let field = format!("rigid_limit.cohesion[{i}]");
+                if let Some(n) = c
+                    .contact
+                    .iter()
+                    .find(|n| !m.inputs.iter().any(|i| i.name == **n))
+                {
+                    return Err(Error::input(
+                        &file,
+                        field,
+                        format!("contact moduli that are inputs of the model, got \"{n}\""),
+                    ));
+                }
+                if let Some(cc) = c
+                    .curves
+                    .iter()
+                    .find(|cc| !m.responses.iter().any(|r| r.name == cc.response))
+                {
+                    return Err(Error::input(
+                        &file,
+                        field,
+                        format!("curves of the model's responses, got \"{}\"", cc.response),
+                    ));
+                }
+            }
+            let pairs = pairs.chain(lim.cohesion.iter().map(|c| (&c.group, &c.along)));
             for (g, a) in pairs {
                 if m.along_input(g, a).is_none() {
                     return Err(Error::input(
@@ -889,10 +939,11 @@ impl Metamodel {
         }
     }
 
-    /// The prediction at a point beyond the data in the rigid limit's groups (`None`: inside,
-    /// or a model without a rigid limit): the equation on the domain's edge plus the measured
-    /// curve. Its value is NaN past the curves' reach.
-    pub fn beyond(&self, response: &ResponseModel, x: &[f64]) -> Option<Beyond> {
+    /// Where the model reads a point beyond its data in the rigid limit's groups (`None`:
+    /// inside, or a model without a rigid limit): the stiffness inputs moved so that their
+    /// groups sit on the edge, and each cohesion group carried there
+    /// ([`crate::metamodel::rigid_limit::Cohesion`]).
+    pub fn reading(&self, x: &[f64]) -> Option<Reading> {
         let lim = self.rigid_limit.as_ref()?;
         let mut clamped = x.to_vec();
         let mut place = Place {
@@ -930,6 +981,58 @@ impl Metamodel {
         if place.inside() {
             return None;
         }
+        let index = |n: &str| self.inputs.iter().position(|i| i.name == n);
+        let mut cohesion = Vec::new();
+        for (c, coh) in lim.cohesion.iter().enumerate() {
+            let (Some(k), Some(a), Some(b)) = (
+                self.along_input(&coh.group, &coh.along),
+                index(&coh.contact[0]),
+                index(&coh.contact[1]),
+            ) else {
+                continue;
+            };
+            let compliance = |p: &[f64]| 1.0 / p[a] + 1.0 / p[b];
+            // E*_edge / E* = compliance / compliance_edge.
+            let ratio = compliance(x) / compliance(&clamped);
+            clamped[k] = x[k] * ratio.powf(COHESION_POWER);
+            cohesion.push(Carried {
+                cohesion: c,
+                input: k,
+                decades: -ratio.log10(),
+            });
+        }
+        Some(Reading {
+            clamped,
+            place,
+            reached,
+            cohesion,
+        })
+    }
+
+    /// A group's value where the model reads it at `x`: a cohesion group beyond the stiffness
+    /// edge is read at its carried value ([`Metamodel::reading`]), any other at its own.
+    pub fn group_read_value(&self, g: &Group, x: &[f64]) -> f64 {
+        let carried = self
+            .rigid_limit
+            .as_ref()
+            .is_some_and(|l| l.cohesion.iter().any(|c| c.group == g.name));
+        match self.reading(x).filter(|_| carried) {
+            Some(r) => self.group_value(g, &r.clamped),
+            None => self.group_value(g, x),
+        }
+    }
+
+    /// The prediction at a point beyond the data in the rigid limit's groups (`None`: inside,
+    /// or a model without a rigid limit): the equation on the domain's edge plus the measured
+    /// curve. Its value is NaN past the curves' reach.
+    pub fn beyond(&self, response: &ResponseModel, x: &[f64]) -> Option<Beyond> {
+        let lim = self.rigid_limit.as_ref()?;
+        let Reading {
+            clamped,
+            place,
+            reached,
+            cohesion,
+        } = self.reading(x)?;
         let nan = |clamped: Vec<f64>| Beyond {
             clamped,
             place,
@@ -944,26 +1047,71 @@ impl Metamodel {
         let shift = match form {
             Form::Shift => v * factor,
             Form::Slope => {
-                // The slope along the lines the curve was measured on, which move the wall
-                // with the particles; scaling an input by 10 moves its group one decade.
-                let Some((_, g)) = self.equation_value_and_gradient(response, &clamped) else {
+                // The curves were measured without cohesion: the slope is the equation's
+                // without it.
+                let mut dry = clamped.clone();
+                for c in &cohesion {
+                    dry[c.input] = 0.0;
+                }
+                let along: Vec<usize> = std::iter::once((&lim.group, &lim.along))
+                    .chain(lim.wall.as_ref().map(|(g, a)| (g, a)))
+                    .filter_map(|(g, a)| self.along_input(g, a))
+                    .collect();
+                let Some(slope) = self.slope_per_decade(response, &dry, &along) else {
                     return Some(nan(clamped));
                 };
-                let along = std::iter::once((&lim.group, &lim.along))
-                    .chain(lim.wall.as_ref().map(|(g, a)| (g, a)))
-                    .filter_map(|(g, a)| self.along_input(g, a));
-                along
-                    .map(|k| g[k] * clamped[k] * std::f64::consts::LN_10)
-                    .sum::<f64>()
-                    * v
+                slope * v
             }
         };
+        // The similarity's scatter, in proportion to the carried cohesion.
+        let mut var = sd * sd;
+        for c in &cohesion {
+            let coh = &lim.cohesion[c.cohesion];
+            let Some(curve) = coh.curves.iter().find(|k| k.response == response.name) else {
+                return Some(nan(clamped));
+            };
+            let Some(gd) = self.groups.iter().find(|g| g.group.name == coh.group) else {
+                continue;
+            };
+            let carried = self.group_value(&gd.group, &clamped);
+            var += (curve.sd_at(c.decades) * carried / coh.reference).powi(2);
+        }
         Some(Beyond {
             clamped,
             place,
             value: f0 + shift,
-            sd: sd * factor,
+            sd: var.sqrt() * factor,
         })
+    }
+
+    /// The equation's slope per decade of the inputs `along` moved together (scaling an input
+    /// by 10 moves its group one decade), as the rigid limit's lines move the wall with the
+    /// particles. From the gradient, or where that is not finite (a sqrt of a cohesion at 0,
+    /// which does not move along them) by a central difference along the line.
+    pub fn slope_per_decade(
+        &self,
+        response: &ResponseModel,
+        x: &[f64],
+        along: &[usize],
+    ) -> Option<f64> {
+        if let Some((_, g)) = self.equation_value_and_gradient(response, x) {
+            return Some(
+                along
+                    .iter()
+                    .map(|&k| g[k] * x[k] * std::f64::consts::LN_10)
+                    .sum(),
+            );
+        }
+        let h = 1e-4;
+        let moved = |decades: f64| {
+            let mut p = x.to_vec();
+            for &k in along {
+                p[k] *= 10f64.powf(decades);
+            }
+            self.equation_at(response, &p)
+        };
+        let s = (moved(h) - moved(-h)) / (2.0 * h);
+        s.is_finite().then_some(s)
     }
 
     /// The dimensional factor of a response fitted dimensionless (rho_p for the bulk density,
@@ -1147,7 +1295,7 @@ impl Metamodel {
             .map(|(i, &v)| (i.name.as_str(), v, i.domain))
             .collect();
         for g in &self.groups {
-            let value = self.group_value(&g.group, x);
+            let value = self.group_read_value(&g.group, x);
             let range = self.group_range(g);
             // A group is a product of powers: the same point computed along another path (a
             // file's digits read back, another order of factors) may differ in the last bits,

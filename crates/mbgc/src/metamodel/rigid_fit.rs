@@ -4,7 +4,9 @@
 //! limit.
 
 use super::model::Metamodel;
-use super::rigid_limit::{Curve, LineShifts, RigidLimit};
+use super::rigid_limit::{
+    Cohesion, CohesionCurve, CohesionKnot, Curve, LineShifts, RigidLimit, COHESION_POWER,
+};
 use crate::error::{Error, Result};
 
 /// One line: the model's inputs at its point (any value of the input moved along the group)
@@ -141,6 +143,7 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
         // Only the lines with a run at an edge and beyond it: the others measured nothing.
         lines: used,
         source: fit.source.clone(),
+        cohesion: Vec::new(),
     });
     Ok(m)
 }
@@ -199,9 +202,8 @@ fn line_shifts(
     }
     let resp = &model.responses[r];
     let factor = model.factor_at(resp, &x);
-    let (_, g) = model.equation_value_and_gradient(resp, &x)?;
-    let slope = g[k_along] * x[k_along] * std::f64::consts::LN_10
-        + wall_along.map_or(0.0, |w| g[w] * x[w] * std::f64::consts::LN_10);
+    let along: Vec<usize> = std::iter::once(k_along).chain(wall_along).collect();
+    let slope = model.slope_per_decade(resp, &x, &along)?;
     // One run's noise variance in the fitted unit, at its 95 % lower bound (only what surely
     // is noise is taken off); unknown noise is taken as none (the scatter then keeps it, which
     // errs on the safe side).
@@ -226,5 +228,188 @@ fn line_shifts(
             .iter()
             .map(|&&(_, _, n)| var * (1.0 / n_edge as f64 + 1.0 / n as f64))
             .collect(),
+    })
+}
+
+/// One line's runs with and without cohesion, as the cohesion fit takes them.
+#[derive(Clone, Debug)]
+pub struct CohesionLine {
+    /// The point's name.
+    pub label: String,
+    /// The model's inputs at the point, in the model's order (any stiffness, no cohesion).
+    pub inputs: Vec<f64>,
+    /// The runs as `(stiffness group K, cohesion group C, one value per model response, NaN
+    /// where missing)`; C = 0 for the runs without cohesion.
+    pub runs: Vec<(f64, f64, Vec<f64>)>,
+}
+
+/// Relative tolerance on a run's cohesion matching the edge's carried by
+/// [`COHESION_POWER`]: the tables write it to four or five significant digits.
+const SAME_COHESION: f64 = 1e-3;
+
+/// Measures how well a cohesion group carried to the stiffness edge
+/// ([`super::rigid_limit::Cohesion`]) stands for the material beyond it. Each line has runs
+/// on the edge with cohesion C_e and without, and beyond it at K with C_e (K / K_e)^(2/3) and
+/// without; the cohesion effect there minus the edge's is what the similarity misses. Runs at
+/// other cohesions are left out. `model` must carry its rigid limit.
+pub fn fit_cohesion(
+    model: &Metamodel,
+    group: &str,
+    along: &str,
+    contact: [&str; 2],
+    lines: &[CohesionLine],
+    measured: String,
+) -> Result<Cohesion> {
+    let bad = |what: String| Error::invalid(format!("rigid limit, cohesion: {what}"));
+    let lim = model
+        .rigid_limit
+        .as_ref()
+        .ok_or_else(|| bad("the model has no rigid limit to carry its cohesion".into()))?;
+    model
+        .along_input(group, along)
+        .ok_or_else(|| bad(format!("{along} does not enter {group} alone with power 1")))?;
+    let gd = model
+        .groups
+        .iter()
+        .find(|g| g.group.name == lim.group)
+        .ok_or_else(|| bad(format!("the model has no group {}", lim.group)))?;
+    let edge = gd.domain[1];
+    let mut reference: Option<f64> = None;
+    // Per response: (decades, difference, noise variance) of every line.
+    let mut diffs: Vec<Vec<(f64, f64, f64)>> = vec![Vec::new(); model.responses.len()];
+    for line in lines {
+        // Seed means at each (K, C).
+        let mut means: Vec<(f64, f64, Vec<f64>, Vec<usize>)> = Vec::new();
+        for (k, c, v) in &line.runs {
+            let at = means
+                .iter()
+                .position(|m| (m.0 / k - 1.0).abs() < 1e-9 && (m.1 - c).abs() <= 1e-9 * c.abs());
+            let i = at.unwrap_or_else(|| {
+                means.push((*k, *c, vec![0.0; v.len()], vec![0; v.len()]));
+                means.len() - 1
+            });
+            for (r, y) in v.iter().enumerate() {
+                if y.is_finite() {
+                    means[i].2[r] += y;
+                    means[i].3[r] += 1;
+                }
+            }
+        }
+        let mean = |k: f64, c: f64, r: usize| {
+            means
+                .iter()
+                .find(|m| {
+                    (m.0 / k - 1.0).abs() < 1e-9
+                        && (m.1 - c).abs() <= SAME_COHESION * c.abs().max(1e-300)
+                })
+                .filter(|m| m.3[r] > 0)
+                .map(|m| (m.2[r] / m.3[r] as f64, m.3[r]))
+        };
+        let on_edge = |k: f64| (k / edge).log10().abs() < EDGE_DECADES;
+        let edge_runs: Vec<&(f64, f64, Vec<f64>, Vec<usize>)> =
+            means.iter().filter(|m| on_edge(m.0) && m.1 > 0.0).collect();
+        let Some(first) = edge_runs.first() else {
+            continue;
+        };
+        let (k_e, c_e) = (first.0, first.1);
+        if edge_runs
+            .iter()
+            .any(|m| (m.1 / c_e - 1.0).abs() > SAME_COHESION)
+        {
+            return Err(bad(format!(
+                "line {}: runs at two cohesions on the edge; expected one",
+                line.label
+            )));
+        }
+        match reference {
+            Some(r) if (r / c_e - 1.0).abs() > SAME_COHESION => {
+                return Err(bad(format!(
+                    "line {}: edge cohesion {c_e}, another line's is {r}; expected one for all",
+                    line.label
+                )))
+            }
+            _ => reference = Some(c_e),
+        }
+        let mut x = line.inputs.clone();
+        let scale = edge / model.group_value(&gd.group, &x);
+        if let Some(k) = model.along_input(&lim.group, &lim.along) {
+            x[k] *= scale;
+        }
+        for (r, resp) in model.responses.iter().enumerate() {
+            let factor = model.factor_at(resp, &x);
+            let var = resp.replicate_sd.map_or(0.0, |sd| {
+                (super::noise::lower_bound(sd, resp.replicate_pairs) / factor).powi(2)
+            });
+            let (Some((ye_c, ne_c)), Some((ye_0, ne_0))) = (mean(k_e, c_e, r), mean(k_e, 0.0, r))
+            else {
+                continue;
+            };
+            for m in means.iter().filter(|m| !on_edge(m.0) && m.0 > edge) {
+                let carried = c_e * (m.0 / k_e).powf(COHESION_POWER);
+                if (m.1 / carried - 1.0).abs() > SAME_COHESION {
+                    continue;
+                }
+                let (Some((y_c, n_c)), Some((y_0, n_0))) = (mean(m.0, m.1, r), mean(m.0, 0.0, r))
+                else {
+                    continue;
+                };
+                let d = ((y_c - y_0) - (ye_c - ye_0)) / factor;
+                let noise = var
+                    * (1.0 / n_c as f64 + 1.0 / n_0 as f64 + 1.0 / ne_c as f64 + 1.0 / ne_0 as f64);
+                diffs[r].push(((m.0 / edge).log10(), d, noise));
+            }
+        }
+    }
+    let reference = reference.ok_or_else(|| {
+        bad(format!(
+            "no line has runs with cohesion on the edge of {} ({edge:.4e}, within \
+             {EDGE_DECADES} decades)",
+            lim.group
+        ))
+    })?;
+    let mut curves = Vec::new();
+    for (r, resp) in model.responses.iter().enumerate() {
+        let mut ds: Vec<f64> = diffs[r].iter().map(|d| d.0).collect();
+        ds.sort_by(f64::total_cmp);
+        ds.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+        let mut knots = Vec::new();
+        for d in ds {
+            let here: Vec<&(f64, f64, f64)> =
+                diffs[r].iter().filter(|p| (p.0 - d).abs() < 1e-6).collect();
+            if here.len() < 2 {
+                continue;
+            }
+            let n = here.len() as f64;
+            let ms = here.iter().map(|p| p.1 * p.1).sum::<f64>() / n;
+            let noise = here.iter().map(|p| p.2).sum::<f64>() / n;
+            let mean = here.iter().map(|p| p.1).sum::<f64>() / n;
+            let var = here.iter().map(|p| (p.1 - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            knots.push(CohesionKnot {
+                decades: d,
+                sd: ((ms - noise).max(0.0) + ms / n).sqrt(),
+                mean,
+                se: (var / n).sqrt(),
+                lines: here.len(),
+            });
+        }
+        if knots.is_empty() {
+            return Err(bad(format!(
+                "{}: no stiffness beyond the edge where two lines ran with the carried \
+                 cohesion C_e (K / K_e)^(2/3) and without",
+                resp.name
+            )));
+        }
+        curves.push(CohesionCurve {
+            response: resp.name.clone(),
+            knots,
+        });
+    }
+    Ok(Cohesion {
+        group: group.to_string(),
+        along: along.to_string(),
+        contact: [contact[0].to_string(), contact[1].to_string()],
+        reference,
+        curves,
+        measured,
     })
 }

@@ -20,6 +20,13 @@
 //! noise taken off: how much the shift differs between materials. It is added to the model's
 //! own error (which holds one run's noise) wherever the curve is used. Past the last measured
 //! knot the model does not answer.
+//!
+//! A cohesive model's cohesion groups (C_pp = ced_pp / (rho_p g d50)) do not stay put beyond the
+//! edge: SJKR pulls with ced times the contact area, and under gravity a Hertz contact's area
+//! over d50^2 scales as K^(-2/3) (K the contact's stiffness group), so a material beyond the edge
+//! acts as one on the edge with C (K_edge / K)^(2/3) (`docs/cohesion_stiffness.md` measures it in
+//! the DEM). The equation is read there, and a measured scatter of that similarity, growing with
+//! the mapped cohesion and the decades beyond the edge, is added to the error.
 
 use serde::{Deserialize, Serialize};
 
@@ -100,6 +107,92 @@ pub struct RigidLimit {
     pub lines: Vec<String>,
     /// The tables of runs they came from, with their FNV-1a 64 hashes.
     pub source: String,
+    /// The cohesion groups read at the edge's equivalent cohesion (empty: a model without
+    /// cohesion).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cohesion: Vec<Cohesion>,
+}
+
+/// The power of the contact stiffness by which a cohesion group is carried to the edge: a Hertz
+/// overlap under a given load scales as E*^(-2/3), and SJKR's force is ced times the contact
+/// area pi R* delta.
+pub const COHESION_POWER: f64 = 2.0 / 3.0;
+
+/// A cohesion group carried to the stiffness edge: at a point beyond it the group is read at
+/// `C (E*_edge / E*)^COHESION_POWER`, with E* the contact's effective modulus
+/// (1 / E* ~ 1 / E_a + 1 / E_b; the Poisson factors are the same on both sides and cancel).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cohesion {
+    /// The group (`C_pp`).
+    pub group: String,
+    /// Its input that moves it alone (`ced_pp`).
+    pub along: String,
+    /// The moduli of the contact's two sides (`E_p`, `E_p`; `E_p`, `E_w` for the wall's).
+    pub contact: [String; 2],
+    /// The group's value on the edge at which the scatter was measured: the scatter at another
+    /// value is scaled by the ratio (no cohesion, no scatter).
+    pub reference: f64,
+    /// One scatter curve per response.
+    pub curves: Vec<CohesionCurve>,
+    /// Where the curves come from (the lines and tables, or the group they were taken from when
+    /// this one was not measured).
+    pub measured: String,
+}
+
+/// How far the cohesion effect beyond the edge may lie from the edge's at the same carried
+/// cohesion, for one response.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CohesionCurve {
+    /// The response.
+    pub response: String,
+    /// Knots away from the edge (decades of the contact's stiffness), ordered from it.
+    pub knots: Vec<CohesionKnot>,
+}
+
+/// One stiffness at which the similarity was measured.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CohesionKnot {
+    /// Decades of the contact stiffness beyond the edge.
+    pub decades: f64,
+    /// The scatter added to a prediction there at the reference cohesion (fitted unit): the
+    /// lines' root mean square difference with the runs' noise taken off, plus its own
+    /// uncertainty (rms^2 / lines).
+    pub sd: f64,
+    /// The lines' mean difference (fitted unit), kept for the record: no shift is applied,
+    /// which the mean's standard error `se` decides.
+    pub mean: f64,
+    /// The standard error of `mean`.
+    pub se: f64,
+    /// Lines measured here.
+    pub lines: usize,
+}
+
+impl CohesionCurve {
+    /// The scatter `decades` beyond the edge at the reference cohesion: linear from 0 on the
+    /// edge (where the carried cohesion is the material's own) through the knots, and beyond
+    /// the last in proportion to the decades (a similarity measured over d decades is taken to
+    /// err as much again over each further d).
+    pub fn sd_at(&self, decades: f64) -> f64 {
+        let d = decades.abs();
+        let mut prev = (0.0, 0.0);
+        for k in &self.knots {
+            let kd = k.decades.abs();
+            if d <= kd {
+                let t = if kd > prev.0 {
+                    (d - prev.0) / (kd - prev.0)
+                } else {
+                    1.0
+                };
+                return prev.1 + t * (k.sd - prev.1);
+            }
+            prev = (kd, k.sd);
+        }
+        if prev.0 > 0.0 {
+            prev.1 * d / prev.0
+        } else {
+            0.0
+        }
+    }
 }
 
 /// One line of DEM runs through a point of the space, as the fit sees it: its value at the
@@ -322,6 +415,28 @@ impl RigidLimit {
     /// impossible.
     pub fn validate(&self, file: &str) -> Result<()> {
         let bad = |field: String, what: &str| Err(Error::input(file, field, what.to_string()));
+        for (i, c) in self.cohesion.iter().enumerate() {
+            if !(c.reference.is_finite() && c.reference > 0.0) {
+                return bad(
+                    format!("rigid_limit.cohesion[{i}].reference"),
+                    "a positive value of the group",
+                );
+            }
+            for (j, cc) in c.curves.iter().enumerate() {
+                let mut last = 0.0;
+                for (k, kn) in cc.knots.iter().enumerate() {
+                    if !(kn.sd.is_finite() && kn.sd >= 0.0 && kn.decades.is_finite())
+                        || kn.decades.abs() <= last
+                    {
+                        return bad(
+                            format!("rigid_limit.cohesion[{i}].curves[{j}].knots[{k}]"),
+                            "a finite sd of at least 0 at decades moving away from the edge",
+                        );
+                    }
+                    last = kn.decades.abs();
+                }
+            }
+        }
         if !(self.reach[0] > 0.0 && self.reach[0] <= self.reach[1] && self.reach[1].is_finite()) {
             return bad(
                 "rigid_limit.reach".into(),
@@ -447,6 +562,7 @@ mod tests {
             curves: vec![c],
             lines: vec![],
             source: String::new(),
+            cohesion: vec![],
         };
         let only_wall = Place {
             decades: 0.0,

@@ -21,6 +21,11 @@ SETS = {
     "fine_c": ("5e6", "1000", "E 5 MPa, rho_p 1000 kg/m3, no cohesion"),
     "fine_a": ("2e7", "2600", "E 20 MPa, rho_p 2600 kg/m3, no cohesion"),
     "fine_b": ("5e7", "1500", "E 50 MPa, rho_p 1500 kg/m3, no cohesion"),
+    # The same materials with a hidden SJKR cohesion between the particles (walls not
+    # cohesive): the files do not say it, as a user who does not know would write them.
+    "fine_c_sjkr": ("5e6", "1000", "E 5 MPa, rho_p 1000 kg/m3, hidden cohesion ced_pp 1e4 J/m3"),
+    "fine_a_sjkr": ("2e7", "2600", "E 20 MPa, rho_p 2600 kg/m3, hidden cohesion ced_pp 2.5e4 J/m3"),
+    "fine_c_sjkr_strong": ("5e6", "1000", "E 5 MPa, rho_p 1000 kg/m3, hidden cohesion ced_pp 1.4e4 J/m3"),
 }
 RESPONSES = ["shear_angle", "bulk_density"]
 RUNS = 3
