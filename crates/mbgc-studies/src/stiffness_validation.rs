@@ -6,7 +6,10 @@
 //! noise, and how often the stated error covers the miss; and the cost per run across K_p.
 //!
 //! `mbgc bench stiffness-validation --report docs/stiffness_validation.md`; every run is a row
-//! of `--table`, appended as it finishes, so a killed study resumes.
+//! of `--table`, appended as it finishes, so a killed study resumes. With `--cohesive` the same
+//! rows gain an SJKR cohesion (particles and walls) for the cohesive model, drawn over what it
+//! covers: C = ced / (rho_p g d50) read at the stiffness edge (C (E*_edge / E*)^(2/3) beyond it,
+//! docs/cohesion_stiffness.md) uniform up to 950, and ced_pp <= 0.01 E_p.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -17,6 +20,7 @@ use rand::RngExt as _;
 
 use super::rest_tables::{append, outcome_columns, read_tsv, run_queue};
 use super::stiffness_dependence::SHIPPED_SPACE;
+use mbgc::dem::contact::ModelClass;
 use mbgc::experiments::shear_box::{RestRule, ShearBox};
 use mbgc::experiments::{Experiment, ParamSet, RunOptions};
 use mbgc::metamodel::Metamodel;
@@ -44,6 +48,10 @@ pub struct Args {
     /// Score the finished rows only; run nothing.
     #[cfg_attr(feature = "cli", arg(long))]
     pub no_run: bool,
+    /// The same rows with a cohesion between the particles and on the walls (class
+    /// hertz,mindlin,epsd2,sjkr), for a cohesive model.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub cohesive: bool,
     /// The runs, one row each (appended as they finish).
     #[cfg_attr(
         feature = "cli",
@@ -62,16 +70,34 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The parameters of a row, in this order, then the responses and the cost.
+/// The parameters of a row, in this order, then (with cohesion) `COHESION`, the responses and
+/// the cost.
 const PARAMS: [&str; 12] = [
     "E_p", "E_w", "nu_p", "e_pp", "e_pw", "mu_pp", "mu_pw", "mu_r_pp", "mu_r_pw", "rho_p", "d50",
     "sigma_ln",
 ];
+const COHESION: [&str; 2] = ["ced_pp", "ced_pw"];
 
-fn header() -> String {
+/// The stiffness edges of the shipped campaigns (K_p and K_w): a cohesion beyond them is read
+/// on them.
+const K_SOFT: f64 = 9.83e3;
+const K_EDGE: f64 = 1.94e5;
+/// The largest cohesion group, read at the edge, a cohesive row gets: inside the shipped
+/// cohesive model's 0-978.
+const C_TOP: f64 = 950.0;
+
+fn params(cohesive: bool) -> Vec<&'static str> {
+    let mut v = PARAMS.to_vec();
+    if cohesive {
+        v.extend(COHESION);
+    }
+    v
+}
+
+fn header(cohesive: bool) -> String {
     format!(
         "row\tseed\t{}\tk_p\tshear_angle\tbulk_density\tsettled\tsteps\tparticles\tseconds",
-        PARAMS.join("\t")
+        params(cohesive).join("\t")
     )
 }
 
@@ -86,9 +112,14 @@ pub fn k_range() -> [f64; 2] {
 /// The design's first `n` rows: K_p log-uniform over the box's range, then rho_p (uniform) and
 /// d50 (log-uniform) drawn until E_p = K_p rho_p g d50 lies in seed 004's range; E_w
 /// log-uniform; the rest uniform over the shipped space.
-pub fn design(n: usize, seed: u64) -> anyhow::Result<Vec<Vec<f64>>> {
+///
+/// With `cohesive`, each row then gains ced_pp and ced_pw from a stream of its own (the rows
+/// are the same materials with and without): the cohesion group read at the edge uniform in
+/// [0, C_TOP], and ced_pp <= 0.01 E_p (the cohesive space's constraint).
+pub fn design(n: usize, seed: u64, cohesive: bool) -> anyhow::Result<Vec<Vec<f64>>> {
     let space = mbgc::space::Space::from_toml_str(SHIPPED_SPACE, "examples/space_shear_box.toml")?;
     let mut rng = mbgc::sampling::rng(seed);
+    let mut coh_rng = mbgc::sampling::rng(seed.wrapping_add(0x5eed_c0e5));
     let [k_lo, k_hi] = k_range();
     let mut rows = Vec::with_capacity(n);
     for _ in 0..n {
@@ -119,6 +150,19 @@ pub fn design(n: usize, seed: u64) -> anyhow::Result<Vec<Vec<f64>>> {
                 })
             })
             .collect::<anyhow::Result<Vec<f64>>>()?;
+        let mut row = row;
+        if cohesive {
+            let weight = rho * G * d50 * 1e-3;
+            let edge = |m: f64| m.clamp(K_SOFT * weight, K_EDGE * weight);
+            // The contact's modulus on the edge over its own (1 / E* ~ 1 / E_a + 1 / E_b).
+            let carried = |a: f64, b: f64| {
+                ((1.0 / a + 1.0 / b) / (1.0 / edge(a) + 1.0 / edge(b))).powf(2.0 / 3.0)
+            };
+            let c_pp = coh_rng.random::<f64>() * C_TOP.min(0.01 * e / weight);
+            let c_pw = coh_rng.random::<f64>() * C_TOP;
+            row.push(c_pp * weight / carried(e, e));
+            row.push(c_pw * weight / carried(e, e_w));
+        }
         rows.push(row);
     }
     Ok(rows)
@@ -136,9 +180,9 @@ struct Run {
     seconds: f64,
 }
 
-fn read_runs(path: &std::path::Path) -> anyhow::Result<Vec<Run>> {
+fn read_runs(path: &std::path::Path, cohesive: bool) -> anyhow::Result<Vec<Run>> {
     let mut out: Vec<Run> = Vec::new();
-    for (i, c) in read_tsv(path, &header())?.into_iter().enumerate() {
+    for (i, c) in read_tsv(path, &header(cohesive))?.into_iter().enumerate() {
         let num = |j: usize| -> anyhow::Result<f64> {
             c[j].parse().with_context(|| {
                 format!(
@@ -159,7 +203,7 @@ fn read_runs(path: &std::path::Path) -> anyhow::Result<Vec<Run>> {
             );
             continue;
         }
-        let p = PARAMS.len();
+        let p = params(cohesive).len();
         out.push(Run {
             row,
             params: (2..2 + p).map(num).collect::<anyhow::Result<_>>()?,
@@ -178,8 +222,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.jobs == 0 {
         anyhow::bail!("--jobs: expected at least 1");
     }
-    let rows = design(a.n, a.seed)?;
-    let done: Vec<usize> = read_runs(&a.table)?.iter().map(|r| r.row).collect();
+    let rows = design(a.n, a.seed, a.cohesive)?;
+    let done: Vec<usize> = read_runs(&a.table, a.cohesive)?
+        .iter()
+        .map(|r| r.row)
+        .collect();
     // Cheapest first (the cost grows with K_p): a study cut short has the soft rows done.
     let mut todo: Vec<usize> = (0..rows.len()).filter(|i| !done.contains(i)).collect();
     let k_of = |r: &[f64]| r[0] / (r[9] * G * r[10] * 1e-3);
@@ -197,7 +244,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             |&i, write| run_row(a, &rows, i, write),
         );
     }
-    let runs = read_runs(&a.table)?;
+    let runs = read_runs(&a.table, a.cohesive)?;
     let mut text = String::new();
     for m in &a.model {
         let model = Metamodel::load(std::path::Path::new(m))?;
@@ -213,8 +260,16 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 
 fn run_row(a: &Args, rows: &[Vec<f64>], i: usize, write: &Mutex<()>) -> anyhow::Result<()> {
     let p = &rows[i];
-    let pairs: Vec<(&str, f64)> = PARAMS.iter().copied().zip(p.iter().copied()).collect();
+    let pairs: Vec<(&str, f64)> = params(a.cohesive)
+        .into_iter()
+        .zip(p.iter().copied())
+        .collect();
     let sb = ShearBox {
+        class: if a.cohesive {
+            ModelClass::parse("hertz,mindlin,epsd2,sjkr")?
+        } else {
+            ModelClass::default()
+        },
         // The rule of the shipped campaigns.
         rest: RestRule::Kinetic,
         ..ShearBox::default()
@@ -234,18 +289,19 @@ fn run_row(a: &Args, rows: &[Vec<f64>], i: usize, write: &Mutex<()>) -> anyhow::
     );
     let _g = write.lock().map_err(|_| anyhow::anyhow!("poisoned"))?;
     eprintln!("{line}");
-    append(&a.table, &header(), &[line])
+    append(&a.table, &header(a.cohesive), &[line])
 }
 
-/// A run's parameters in the order of the model's inputs `names` (NaN for one it lacks).
-fn model_point(names: &[String], r: &Run) -> Vec<f64> {
+/// A run's parameters in the order of the model's inputs `names` (NaN for one it lacks; no
+/// cohesion for a cohesion the runs did not have).
+fn model_point(names: &[String], r: &Run, cohesive: bool) -> Vec<f64> {
+    let p = params(cohesive);
     names
         .iter()
-        .map(|n| {
-            PARAMS
-                .iter()
-                .position(|p| p == n)
-                .map_or(f64::NAN, |k| r.params[k])
+        .map(|n| match p.iter().position(|q| q == n) {
+            Some(k) => r.params[k],
+            None if COHESION.contains(&n.as_str()) => 0.0,
+            None => f64::NAN,
         })
         .collect()
 }
@@ -264,15 +320,24 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
     let _ = writeln!(
         w,
         "# `{label}` over seed 004's box of stiffness, density and size\n\nRegenerate with \
-         `cargo run --release -- bench stiffness-validation --n {} --seed {} --table {} --model \
-         {label}` (runs the rows not yet in the table, one core each, then scores).\n\nThe \
-         design: K_p log-uniform from {k_lo:.3e} to {k_hi:.3e} (E_p in [5e6, 5e8] Pa, rho_p in \
-         [250, 3000] kg/m3, d50 in [0.4, 25.6] mm), E_w log-uniform in [5e6, 5e8], every other \
-         parameter uniform over the shipped space; each row run once with the kinetic rest \
-         rule, never trained on. {} of {} rows run.\n",
+         `cargo run --release -- bench stiffness-validation --n {} --seed {}{} --table {} \
+         --model {label}` (runs the rows not yet in the table, one core each, then \
+         scores).\n\nThe design: K_p log-uniform from {k_lo:.3e} to {k_hi:.3e} (E_p in [5e6, \
+         5e8] Pa, rho_p in [250, 3000] kg/m3, d50 in [0.4, 25.6] mm), E_w log-uniform in [5e6, \
+         5e8], every other parameter uniform over the shipped space{}; each row run once with \
+         the kinetic rest rule, never trained on. {} of {} rows run.\n",
         a.n,
         a.seed,
+        if a.cohesive { " --cohesive" } else { "" },
         a.table.display(),
+        if a.cohesive {
+            "; an SJKR cohesion between the particles and on the walls (class \
+             hertz,mindlin,epsd2,sjkr), C = ced / (rho_p g d50) read at the stiffness edge \
+             (K 9.83e3 or 1.94e5; C (E*_edge / E*)^(2/3) beyond it) uniform in [0, 950], and ced_pp <= \
+             0.01 E_p"
+        } else {
+            ""
+        },
         runs.len(),
         a.n
     );
@@ -288,7 +353,7 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
     let scored: Vec<Scored> = runs
         .iter()
         .map(|r| {
-            let x = model_point(&names, r);
+            let x = model_point(&names, r, a.cohesive);
             let inside = model.outside_domain(&x).is_empty();
             let one = |rm| {
                 if inside {
@@ -378,7 +443,7 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
     let refused: Vec<String> = runs
         .iter()
         .filter_map(|r| {
-            let x = model_point(&names, r);
+            let x = model_point(&names, r, a.cohesive);
             model.outside_domain(&x).first().map(|(n, v, d)| {
                 format!(
                     "row {}: {n} = {v:.3e} outside [{:.3e}, {:.3e}]",
@@ -427,8 +492,8 @@ mod tests {
 
     #[test]
     fn the_design_fills_the_box_and_extends_with_its_first_rows_kept() {
-        let d = design(200, 40).unwrap();
-        let again = design(210, 40).unwrap();
+        let d = design(200, 40, false).unwrap();
+        let again = design(210, 40, false).unwrap();
         assert_eq!(d[..], again[..200], "a larger n keeps the first rows");
         let [k_lo, k_hi] = k_range();
         let mut ks = Vec::new();
@@ -447,6 +512,53 @@ mod tests {
                 .filter(|u| **u >= q as f64 / 5.0 && **u < (q + 1) as f64 / 5.0)
                 .count();
             assert!((20..=60).contains(&n), "fifth {q}: {n} of 200");
+        }
+    }
+
+    #[test]
+    fn the_cohesive_design_is_the_same_materials_with_a_cohesion_the_model_covers() {
+        let dry = design(60, 40, false).unwrap();
+        let wet = design(60, 40, true).unwrap();
+        let model = Metamodel::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../models/shear_box_sjkr.json"
+        )))
+        .unwrap();
+        let names = model.input_names();
+        let (mut pp, mut pw) = (Vec::new(), Vec::new());
+        for (d, w) in dry.iter().zip(&wet) {
+            assert_eq!(d[..], w[..PARAMS.len()]);
+            let (ced_pp, ced_pw) = (w[PARAMS.len()], w[PARAMS.len() + 1]);
+            assert!(ced_pp >= 0.0 && ced_pp <= 0.01 * w[0] * (1.0 + 1e-12));
+            let run = Run {
+                row: 0,
+                params: w.clone(),
+                k: 0.0,
+                angle: 0.0,
+                density: 0.0,
+                settled: true,
+                seconds: 0.0,
+            };
+            let x = model_point(&names, &run, true);
+            assert_eq!(x[names.iter().position(|n| n == "ced_pw").unwrap()], ced_pw);
+            // Read where the model reads it, the cohesion lies in the model's range (up to 950
+            // carried to K 1.94e5; the model's edge lies 0.3 % further, 0.5 % more cohesion).
+            for (g, v) in [("C_pp", &mut pp), ("C_pw", &mut pw)] {
+                let gd = model.groups.iter().find(|d| d.group.name == g).unwrap();
+                let c = model.group_read_value(&gd.group, &x);
+                assert!(
+                    c >= 0.0 && c <= 1.006 * C_TOP && c <= gd.domain[1],
+                    "{g} = {c}"
+                );
+                v.push(c);
+            }
+        }
+        // Spread over the range, not bunched at 0.
+        for v in [pp, pw] {
+            assert!(
+                v.iter().filter(|c| **c > 0.5 * C_TOP).count() >= 10,
+                "{v:?}"
+            );
         }
     }
 }
