@@ -82,6 +82,8 @@ const COHESION: [&str; 2] = ["ced_pp", "ced_pw"];
 /// on them.
 const K_SOFT: f64 = 9.83e3;
 const K_EDGE: f64 = 1.94e5;
+/// The cohesive space's largest ced_pp and ced_pw (J/m3, examples/space_shear_box_sjkr.toml).
+const CED_MAX: f64 = 2.5e5;
 /// The largest cohesion group, read at the edge, a cohesive row gets: inside the shipped
 /// cohesive model's 0-978.
 const C_TOP: f64 = 950.0;
@@ -160,8 +162,10 @@ pub fn design(n: usize, seed: u64, cohesive: bool) -> anyhow::Result<Vec<Vec<f64
             };
             let c_pp = coh_rng.random::<f64>() * C_TOP.min(0.01 * e / weight);
             let c_pw = coh_rng.random::<f64>() * C_TOP;
-            row.push(c_pp * weight / carried(e, e));
-            row.push(c_pw * weight / carried(e, e_w));
+            // And inside the cohesive space's ced range (a rare row beyond it is held at its
+            // top, which keeps every other row as drawn).
+            row.push((c_pp * weight / carried(e, e)).min(CED_MAX));
+            row.push((c_pw * weight / carried(e, e_w)).min(CED_MAX));
         }
         rows.push(row);
     }
@@ -333,8 +337,8 @@ fn report(a: &Args, label: &str, model: &Metamodel, runs: &[Run]) -> String {
         if a.cohesive {
             "; an SJKR cohesion between the particles and on the walls (class \
              hertz,mindlin,epsd2,sjkr), C = ced / (rho_p g d50) read at the stiffness edge \
-             (K 9.83e3 or 1.94e5; C (E*_edge / E*)^(2/3) beyond it) uniform in [0, 950], and ced_pp <= \
-             0.01 E_p"
+             (K 9.83e3 or 1.94e5; C (E*_edge / E*)^(2/3) beyond it) uniform in [0, 950], ced_pp <= \
+             0.01 E_p and both at most 2.5e5 J/m3"
         } else {
             ""
         },
@@ -530,6 +534,7 @@ mod tests {
             assert_eq!(d[..], w[..PARAMS.len()]);
             let (ced_pp, ced_pw) = (w[PARAMS.len()], w[PARAMS.len() + 1]);
             assert!(ced_pp >= 0.0 && ced_pp <= 0.01 * w[0] * (1.0 + 1e-12));
+            assert!(ced_pp <= CED_MAX && (0.0..=CED_MAX).contains(&ced_pw));
             let run = Run {
                 row: 0,
                 params: w.clone(),
