@@ -281,9 +281,9 @@ pub fn fit_cohesion(
         // Seed means at each (K, C).
         let mut means: Vec<(f64, f64, Vec<f64>, Vec<usize>)> = Vec::new();
         for (k, c, v) in &line.runs {
-            let at = means
-                .iter()
-                .position(|m| (m.0 / k - 1.0).abs() < 1e-9 && (m.1 - c).abs() <= 1e-9 * c.abs());
+            let at = means.iter().position(|m| {
+                (m.0 / k - 1.0).abs() < 1e-9 && (m.1 - c).abs() <= SAME_COHESION * c.abs()
+            });
             let i = at.unwrap_or_else(|| {
                 means.push((*k, *c, vec![0.0; v.len()], vec![0; v.len()]));
                 means.len() - 1
