@@ -151,9 +151,8 @@ fn box_points(path: &str) {
             .collect();
         let mut x = x;
         let k = |n: &str| names.iter().position(|m| m == n);
-        for (ced, group) in [("ced_pp", "C_pp"), ("ced_pw", "C_pw")] {
-            let (Some(kc), Some(g)) = (k(ced), model.groups.iter().find(|g| g.group.name == group))
-            else {
+        for ced in ["ced_pp", "ced_pw"] {
+            let (Some(kc), Some(g)) = (k(ced), model.group_of_input(ced)) else {
                 continue;
             };
             // The group is linear in ced, carried or not: its read value per unit of ced.

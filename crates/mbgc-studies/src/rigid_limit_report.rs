@@ -99,25 +99,34 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             coh_source.join(", "),
             source.join(", ")
         );
+        let group_of = |ced: &str| {
+            extended
+                .group_of_input(ced)
+                .map(|g| g.group.name.clone())
+                .filter(|g| extended.along_input(g, ced).is_some())
+        };
+        let pp_group = group_of("ced_pp")
+            .ok_or_else(|| anyhow::anyhow!("the model has no group that ced_pp alone moves"))?;
         let pp = fit_cohesion(
             &extended,
-            "C_pp",
+            &pp_group,
             "ced_pp",
             ["E_p", "E_p"],
             &coh_lines,
             measured,
         )?;
         let mut cohesion = vec![pp.clone()];
-        if extended.along_input("C_pw", "ced_pw").is_some() {
+        if let Some(pw_group) = group_of("ced_pw") {
             // The lines' walls were not cohesive: the wall's similarity is the particles'
-            // physics with the wall contact's modulus, its scatter taken over unmeasured.
+            // physics with the wall contact's modulus, its scatter taken over unmeasured. The
+            // reference carries over: at E_w = E_p both groups have one value per ced.
             cohesion.push(mbgc::metamodel::rigid_limit::Cohesion {
-                group: "C_pw".into(),
+                group: pw_group,
                 along: "ced_pw".into(),
                 contact: ["E_p".into(), "E_w".into()],
-                measured: "not measured (the lines' walls were not cohesive): the scatter of \
-                           C_pp"
-                    .into(),
+                measured: format!(
+                    "not measured (the lines' walls were not cohesive): the scatter of {pp_group}"
+                ),
                 ..pp
             });
         }
@@ -211,7 +220,7 @@ fn cohesion_lines(model: &Metamodel, rows: &[Row]) -> anyhow::Result<Vec<Cohesio
                 runs: rows
                     .iter()
                     .filter(|r| r.job.point == name)
-                    .map(|r| (r.job.k, r.job.bond, row_values(model, r)))
+                    .map(|r| (r.job.k, r.job.bond * WEIGHT, row_values(model, r)))
                     .collect(),
             })
         })
@@ -347,7 +356,8 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
         let _ = writeln!(
             w,
             "## {} beyond the stiffness edge\n\nA material beyond the edge is read on it with \
-             {} times (E*_edge / E*)^(2/3), E* the modulus of a contact between {} and {} \
+             {} times (E*_edge / E*)^(2/3), E* the modulus of a contact between {} and {}, \
+             which holds the pull of a Hertz contact per particle weight, C K^(-2/3) \
              (docs/cohesion_stiffness.md). The scatter of that similarity was measured at {} = \
              {} on the edge: on each line, the cohesion effect (the run with cohesion minus the \
              run without) at K_p beyond the edge with the carried cohesion, minus the effect on \
@@ -358,7 +368,7 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
              shown for that). Source: {}.\n\n| response | K_p | decades beyond | lines | mean \
              difference | se | sd |\n|---|---|---|---|---|---|---|",
             c.group,
-            c.group,
+            c.along,
             c.contact[0],
             c.contact[1],
             c.group,

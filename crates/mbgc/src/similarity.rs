@@ -98,25 +98,32 @@ impl Monomial {
         out
     }
 
-    /// Postfix nodes computing the monomial as a plain product and quotient, then times its
-    /// coefficient: exact where a factor is zero (a cohesion off), which [`Monomial::program`]'s
-    /// logarithm is not. `None` unless every power is +-1.
+    /// Postfix nodes computing the monomial as a plain product and quotient of its factors with
+    /// powers +-1, times `exp(ln ...)` of the others and its coefficient: exact where a factor of
+    /// power 1 is zero (a cohesion off), which [`Monomial::program`]'s logarithm is not, and with
+    /// a finite gradient there. `None` without a factor of power 1 to lead the product.
     pub fn product_program(&self, var: &impl Fn(&str) -> u16) -> Option<Vec<Node>> {
-        if self.powers.is_empty() || self.powers.iter().any(|(_, p)| p.abs() != 1.0) {
-            return None;
-        }
-        let mut out = Vec::new();
-        match self.powers.iter().position(|(_, p)| *p > 0.0) {
-            Some(k) => out.push(Node::Var(var(&self.powers[k].0))),
-            None => out.push(Node::Const(1.0)),
-        }
-        let first = self.powers.iter().position(|(_, p)| *p > 0.0);
+        let first = self.powers.iter().position(|(_, p)| *p == 1.0)?;
+        let mut out = vec![Node::Var(var(&self.powers[first].0))];
         for (k, (n, p)) in self.powers.iter().enumerate() {
-            if Some(k) == first {
+            if k == first || p.abs() != 1.0 {
                 continue;
             }
             out.push(Node::Var(var(n)));
             out.push(if *p > 0.0 { Node::Mul } else { Node::Div });
+        }
+        let rest = Monomial {
+            coefficient: 1.0,
+            powers: self
+                .powers
+                .iter()
+                .filter(|(_, p)| p.abs() != 1.0)
+                .cloned()
+                .collect(),
+        };
+        if !rest.powers.is_empty() {
+            out.extend(rest.ln_program(var));
+            out.extend([Node::Exp, Node::Mul]);
         }
         if self.coefficient != 1.0 {
             out.extend([Node::Const(self.coefficient), Node::Mul]);
@@ -175,6 +182,11 @@ pub struct Similarity {
     pub groups: Vec<Group>,
     /// Responses fitted as dimensionless fractions of a known factor.
     pub scaled: Vec<ScaledResponse>,
+    /// Groups the equations do not read whose range over the data still bounds the model: a
+    /// box in the fitted groups can hold points no run came near (Ca_pp = C_pp K_p^(-2/3) high
+    /// at the stiff end, where the runs' C_pp stopped lower), so `C_pp`'s own range is kept.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub support: Vec<Group>,
 }
 
 impl Similarity {
@@ -183,6 +195,8 @@ impl Similarity {
     /// one point outside which every prediction would be refused. Its inputs stop being absorbed.
     pub fn without_constant_groups(mut self, is_fixed: impl Fn(&str) -> bool) -> Similarity {
         self.groups
+            .retain(|g| !g.monomial.powers.iter().all(|(n, _)| is_fixed(n)));
+        self.support
             .retain(|g| !g.monomial.powers.iter().all(|(n, _)| is_fixed(n)));
         self
     }
@@ -233,13 +247,75 @@ pub fn per_particle_weight(name: &str) -> Monomial {
     }
 }
 
+/// The group of a cohesion energy density `name` (`ced_pp`; `pair` its suffix `_pp`): the
+/// pull ced x contact area of a contact under a particle's weight, per that weight. Every normal
+/// force of the classes is Hertz elasticity, whose contact area under a force F is (F R /
+/// E*)^(2/3), so the pull per weight is C K^(-2/3) with C = ced / (rho_p g d50) and K the
+/// contact's stiffness group: `Ca_pp = ced_pp E_p^(-2/3) (rho_p g d50)^(-1/3)`. A run keeps its
+/// responses when ced and E change at fixed Ca (docs/cohesion_stiffness.md measures it over
+/// three decades of K), which C alone does not: a model fitted in C has no reason to fade its
+/// cohesion with stiffness, one fitted in Ca has it built in. The wall contact's modulus E* is
+/// E_p E_w / (E_p + E_w) (one Poisson ratio); a monomial takes its geometric mean sqrt(E_p
+/// E_w), exact at E_w = E_p up to the factor of 2 that the fit's scaling absorbs.
+fn contact_pull(name: &str, pair: &str, what: &str) -> Group {
+    let c = per_particle_weight(name);
+    let moduli: Vec<(String, f64)> = if pair == "_pp" {
+        vec![("E_p".into(), -2.0 / 3.0)]
+    } else {
+        vec![("E_p".into(), -1.0 / 3.0), ("E_w".into(), -1.0 / 3.0)]
+    };
+    let mut powers = vec![
+        (name.to_string(), 1.0),
+        ("rho_p".to_string(), -1.0 / 3.0),
+        ("d50".to_string(), -1.0 / 3.0),
+    ];
+    powers.extend(moduli);
+    Group {
+        name: format!("Ca{pair}"),
+        what: format!(
+            "{what}: its pull on a Hertz contact per particle weight, C{pair} K^(-2/3) = {name} \
+             E*^(-2/3) (rho_p g d50)^(-1/3)"
+        ),
+        monomial: Monomial {
+            // C K^(-2/3): the weight's coefficient to the power 1 - 2/3.
+            coefficient: c.coefficient.cbrt(),
+            powers,
+        },
+    }
+}
+
+/// The support groups ([`Similarity::support`]) of [`bulk_groups`]: for each cohesion energy
+/// density of the class for `pairs`, C = ced / (rho_p g d50), whose range over the runs bounds
+/// the model where its fitted group [`contact_pull`] alone would not.
+pub fn bulk_support(
+    class: &mbgc_dem::contact::ModelClass,
+    pairs: &[mbgc_dem::contact::Pair],
+) -> Vec<Group> {
+    class
+        .parameters(pairs)
+        .iter()
+        .filter_map(|(name, spec, _)| {
+            let pair = name.strip_prefix("ced")?;
+            Some(Group {
+                name: format!("C{pair}"),
+                what: format!(
+                    "{} per particle weight per area, {name} / (rho_p g d50): a bound of the \
+                     runs, not read by the equations",
+                    spec.what
+                ),
+                monomial: per_particle_weight(name),
+            })
+        })
+        .collect()
+}
+
 /// The groups of a bulk experiment under gravity whose only lengths are d50 and sizes in units
 /// of it, and whose stresses are E_p, E_w (when the material meets walls: `pairs`), `stresses`
 /// (the experiment's own, as (group name, parameter, meaning)) and any effect parameter of the
 /// class for those pairs that is a stress (cohesion's energy density): K_p = E_p /
-/// (rho_p g d50), K_w, the experiment's, then C_pp =
-/// ced_pp / (rho_p g d50) and the like. `None` when the class has an effect parameter of
-/// another dimension (a spring in N/m), which would need a group of its own.
+/// (rho_p g d50), K_w, the experiment's, then a cohesion's Ca_pp = C_pp K_p^(-2/3)
+/// ([`contact_pull`]) and any other stress's Pi = stress / (rho_p g d50). `None` when the
+/// class has an effect parameter of another dimension (a spring in N/m), which would need a group of its own.
 pub fn bulk_groups(
     class: &mbgc_dem::contact::ModelClass,
     pairs: &[mbgc_dem::contact::Pair],
@@ -273,16 +349,16 @@ pub fn bulk_groups(
         });
     }
     for (name, spec, _) in params.iter().filter(|(_, spec, _)| stress(spec.unit)) {
-        groups.push(Group {
-            name: match name.strip_prefix("ced") {
-                Some(pair) => format!("C{pair}"),
-                None => format!("Pi_{name}"),
+        groups.push(match name.strip_prefix("ced") {
+            Some(pair) => contact_pull(name, pair, spec.what),
+            None => Group {
+                name: format!("Pi_{name}"),
+                what: format!(
+                    "{} per particle weight per area, {name} / (rho_p g d50)",
+                    spec.what
+                ),
+                monomial: per_particle_weight(name),
             },
-            what: format!(
-                "{} per particle weight per area, {name} / (rho_p g d50)",
-                spec.what
-            ),
-            monomial: per_particle_weight(name),
         });
     }
     Some(groups)
@@ -331,5 +407,37 @@ mod tests {
         assert!((m.log_derivative("rho", 2600.0) + 1.0 / 2600.0).abs() < 1e-18);
         assert_eq!(m.log_derivative("nu", 0.3), 0.0);
         assert_eq!(m.text(), "101.9 E / (rho d)");
+        // A zero-able factor of power 1 with fractional others: the product is exact at zero,
+        // and the zero never meets a logarithm (whose derivative there is infinite).
+        let pull = Monomial {
+            coefficient: 3.0,
+            powers: vec![
+                ("d".into(), 1.0),
+                ("E".into(), -2.0 / 3.0),
+                ("rho".into(), -1.0),
+            ],
+        };
+        let p = pull.product_program(&var).unwrap();
+        let want = 3.0 * 8.0 * 5e6f64.powf(-2.0 / 3.0) / 2600.0;
+        assert!((eval(&p, &x) / want - 1.0).abs() < 1e-12);
+        assert_eq!(eval(&p, &[5e6, 2600.0, 0.0]), 0.0);
+        let logs_of_d = p
+            .windows(2)
+            .filter(|w| w[0] == Node::Var(2) && w[1] == Node::Log)
+            .count();
+        assert_eq!(logs_of_d, 0, "{p:?}");
+        // Integer powers keep the plain product and quotient.
+        assert_eq!(
+            k().product_program(&var).unwrap(),
+            vec![
+                Node::Var(0),
+                Node::Var(1),
+                Node::Div,
+                Node::Var(2),
+                Node::Div,
+                Node::Const(1.0 / 9.81e-3),
+                Node::Mul
+            ]
+        );
     }
 }

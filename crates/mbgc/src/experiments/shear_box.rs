@@ -593,12 +593,14 @@ impl Experiment for ShearBox {
     /// Gravity, d50 and the box (k d_max) are the only lengths, and E_p, E_w and any effect
     /// parameter that is a stress (cohesion's energy density, J/m^3 = N/m^2) the only stresses:
     /// E_p, E_w, rho_p and d50 act through K_p = E_p / (rho_p g d50), K_w, and one such group per
-    /// stress parameter (SJKR: C_pp = ced_pp / (rho_p g d50), C_pw), and the bulk density is
+    /// stress parameter (SJKR: Ca_pp = C_pp K_p^(-2/3), C_pp = ced_pp / (rho_p g d50), and Ca_pw;
+    /// C_pp and C_pw bound the model as support groups), and the bulk density is
     /// rho_p times the solid fraction (bit-for-bit tests below). An effect parameter of any other
     /// dimension (a spring in N/m, a damper) would need a group of its own: no similarity then.
     fn similarity(&self) -> Option<Similarity> {
         Some(Similarity {
             groups: crate::similarity::bulk_groups(&self.class, &Pair::BOTH, &[])?,
+            support: crate::similarity::bulk_support(&self.class, &Pair::BOTH),
             scaled: vec![ScaledResponse {
                 response: "bulk_density".into(),
                 factor: Monomial {
@@ -1079,7 +1081,8 @@ mod tests {
     }
 
     /// With SJKR the energy density is one more stress: scaled with E (C = ced / (rho_p g d50)
-    /// held), the run repeats bit for bit; the similarity offers C_pp and C_pw as groups.
+    /// held), the run repeats bit for bit; the similarity offers the Hertz contact's pull
+    /// Ca = C K^(-2/3) for each pair as groups.
     #[test]
     fn cohesion_acts_through_its_energy_density_per_particle_weight() {
         let base = scaled_cohesive_run(4.0, 2000.0, 4e6, Some(2e4));
@@ -1100,15 +1103,23 @@ mod tests {
         };
         let sim = sb.similarity().expect("sjkr keeps a similarity");
         let names: Vec<&str> = sim.groups.iter().map(|g| g.name.as_str()).collect();
-        assert_eq!(names, ["K_p", "K_w", "C_pp", "C_pw"]);
-        let c = &sim.groups[2].monomial;
-        let v = c.value(|n| match n {
-            "ced_pp" => 2e4,
+        assert_eq!(names, ["K_p", "K_w", "Ca_pp", "Ca_pw"]);
+        let at = |n: &str| match n {
+            "ced_pp" | "ced_pw" => 2e4,
             "rho_p" => 2000.0,
             "d50" => 4.0,
+            "E_p" => 4e6,
+            "E_w" => 32e6,
             _ => f64::NAN,
-        });
-        assert!((v - 2e4 / (2000.0 * G * 4e-3)).abs() < 1e-9 * v, "{v}");
+        };
+        let weight = 2000.0 * G * 4e-3;
+        let k = |e: f64| e / weight;
+        let v = sim.groups[2].monomial.value(at);
+        let want = 2e4 / weight * k(4e6).powf(-2.0 / 3.0);
+        assert!((v / want - 1.0).abs() < 1e-12, "{v} {want}");
+        let w = sim.groups[3].monomial.value(at);
+        let want = 2e4 / weight * (k(4e6) * k(32e6)).powf(-1.0 / 3.0);
+        assert!((w / want - 1.0).abs() < 1e-12, "{w} {want}");
     }
 
     #[test]

@@ -517,6 +517,7 @@ impl Experiment for ShearCell {
         };
         Some(Similarity {
             groups,
+            support: crate::similarity::bulk_support(&self.class, self.pairs()),
             scaled: vec![
                 ScaledResponse {
                     response: "bulk_density".into(),
@@ -799,7 +800,7 @@ mod tests {
         }
         let groups = cell.similarity().unwrap().groups;
         let g: Vec<&str> = groups.iter().map(|g| g.name.as_str()).collect();
-        assert_eq!(g, ["K_p", "S", "C_pp"]);
+        assert_eq!(g, ["K_p", "S", "Ca_pp"]);
     }
 
     #[test]

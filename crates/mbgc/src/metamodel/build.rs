@@ -171,6 +171,8 @@ fn columns(table: &TrainingTable, settings: &FitSettings) -> Result<Vec<Vec<f64>
 struct Scaling {
     inputs: Vec<Input>,
     groups: Vec<GroupDomain>,
+    /// The support groups, after `groups` in the model (no GP column).
+    support: Vec<GroupDomain>,
     /// Every input scaled, `xt[k][row]`.
     xt: Vec<Vec<f64>>,
     /// The inputs GP sees (indices into `inputs`); the groups follow them.
@@ -230,8 +232,8 @@ fn scaling(
                         &table.source,
                         format!("group {}", g.name),
                         format!(
-                            "{} = {} reaches 0, so it is fitted linearly, which needs powers \
-                             of +-1",
+                            "{} = {} reaches 0, so it is fitted linearly, which needs a \
+                             factor of power 1",
                             g.name,
                             g.monomial.text()
                         ),
@@ -313,8 +315,33 @@ fn scaling(
             group: g.clone(),
             transform,
             domain,
+            support: false,
         });
     }
+    let support = settings
+        .similarity
+        .iter()
+        .flat_map(|s| &s.support)
+        .map(|g| {
+            let col: Vec<f64> = (0..n)
+                .map(|r| {
+                    g.monomial
+                        .value(|name| x_phys[var_of(settings, name) as usize][r])
+                })
+                .collect();
+            let domain = range(&col);
+            GroupDomain {
+                group: g.clone(),
+                // Not read by any equation: recorded as the identity of its range.
+                transform: Transform::Linear {
+                    offset: 0.0,
+                    width: 1.0,
+                },
+                domain,
+                support: true,
+            }
+        })
+        .collect();
     let symbols: Vec<String> = inputs.iter().map(Input::symbol).collect();
     let xt: Vec<Vec<f64>> = inputs
         .iter()
@@ -337,6 +364,7 @@ fn scaling(
     Ok(Scaling {
         inputs,
         groups,
+        support,
         xt,
         gp_inputs,
         gp_cols,
@@ -367,7 +395,7 @@ fn scaled_group(
         Transform::Linear { offset, width } => {
             let p = m
                 .product_program(&|name| var_of(settings, name))
-                .expect("a linear group has powers of +-1 (checked in scaling)");
+                .expect("a linear group has a factor of power 1 (checked in scaling)");
             eval_program(&p, x_phys)
                 .into_iter()
                 .map(|v| (v - offset) / width)
@@ -412,7 +440,7 @@ impl Scaling {
                                 g.group
                                     .monomial
                                     .product_program(&var_of)
-                                    .expect("a linear group has powers of +-1"),
+                                    .expect("a linear group has a factor of power 1"),
                             );
                             (offset, width)
                         }
@@ -917,7 +945,7 @@ pub fn fit(
             unsettled_rows: table.unsettled_rows,
             outside_rows: 0,
         },
-        groups: scaling.groups,
+        groups: scaling.groups.into_iter().chain(scaling.support).collect(),
         experiment: table.campaign.as_ref().map(|m| m.experiment.clone()),
         box_scale: table.campaign.as_ref().and_then(|m| {
             crate::campaign::registry::effective_box_scale(&m.experiment, m.box_scale)
@@ -1076,6 +1104,7 @@ mod tests {
             powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
         };
         let similarity = Similarity {
+            support: vec![],
             groups: vec![Group {
                 name: "K".into(),
                 what: "stiffness".into(),
@@ -1188,6 +1217,7 @@ mod tests {
         }
         std::fs::write(&data, text).unwrap();
         let similarity = Similarity {
+            support: vec![],
             groups: vec![Group {
                 name: "C".into(),
                 what: "cohesion".into(),
@@ -1245,6 +1275,7 @@ mod tests {
             powers: vec![("E".into(), 1.0), ("rho".into(), -1.0), ("d".into(), -1.0)],
         };
         let similarity = Similarity {
+            support: vec![],
             groups: vec![Group {
                 name: "K".into(),
                 what: "stiffness".into(),
@@ -1429,6 +1460,98 @@ mod tests {
     }
 
     #[test]
+    fn a_support_group_bounds_the_model_where_the_fitted_groups_box_holds_no_run() {
+        // Runs over K = E / (rho d) 250-2500 and C = ced / (rho d) 0-100, fitted in K and the
+        // contact pull A = C K^(-2/3); the box of (K, A) holds high A at high K, where no run
+        // has C that large: the support group C keeps that corner out.
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("t.csv");
+        let mut text = String::from("E,rho,d,ced,y\n");
+        for r in 0..40 {
+            let e = 2e6 * (1.0 + 9.0 * (r as f64 * 0.377).fract());
+            let ced = 8000.0 * 100.0 * (r as f64 * 0.618).fract();
+            text.push_str(&format!("{e},2000,4,{ced},{}\n", 10.0 + ced / 8000.0));
+        }
+        std::fs::write(&data, text).unwrap();
+        let mono = |coefficient: f64, powers: &[(&str, f64)]| Monomial {
+            coefficient,
+            powers: powers.iter().map(|(n, p)| (n.to_string(), *p)).collect(),
+        };
+        let group = |name: &str, monomial: Monomial| Group {
+            name: name.into(),
+            what: name.into(),
+            monomial,
+        };
+        let third = 1.0 / 3.0;
+        let inputs: Vec<String> = ["E", "rho", "d", "ced"].map(String::from).to_vec();
+        let settings = FitSettings::new(inputs.clone(), vec!["y".into()])
+            .test_fraction(0.0)
+            .config(gp::Config {
+                population: 100,
+                generations: 2,
+                ..gp::Config::default()
+            })
+            .similarity(Similarity {
+                groups: vec![
+                    group("K", mono(1.0, &[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
+                    group(
+                        "A",
+                        mono(
+                            1.0,
+                            &[
+                                ("ced", 1.0),
+                                ("rho", -third),
+                                ("d", -third),
+                                ("E", -2.0 * third),
+                            ],
+                        ),
+                    ),
+                ],
+                support: vec![group(
+                    "C",
+                    mono(1.0, &[("ced", 1.0), ("rho", -1.0), ("d", -1.0)]),
+                )],
+                scaled: vec![],
+            });
+        let table = TrainingTable::read_csv(&data, &inputs, &["y".to_string()]).unwrap();
+        let m = fit(&table, &settings, |_, _| {}).unwrap().model;
+        let names: Vec<(&str, bool)> = m
+            .groups
+            .iter()
+            .map(|g| (g.group.name.as_str(), g.support))
+            .collect();
+        assert_eq!(names, [("K", false), ("A", false), ("C", true)]);
+        let [k_lo, k_hi] = m.groups[0].domain;
+        let a_hi = m.groups[1].domain[1];
+        let c_hi = m.groups[2].domain[1];
+        assert!(
+            k_lo < 300.0 && k_hi > 2000.0 && c_hi > 90.0,
+            "{k_lo} {k_hi} {c_hi}"
+        );
+        // E moves K alone: the pull's own input, ced, holds A.
+        assert_eq!(m.along_input("K", "E"), Some(0));
+        assert_eq!(m.along_input("A", "ced"), Some(3));
+        assert_eq!(m.group_of_input("ced").unwrap().group.name, "A");
+        // At the stiff end, 1.5 times the largest C: A is inside its box, C is not.
+        let e = 0.99 * k_hi * 8000.0;
+        let x = [e, 2000.0, 4.0, 1.5 * c_hi * 8000.0];
+        let a = m.group_value(&m.groups[1].group, &x);
+        assert!(a < a_hi, "{a} {a_hi}");
+        // (ced, an input, is out too here: the runs held rho and d, so its range is C's.)
+        let out = m.outside_domain(&x);
+        assert!(out.iter().any(|o| o.0 == "C"), "{out:?}");
+        assert!(!out.iter().any(|o| o.0 == "K" || o.0 == "A"), "{out:?}");
+        assert!(m
+            .outside_domain(&[e, 2000.0, 4.0, 0.5 * c_hi * 8000.0])
+            .is_empty());
+        // The flag is saved with the model.
+        let path = dir.path().join("m.json");
+        m.save(&path).unwrap();
+        let back = Metamodel::load(&path).unwrap();
+        assert!(back.groups[2].support && !back.groups[1].support);
+    }
+
+    #[test]
     fn a_cohesion_group_is_carried_to_the_stiffness_edge_with_its_scatter() {
         use crate::metamodel::rigid_fit::{fit_cohesion, CohesionLine};
         use crate::metamodel::rigid_limit::{Curve, Form, Knot, LeaveOneOut, RigidLimit};
@@ -1459,6 +1582,7 @@ mod tests {
                 ..gp::Config::default()
             })
             .similarity(Similarity {
+                support: vec![],
                 groups: vec![group("K", "E"), group("C", "ced")],
                 scaled: vec![],
             });
@@ -1505,7 +1629,7 @@ mod tests {
             inputs: vec![1e6, 2000.0, 4.0, 0.0],
             runs: [(hi, 0.0), (hi, 50.0), (8.0 * hi, 0.0), (8.0 * hi, 200.0)]
                 .iter()
-                .map(|&(k, c)| (k, c, vec![truth(k, c) + kept * c / 200.0]))
+                .map(|&(k, c)| (k, 8000.0 * c, vec![truth(k, c) + kept * c / 200.0]))
                 .collect(),
         };
         let lines = [line("a", 0.0), line("b", 0.0)];

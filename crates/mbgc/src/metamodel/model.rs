@@ -286,6 +286,10 @@ pub struct GroupDomain {
     pub transform: Transform,
     /// Smallest and largest value of the group over the data: calibration keeps it inside.
     pub domain: [f64; 2],
+    /// A support group ([`crate::similarity::Similarity::support`]): the equations do not read
+    /// it, its range bounds the model all the same.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub support: bool,
 }
 
 /// Which data a model was fitted to and how the rows were split, so a fit can be traced and
@@ -903,15 +907,48 @@ impl Metamodel {
         }
     }
 
-    /// The input `along` when it enters group `group` alone (in no other group) with power 1:
+    /// The one fitted group the input `name` enters (`Ca_pp` for `ced_pp`); `None` when it
+    /// enters none or several.
+    pub fn group_of_input(&self, name: &str) -> Option<&GroupDomain> {
+        let mut it = self
+            .groups
+            .iter()
+            .filter(|g| !g.support && g.group.monomial.powers.iter().any(|(n, _)| n == name));
+        let first = it.next()?;
+        it.next().is_none().then_some(first)
+    }
+
+    /// The input `along` when it enters group `group` with power 1 and every other group it
+    /// enters has an input of its own that can hold that group still (`ced_pp` in Ca_pp =
+    /// ced_pp E_p^(-2/3) ..., which the rigid limit's cohesion carry moves as E_p moves):
     /// scaling it moves the point along that group only. Its index among the inputs.
     pub fn along_input(&self, group: &str, along: &str) -> Option<usize> {
         let gd = self.groups.iter().find(|g| g.group.name == group)?;
         let power = gd.group.monomial.powers.iter().find(|(n, _)| n == along)?.1;
-        let elsewhere = self.groups.iter().any(|g| {
-            g.group.name != group && g.group.monomial.powers.iter().any(|(n, _)| n == along)
+        let has = |g: &GroupDomain, n: &str| g.group.monomial.powers.iter().any(|(m, _)| m == n);
+        let own = |g: &GroupDomain, n: &str| {
+            g.group
+                .monomial
+                .powers
+                .iter()
+                .any(|(m, p)| m == n && *p == 1.0)
+                && self
+                    .groups
+                    .iter()
+                    .all(|o| o.group.name == g.group.name || o.support || !has(o, n))
+        };
+        // A support group is not read by the equations: moving it moves no prediction.
+        let held = self.groups.iter().all(|g| {
+            g.group.name == group
+                || g.support
+                || !has(g, along)
+                || g.group
+                    .monomial
+                    .powers
+                    .iter()
+                    .any(|(n, _)| n != along && !has(gd, n) && own(g, n))
         });
-        (power == 1.0 && !elsewhere)
+        (power == 1.0 && held)
             .then(|| self.inputs.iter().position(|i| i.name == along))
             .flatten()
     }
@@ -1009,13 +1046,15 @@ impl Metamodel {
         })
     }
 
-    /// A group's value where the model reads it at `x`: a cohesion group beyond the stiffness
-    /// edge is read at its carried value ([`Metamodel::reading`]), any other at its own.
+    /// A group's value where the model reads it at `x`: a group of a carried cohesion input
+    /// beyond the stiffness edge is read at its carried value ([`Metamodel::reading`]), any
+    /// other at its own.
     pub fn group_read_value(&self, g: &Group, x: &[f64]) -> f64 {
-        let carried = self
-            .rigid_limit
-            .as_ref()
-            .is_some_and(|l| l.cohesion.iter().any(|c| c.group == g.name));
+        let carried = self.rigid_limit.as_ref().is_some_and(|l| {
+            l.cohesion
+                .iter()
+                .any(|c| g.monomial.powers.iter().any(|(n, _)| *n == c.along))
+        });
         match self.reading(x).filter(|_| carried) {
             Some(r) => self.group_value(g, &r.clamped),
             None => self.group_value(g, x),

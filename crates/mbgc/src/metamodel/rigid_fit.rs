@@ -187,13 +187,10 @@ fn line_shifts(
                 .total_cmp(&(b.0 / edge).log10().abs())
         })?;
     // The model's inputs on the edge: the point's, the particle (and wall) moved along.
-    let gd = model.groups.iter().find(|g| {
-        g.group
-            .monomial
-            .powers
-            .iter()
-            .any(|(n, _)| *n == model.inputs[k_along].name)
-    })?;
+    let gd = model
+        .groups
+        .iter()
+        .find(|g| model.along_input(&g.group.name, &model.inputs[k_along].name) == Some(k_along))?;
     let mut x = line.inputs.clone();
     let scale = edge / model.group_value(&gd.group, &x);
     x[k_along] *= scale;
@@ -238,8 +235,9 @@ pub struct CohesionLine {
     pub label: String,
     /// The model's inputs at the point, in the model's order (any stiffness, no cohesion).
     pub inputs: Vec<f64>,
-    /// The runs as `(stiffness group K, cohesion group C, one value per model response, NaN
-    /// where missing)`; C = 0 for the runs without cohesion.
+    /// The runs as `(stiffness group K, the cohesion input (ced), one value per model response,
+    /// NaN where missing)`; ced = 0 for the runs without cohesion. A line holds its density and
+    /// size, so the carry C_e (K / K_e)^(2/3) of its C = ced / (rho_p g d50) is ced's.
     pub runs: Vec<(f64, f64, Vec<f64>)>,
 }
 
@@ -274,7 +272,14 @@ pub fn fit_cohesion(
         .find(|g| g.group.name == lim.group)
         .ok_or_else(|| bad(format!("the model has no group {}", lim.group)))?;
     let edge = gd.domain[1];
+    let along_k = model
+        .inputs
+        .iter()
+        .position(|i| i.name == along)
+        .ok_or_else(|| bad(format!("the model has no input {along}")))?;
     let mut reference: Option<f64> = None;
+    // A line's inputs on the edge, where the reference is read in the model's group.
+    let mut edge_point: Option<Vec<f64>> = None;
     // Per response: (decades, difference, noise variance) of every line.
     let mut diffs: Vec<Vec<(f64, f64, f64)>> = vec![Vec::new(); model.responses.len()];
     for line in lines {
@@ -335,6 +340,7 @@ pub fn fit_cohesion(
         if let Some(k) = model.along_input(&lim.group, &lim.along) {
             x[k] *= scale;
         }
+        edge_point.get_or_insert_with(|| x.clone());
         for (r, resp) in model.responses.iter().enumerate() {
             let factor = model.factor_at(resp, &x);
             let var = resp.replicate_sd.map_or(0.0, |sd| {
@@ -367,6 +373,17 @@ pub fn fit_cohesion(
             lim.group
         ))
     })?;
+    // The reference in the model's cohesion group: the lines' ced on the edge, read there.
+    let reference = {
+        let mut x = edge_point.expect("set with the reference");
+        let cg = model
+            .groups
+            .iter()
+            .find(|g| g.group.name == group)
+            .ok_or_else(|| bad(format!("the model has no group {group}")))?;
+        x[along_k] = reference;
+        model.group_value(&cg.group, &x)
+    };
     let mut curves = Vec::new();
     for (r, resp) in model.responses.iter().enumerate() {
         let mut ds: Vec<f64> = diffs[r].iter().map(|d| d.0).collect();
