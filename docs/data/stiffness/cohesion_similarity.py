@@ -22,7 +22,7 @@ import sys
 import tempfile
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../.."))
-MODEL = os.path.join(ROOT, "models", "shear_box_sjkr.json")
+MODEL = os.environ.get("MBGC_MODEL", os.path.join(ROOT, "models", "shear_box_sjkr.json"))
 COLS = "E_p,E_w,nu_p,e_pp,e_pw,mu_pp,mu_pw,mu_r_pp,mu_r_pw,rho_p,d50,sigma_ln,ced_pp,ced_pw".split(",")
 POINTS = {"a": (0.1, 0.1), "b": (0.7, 0.6), "c": (0.4, 0.3)}  # mu_pp, mu_r_pp
 KS = [1.5e4, 3e4, 6e4, 1.5e5]
