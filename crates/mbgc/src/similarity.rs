@@ -29,6 +29,11 @@ impl Monomial {
             .fold(self.coefficient, |acc, (n, p)| acc * value(n).powf(*p))
     }
 
+    /// Whether `input` is one of its factors.
+    pub fn contains(&self, input: &str) -> bool {
+        self.powers.iter().any(|(n, _)| n == input)
+    }
+
     /// `d ln(monomial) / d input` at a point (zero for an input it does not contain).
     pub fn log_derivative(&self, input: &str, x: f64) -> f64 {
         self.powers

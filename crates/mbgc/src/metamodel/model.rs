@@ -913,7 +913,7 @@ impl Metamodel {
         let mut it = self
             .groups
             .iter()
-            .filter(|g| !g.support && g.group.monomial.powers.iter().any(|(n, _)| n == name));
+            .filter(|g| !g.support && g.group.monomial.contains(name));
         let first = it.next()?;
         it.next().is_none().then_some(first)
     }
@@ -925,7 +925,7 @@ impl Metamodel {
     pub fn along_input(&self, group: &str, along: &str) -> Option<usize> {
         let gd = self.groups.iter().find(|g| g.group.name == group)?;
         let power = gd.group.monomial.powers.iter().find(|(n, _)| n == along)?.1;
-        let has = |g: &GroupDomain, n: &str| g.group.monomial.powers.iter().any(|(m, _)| m == n);
+        let has = |g: &GroupDomain, n: &str| g.group.monomial.contains(n);
         let own = |g: &GroupDomain, n: &str| {
             g.group
                 .monomial
@@ -1050,11 +1050,10 @@ impl Metamodel {
     /// beyond the stiffness edge is read at its carried value ([`Metamodel::reading`]), any
     /// other at its own.
     pub fn group_read_value(&self, g: &Group, x: &[f64]) -> f64 {
-        let carried = self.rigid_limit.as_ref().is_some_and(|l| {
-            l.cohesion
-                .iter()
-                .any(|c| g.monomial.powers.iter().any(|(n, _)| *n == c.along))
-        });
+        let carried = self
+            .rigid_limit
+            .as_ref()
+            .is_some_and(|l| l.cohesion.iter().any(|c| g.monomial.contains(&c.along)));
         match self.reading(x).filter(|_| carried) {
             Some(r) => self.group_value(g, &r.clamped),
             None => self.group_value(g, x),

@@ -263,7 +263,7 @@ pub fn fit_cohesion(
         .rigid_limit
         .as_ref()
         .ok_or_else(|| bad("the model has no rigid limit to carry its cohesion".into()))?;
-    model
+    let along_k = model
         .along_input(group, along)
         .ok_or_else(|| bad(format!("{along} does not enter {group} alone with power 1")))?;
     let gd = model
@@ -272,11 +272,6 @@ pub fn fit_cohesion(
         .find(|g| g.group.name == lim.group)
         .ok_or_else(|| bad(format!("the model has no group {}", lim.group)))?;
     let edge = gd.domain[1];
-    let along_k = model
-        .inputs
-        .iter()
-        .position(|i| i.name == along)
-        .ok_or_else(|| bad(format!("the model has no input {along}")))?;
     let mut reference: Option<f64> = None;
     // A line's inputs on the edge, where the reference is read in the model's group.
     let mut edge_point: Option<Vec<f64>> = None;
