@@ -3,11 +3,11 @@
 use clap::{Args, Subcommand};
 
 use mbgc_studies::{
-    cell_metamodel_report, cohesive_metamodel_report, dem_throughput, diagnose_report,
-    gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report, rest_detection,
-    rest_validation, restitution, rigid_limit_report, sampling_quality, sensitivity_report,
-    shear_box_check, shear_box_vs_liggghts, shear_cell_report, stiffness_dependence,
-    stiffness_validation,
+    cell_metamodel_report, clogging_silo_report, cohesive_metamodel_report, dem_throughput,
+    diagnose_report, gp_vs_gplearn, liggghts_backend, metamodel_benchmark, metamodel_report,
+    rest_detection, rest_validation, restitution, rigid_limit_report, sampling_quality,
+    sensitivity_report, shear_box_check, shear_box_vs_liggghts, shear_cell_report,
+    stiffness_dependence, stiffness_validation,
 };
 
 #[derive(Debug, Args)]
@@ -54,6 +54,10 @@ pub enum BenchCommand {
     /// docs/rest_detection.md: shear-box runs of a campaign table rerun with their seeds, their
     /// per-chunk traces, and the steps each rest rule saves against the response shift it costs.
     Rest(rest_detection::Args),
+    /// docs/clogging_silo.md: the clogging silo's avalanche sizes at several orifices against
+    /// the published trend (exponential sizes, a mean growing steeply with the orifice), their
+    /// run-to-run scatter and cost; runs kept in a table, so a killed study resumes.
+    CloggingSilo(clogging_silo_report::Args),
     /// docs/rest_validation.md: the shipped campaign's validation design rerun with its seeds
     /// under the candidate rest rule: cost against the recorded runs, and the shipped model's
     /// validation RMSE on both.
@@ -102,6 +106,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         BenchCommand::LiggghtsBackend(l) => liggghts_backend::run(l),
         BenchCommand::Stiffness(s) => stiffness_dependence::run(s),
         BenchCommand::RigidLimit(r) => rigid_limit_report::run(r),
+        BenchCommand::CloggingSilo(c) => clogging_silo_report::run(c),
         BenchCommand::StiffnessValidation(v) => stiffness_validation::run(v),
     }
 }

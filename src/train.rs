@@ -29,7 +29,7 @@ pub struct TrainArgs {
     /// Seed of the training design and runs; the validation set uses seed + 1.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Worker threads, one run each [default: all cores].
+    /// Worker threads: one DEM run each, then the fit's [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
     /// Simulate only the rows with row % N == K - 1 of both tables, then stop (no fit): for job

@@ -20,6 +20,8 @@
 //!   [`rest_validation`]: the shipped validation design rerun under the candidate rule, its cost
 //!   and the shipped model's RMSE on it (docs/rest_validation.md).
 //! - [`restitution`]: seed 003's Bayesian model classes on DEM impacts of steel.
+//! - [`clogging_silo_report`]: the clogging silo's avalanches against the orifice, the published
+//!   trend, their scatter and cost (docs/clogging_silo.md).
 //! - [`sensitivity_report`]: seed 000's three-level sensitivity analysis on the hopper
 //!   (docs/sensitivity.md).
 //! - [`liggghts_backend`]: the shear box as a campaign on mbgc, LIGGGHTS and LIGGGHTS under MPI
@@ -37,6 +39,7 @@
 
 mod campaign_runs;
 pub mod cell_metamodel_report;
+pub mod clogging_silo_report;
 pub mod cohesive_metamodel_report;
 pub mod dem_scene;
 pub mod dem_throughput;

@@ -2,6 +2,7 @@
 
 use super::backend::Backend;
 use crate::error::{Error, Result};
+use crate::experiments::clogging_silo::ClogSilo;
 use crate::experiments::hopper::Hopper;
 use crate::experiments::shear_box::{RestRule, ShearBox};
 use crate::experiments::shear_cell::ShearCell;
@@ -167,6 +168,13 @@ const EXPERIMENTS: &[(&str, Constructor)] = &[
         no_box_scale("hopper", s, "its size is the `scale` parameter")?;
         no_rest_rule("hopper", s)?;
         Ok(Box::new(Hopper {
+            class: s.model_class.unwrap_or_default(),
+        }))
+    }),
+    ("clogging-silo", |s| {
+        no_box_scale("clogging-silo", s, "its size is in particle diameters")?;
+        no_rest_rule("clogging-silo", s)?;
+        Ok(Box::new(ClogSilo {
             class: s.model_class.unwrap_or_default(),
         }))
     }),

@@ -86,7 +86,6 @@ use std::time::Instant;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use rand::RngExt;
 
 use super::{
     materials_from, with_class_parameters, Diagnostics, Experiment, Outcome, ParamSet, RunOptions,
@@ -741,36 +740,12 @@ impl Hopper {
         let diam = self.diameters(&s, seed)?;
         let n = diam.len();
 
-        // Loose lattice: spacing 1.3 d_max, jitter up to 45 % of the gap, sites inside the
-        // cylinder with room for the jitter.
-        let spacing = 1.3 * s.d_max;
-        let jitter = 0.45 * (spacing - s.d_max);
-        let site_r = geo.radius - 0.5 * s.d_max - jitter * 2f64.sqrt() - 1e-3 * s.d_max;
-        let m_side = (2.0 * site_r / spacing).floor() as i64 + 1;
-        let off = 0.5 * (m_side - 1) as f64 * spacing;
-        let layer: Vec<(f64, f64)> = (0..m_side)
-            .flat_map(|i| (0..m_side).map(move |j| (i, j)))
-            .map(|(i, j)| (i as f64 * spacing - off, j as f64 * spacing - off))
-            .filter(|(x, y)| (x * x + y * y).sqrt() <= site_r)
-            .collect();
-        if layer.is_empty() {
-            return Err(Error::invalid(format!(
-                "parameter d50: particles up to {:.3} mm do not fit in the container",
-                s.d_max * 1e3
-            )));
-        }
         let mut rng = crate::sampling::rng(seed);
         // An own stream: the diameters used the seed's first stream.
         rng.set_stream(1);
-        let mut particles = Particles::new();
-        let z0 = 0.5 * spacing;
-        for (i, &d) in diam.iter().enumerate() {
-            let (x, y) = layer[i % layer.len()];
-            let z = z0 + (i / layer.len()) as f64 * spacing;
-            let mut j = || (rng.random::<f64>() * 2.0 - 1.0) * jitter;
-            let pos = [x + j(), y + j(), z + j()];
-            particles.add(pos, 0.5 * d, s.rho, s.grain)?;
-        }
+        let particles = super::cylinder_fill::lattice_fill(
+            &diam, geo.radius, s.d_max, s.rho, s.grain, &mut rng,
+        )?;
         let z_top = particles.x.iter().map(|x| x[2]).fold(0.0, f64::max) + s.d_max;
 
         // Walls: container, bottom plate, shutter, fill tube, collection plate, catch cylinder
@@ -897,20 +872,10 @@ impl Hopper {
         // 1. Settle: at least the free-fall time from the top of the lattice, then until rest.
         let t_fall = (2.0 * z_top / GRAVITY).sqrt();
         let settle_cap = 2.0 * t_fall + 2.0 * s.scale.sqrt();
-        loop {
-            sim.run(chunk).map_err(|e| blew("settling", e))?;
-            let ke = sim.particles.translational_energy() / n as f64;
-            if sim.time >= t_fall && ke < ke_rest {
-                break;
-            }
-            if sim.time > settle_cap {
-                warnings.push(format!(
-                    "fill not at rest after {:.2} s (translational energy per particle {ke:.2e} \
-                     J, rest below {ke_rest:.2e} J); discharged anyway",
-                    sim.time
-                ));
-                break;
-            }
+        if let Some(w) =
+            super::cylinder_fill::settle(&mut sim, chunk, t_fall, settle_cap, ke_rest, "hopper")?
+        {
+            warnings.push(format!("{w}; discharged anyway"));
         }
         let settle_steps = sim.step;
         vtk(&sim, "hopper: settled")?;

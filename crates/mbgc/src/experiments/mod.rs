@@ -6,6 +6,8 @@
 //! returns named responses with diagnostics. [`Experiment::check`] refuses an impossible set before
 //! anything runs.
 
+pub mod clogging_silo;
+pub(crate) mod cylinder_fill;
 pub mod hopper;
 pub mod shear_box;
 pub mod shear_box_rest;

@@ -82,7 +82,7 @@ pub struct TrainRequest {
     pub name: Option<String>,
     /// Seed of the training design and runs; the validation set uses `seed + 1`.
     pub seed: u64,
-    /// Worker threads, one run each.
+    /// Worker threads: one run each while simulating, then the fit's.
     pub threads: usize,
     /// Simulate only this shard of both tables, then stop (no fit).
     pub shard: Option<Shard>,
@@ -577,8 +577,31 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             warnings: Vec::new(),
         });
     }
-    let fitted = fit(&table, &fit_settings, |target, p| {
-        observer.fit_progress(target, p)
+    // The GP's population is spread over rayon's threads; its own pool keeps --threads a bound
+    // on the fit as on the runs. Each individual draws from its own seeded stream, so the
+    // equations do not depend on the thread count.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(req.threads)
+        .build()
+        .map_err(|e| Error::invalid(format!("--threads {}: {e}", req.threads)))?;
+    // The observer need not be Sync: the fit runs on a thread of its own and sends its progress
+    // here, where the observer hears it.
+    let (tx, rx) = std::sync::mpsc::channel::<(String, gp::Progress)>();
+    let fitted = std::thread::scope(|scope| {
+        let fitting = scope.spawn(|| {
+            pool.install(move || {
+                fit(&table, &fit_settings, move |target, p| {
+                    // A closed receiver only means nobody listens any more.
+                    let _ = tx.send((target.to_string(), p.clone()));
+                })
+            })
+        });
+        for (target, p) in rx {
+            observer.fit_progress(&target, &p);
+        }
+        fitting
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
     })?;
     let figures = if req.figures {
         crate::plot::fit_figures::fit_figures(&paths.figures, &fitted)?
