@@ -309,9 +309,9 @@ fn report(a: &Args, runs: &[Run]) -> String {
         "- Published trend: exponentially distributed avalanches (a CV near 1, and e^-1 = 0.37 \
          of them above the mean), whose mean grows steeply with the orifice: Zuriguel et al. \
          (2005, Phys. Rev. E 71, 051303) fit a power-law divergence at a finite orifice size in \
-         their 3D silo of beads; Janda et al. (2008, EPL 84, 44002) an exponential-type growth \
-         without a critical size in 2D. Both agree that one more bead diameter multiplies the \
-         mean many times at these orifices. The test \
+         their 3D silo of beads; Janda et al. (2008, EPL 84, 44002) find no critical size in 2D \
+         (the mean grows fast but stays finite). In both the mean grows by orders of magnitude \
+         over the few bead diameters of orifice where clogging is common. The test \
          `clogging_silo::tests::avalanches_are_exponential_and_grow_steeply_with_the_orifice` \
          checks the trend on a 600-bead silo.\n- The noise: the sd of the runs' means is the \
          run-to-run scatter of one run's mean avalanche, the figure a propagation separates \

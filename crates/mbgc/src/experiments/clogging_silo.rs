@@ -41,10 +41,14 @@
 //! - `avalanches`: complete avalanches; `open_avalanche`: the censored one's size (0 if the
 //!   run ended clogged); `discharged`: grains passed in all; `failed_puffs`.
 //! - `bulk_density` (kg/m^3): the settled fill's, below one d_max under its free surface.
+//! - the diagnostic `settled`: the run ended by its own rule (`max_avalanches`, or half the
+//!   fill passed), not at its time limit or on an arch that [`MAX_FAILED_PUFFS`] puffs did not
+//!   break (both warn).
 //!
 //! The first avalanche starts from a settled fill, the others from a puffed arch; experiments
 //! count both alike (To et al. refilled for every avalanche, Zuriguel et al. puffed).
-//! [`ClogSiloRun::sizes`] keeps every avalanche in order for a distribution.
+//! [`ClogSiloRun::sizes`] keeps every avalanche in order for a distribution. With a VTK
+//! directory a run writes the fill, the settled fill, every clog and the end.
 
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -300,6 +304,17 @@ impl ClogSilo {
         // Checks every 0.05 sqrt(d50 / g): 1 ms at 4 mm.
         let chunk = ((0.05 * (s.d50 / g).sqrt() / s.dt).round() as u64).max(1);
 
+        let mut vtk_index = 0usize;
+        let mut vtk = |sim: &Simulation, label: &str| -> Result<()> {
+            if let Some(dir) = &opts.vtk_dir {
+                let path = dir.join(format!("silo_{vtk_index:04}.vtk"));
+                super::write_vtk(&path, &sim.particles, label)?;
+                vtk_index += 1;
+            }
+            Ok(())
+        };
+        vtk(&sim, "clogging silo: filled")?;
+
         // 1. Settle.
         let t_fall = (2.0 * z_top / g).sqrt();
         let settle_cap = 2.0 * t_fall + 40.0 * (s.d50 / g).sqrt();
@@ -314,6 +329,7 @@ impl ClogSilo {
             warnings.push(format!("{w}; opened anyway"));
         }
         let bulk_density = settled_density(&sim, radius, s.d_max, s.rho);
+        vtk(&sim, "clogging silo: settled")?;
 
         // 2.-4. Avalanches.
         sim.set_wall_active(SHUTTER, false);
@@ -332,6 +348,9 @@ impl ClogSilo {
         let t_cap = sim.time
             + (s.avalanches + MAX_FAILED_PUFFS) as f64 * 8.0 * t_quiet
             + n as f64 * t_quiet / 20.0;
+        let t_open = sim.time;
+        // Whether the run ended by its own rule (its avalanches, or half the fill passed), not
+        // at the time limit or on an arch no puff breaks.
         let mut settled = false;
         loop {
             sim.run(chunk).map_err(|e| blew("discharge", e))?;
@@ -357,6 +376,7 @@ impl ClogSilo {
             }
             let in_silo = n - discharged;
             if 2 * in_silo < n {
+                settled = true;
                 break;
             }
             if t - last_pass.max(last_event) < t_quiet {
@@ -364,7 +384,7 @@ impl ClogSilo {
                     warnings.push(format!(
                         "stopped at the time limit ({:.2} s after opening) with {} of {} \
                          avalanches",
-                        t_cap - started,
+                        t - t_open,
                         sizes.len(),
                         s.avalanches
                     ));
@@ -373,6 +393,7 @@ impl ClogSilo {
                 continue;
             }
             // Clogged.
+            vtk(&sim, "clogging silo: clogged")?;
             if current > 0 {
                 sizes.push(current);
                 durations.push(last_pass - started);
@@ -398,8 +419,9 @@ impl ClogSilo {
             started = sim.time;
             last_event = sim.time;
         }
+        vtk(&sim, "clogging silo: final")?;
         let open_avalanche = current;
-        if sizes.len() < s.avalanches && !settled && 2 * (n - discharged) < n {
+        if sizes.len() < s.avalanches && 2 * (n - discharged) < n {
             warnings.push(format!(
                 "half the fill has passed after {} of {} avalanches (raise fill for more)",
                 sizes.len(),
