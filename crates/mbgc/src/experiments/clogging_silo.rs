@@ -1,7 +1,8 @@
 //! Clogging silo (issue 41): avalanches of grains through an orifice of a few particle diameters
 //! in a flat-bottomed silo, each ended by an arch that clogs the orifice and broken by a puff
-//! from below, as in Zuriguel et al. (2005, Phys. Rev. E 71, 051303), whose 3D silo blew air
-//! through the orifice to restart the flow. The question it answers is one a plant asks: will
+//! from below, the numerical stand-in for the air blow or tap with which silo experiments
+//! restart the flow (Zuriguel et al. 2005, Phys. Rev. E 71, 051303, measured avalanches between
+//! such restarts). The question it answers is one a plant asks: will
 //! this material flow through this outlet, and how much passes between blockages? The
 //! published trend: avalanche sizes are exponentially distributed beyond the smallest (their
 //! standard deviation near their mean), and their mean grows steeply with the orifice, diverging
