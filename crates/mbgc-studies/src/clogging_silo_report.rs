@@ -118,6 +118,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.seeds == 0 || a.orifices.is_empty() {
         anyhow::bail!("--seeds and --orifices: expected at least one of each");
     }
+    for (k, o) in a.orifices.iter().enumerate() {
+        if a.orifices[..k].contains(o) {
+            anyhow::bail!("--orifices: {o} is given twice");
+        }
+    }
     let same = |o: f64, s: u64, r: &(Run, u64, usize, usize)| {
         r.0.orifice == o && r.1 == s && r.2 == a.fill && r.3 == a.max_avalanches
     };
@@ -130,25 +135,39 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             }
         }
     }
+    let mut failed = Vec::new();
     if !a.no_run {
         eprintln!(
             "clogging silo: {} runs to do, {} at a time",
             todo.len(),
             a.jobs
         );
-        run_queue(
+        failed = run_queue(
             a.jobs,
             todo,
             |(o, s)| format!("orifice {o}, seed {s}: "),
             |&(o, s), write| run_one(a, o, s, write),
         );
     }
-    let runs: Vec<Run> = read_runs(a)?
-        .into_iter()
-        .filter(|r| a.orifices.contains(&r.0.orifice) && r.2 == a.fill && r.3 == a.max_avalanches)
-        .map(|r| r.0)
-        .collect();
-    let text = report(a, &runs);
+    // One row per (orifice, seed) of this study: a row of a larger --seeds, or a repeat, is
+    // left out.
+    let mut runs: Vec<Run> = Vec::new();
+    let mut seen = Vec::new();
+    for r in read_runs(a)? {
+        let key = (r.0.orifice.to_bits(), r.1);
+        if a.orifices.iter().any(|&o| same(o, r.1, &r)) && r.1 <= a.seeds && !seen.contains(&key) {
+            seen.push(key);
+            runs.push(r.0);
+        }
+    }
+    let mut text = report(a, &runs);
+    if !failed.is_empty() {
+        let _ = writeln!(
+            text,
+            "- Failed runs (not in the table, run again by the same command): {}",
+            failed.join("; ")
+        );
+    }
     crate::emit_report(
         a.json,
         a.report.as_deref(),
@@ -210,7 +229,7 @@ fn report(a: &Args, runs: &[Run]) -> String {
         s,
         "Experiment: `clogging-silo` (`crates/mbgc/src/experiments/clogging_silo.rs`): {} beads of \
          4 mm (E 5e6 Pa, rho_p 2500 kg/m3, e 0.5, mu 0.5, mu_r 0.1, walls alike) settle in a \
-         flat-bottomed silo 12 bead diameters wide; the orifice opens; a clog is no bead passing \
+         flat-bottomed silo 12 bead diameters wide (3 orifices if wider); the orifice opens; a clog is no bead passing \
          for 4 sqrt(D_o / g); a puff from below breaks it; a run stops after {} avalanches or \
          when half the fill has passed. The mean avalanche pools the seeds: all beads passed \
          over all clogs, the maximum-likelihood mean of an exponential distribution when a \

@@ -13,9 +13,13 @@
 //! 3 D_o.
 //!
 //! Procedure
-//! 1. Fill: `fill` grains (d50, and sigma_ln when given: log-normal by number) on a loose
-//!    jittered lattice in the silo above the closed orifice; settle until the translational
-//!    kinetic energy per particle is that of a grain moving at 1 % of sqrt(g d50).
+//! 1. Fill: `fill` grains (d50, and sigma_ln when given: log-normal in mass about d50, drawn
+//!    by number) on a loose jittered lattice in the silo above the closed orifice; settle
+//!    until the translational kinetic energy per particle is that of a grain moving at 1 % of
+//!    sqrt(g d50). Known weakness: the lattice is spaced by 1.3 d_max in a silo sized by d50,
+//!    so a wide size distribution starts as a tall, sparse column (3000 grains of sigma_ln
+//!    0.26: 12 per layer, 6.7 m) that falls far into its pile; such fills need pouring in
+//!    batches before their runs are trusted (docs/propagation.md).
 //! 2. Open the orifice. A grain passes when its centre is one d_max below the orifice plane;
 //!    grains three d_max below it are removed, so that nothing piles up under the silo.
 //! 3. A clog: no grain has passed for [`QUIET_TIMES`] sqrt(D_o / g) (the hopper's criterion)
@@ -24,12 +28,15 @@
 //!    D_o of the orifice's centre a random velocity: upward between 0.5 and 1 times
 //!    sqrt(2 g D_o) (enough to lift it by up to D_o), sideways up to half that, from the run's
 //!    seed. A puff after which no grain passes is counted (`failed_puffs`), and the silo is
-//!    puffed again, at most [`MAX_FAILED_PUFFS`] times in a row.
+//!    puffed again, at most [`MAX_FAILED_PUFFS`] times in a row. (A clog before the first
+//!    grain passed counts as one too, and the quiet time after a puff starts with the puff,
+//!    while the puffed grains are still in the air.)
 //! 4. Stop when `max_avalanches` avalanches are complete, or when fewer than half the fill is left
 //!    in the silo (the head over the orifice then falls; a silo's pressure at the orifice
 //!    does not depend on the head only above about one silo diameter, Janssen), or at a time
-//!    limit. An avalanche still flowing then is censored: its size so far is
-//!    `open_avalanche`, not in the mean.
+//!    limit. An avalanche still flowing then is cut off: its size so far is `open_avalanche`;
+//!    it is no avalanche of `avalanches` or `avalanche_cv`, but its grains are in
+//!    `mean_avalanche`.
 //!
 //! Responses
 //! - `mean_avalanche`: grains passed per clog, (sum of the complete avalanches + the open one)
@@ -344,8 +351,8 @@ impl ClogSilo {
         let mut started = sim.time;
         let mut last_pass = sim.time;
         let mut last_event = sim.time;
-        // Generous: every avalanche takes a few quiet times, and the whole fill flows out at
-        // no less than a grain per quiet time... times the puffs that may fail.
+        // Generous: eight quiet times per avalanche and per failed puff allowed in a row, and
+        // half the fill flowing out at no less than 20 grains per quiet time.
         let t_cap = sim.time
             + (s.avalanches + MAX_FAILED_PUFFS) as f64 * 8.0 * t_quiet
             + n as f64 * t_quiet / 20.0;
@@ -481,7 +488,8 @@ fn puff(sim: &mut Simulation, orifice: f64, v: f64, rng: &mut rand_chacha::ChaCh
 }
 
 /// The settled fill's bulk density: rho_p times the solid fraction of the silo from the bottom
-/// to one d_max below the mean free surface (the top d_max of grains, highest per column).
+/// to one d_max below the free surface, taken as the mean top of the highest tenth of the
+/// grains (about the top layers of a default fill).
 fn settled_density(sim: &Simulation, radius: f64, d_max: f64, rho: f64) -> f64 {
     let p = &sim.particles;
     let n = p.len();
