@@ -68,7 +68,7 @@ use super::{
     RHO_RANGE,
 };
 use crate::error::{Error, Result};
-use crate::psd::{default_range, draw_by_number, Distribution, LogNormal};
+use crate::psd::{draw_by_number, sizes_drawn, Distribution};
 use mbgc_dem::contact::{ModelClass, Pair};
 use mbgc_dem::material::Materials;
 use mbgc_dem::sim::{Scene, Simulation};
@@ -176,13 +176,7 @@ impl ClogSilo {
                 )));
             }
         }
-        let (dist, d_min_mm, d_max_mm) = if sigma > 0.0 {
-            let dist = Distribution::LogNormal(LogNormal::new(d50_mm, sigma)?);
-            let (a, b) = default_range(&dist);
-            (Some(dist), a, b)
-        } else {
-            (None, d50_mm, d50_mm)
-        };
+        let (dist, d_min_mm, d_max_mm) = sizes_drawn(d50_mm, sigma)?;
         let d50 = d50_mm * 1e-3;
         let orifice = ratio * d50;
         if orifice <= d_max_mm * 1e-3 {

@@ -92,7 +92,7 @@ use super::{
     RHO_RANGE,
 };
 use crate::error::{write_atomic, Error, Result};
-use crate::psd::{default_range, draw_by_number, Distribution, LogNormal};
+use crate::psd::{draw_by_number, sizes_drawn, Distribution};
 use mbgc_dem::analysis::sphere_box_volume;
 use mbgc_dem::contact::{ModelClass, Pair};
 use mbgc_dem::material::Materials;
@@ -621,13 +621,7 @@ impl Hopper {
         let sigma = p.optional("sigma_ln", 0.0, 0.0, 1.5)?;
         let scale = p.optional("scale", 1.0, 0.01, 100.0)?;
         let fill_mass_1 = p.optional("fill_mass", DEFAULT_FILL_MASS, 1e-9, 1e6)?;
-        let (dist, d_min_mm, d_max_mm) = if sigma > 0.0 {
-            let dist = Distribution::LogNormal(LogNormal::new(d50_mm, sigma)?);
-            let (a, b) = default_range(&dist);
-            (Some(dist), a, b)
-        } else {
-            (None, d50_mm, d50_mm)
-        };
+        let (dist, d_min_mm, d_max_mm) = sizes_drawn(d50_mm, sigma)?;
         let geo = Geometry::scaled(scale);
         let d_max = d_max_mm * 1e-3;
         let d_o = 2.0 * geo.orifice_radius;

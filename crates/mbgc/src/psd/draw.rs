@@ -34,6 +34,19 @@ pub fn default_range(dist: &Distribution) -> (f64, f64) {
     (dist.q3_inv(DEFAULT_TRIM), dist.q3_inv(1.0 - DEFAULT_TRIM))
 }
 
+/// The sizes an experiment draws for a material of mass median `d50_mm` and log-normal width
+/// `sigma_ln`: the distribution and its [`default_range`], or one size (`None`, d50, d50) when
+/// `sigma_ln` is not positive. Refuses what [`LogNormal::new`] refuses.
+pub fn sizes_drawn(d50_mm: f64, sigma_ln: f64) -> Result<(Option<Distribution>, f64, f64)> {
+    if sigma_ln > 0.0 {
+        let dist = Distribution::LogNormal(LogNormal::new(d50_mm, sigma_ln)?);
+        let (a, b) = default_range(&dist);
+        Ok((Some(dist), a, b))
+    } else {
+        Ok((None, d50_mm, d50_mm))
+    }
+}
+
 /// Q3 truncated to [d_min, d_max] and renormalised: the target mass cdf of a drawn set.
 pub fn truncated_q3(dist: &Distribution, (d_min, d_max): (f64, f64), x: f64) -> f64 {
     let lo = dist.q3(d_min);

@@ -12,8 +12,8 @@ pub use distribution::{
     phi, phi_inv, Basis, Distribution, Ggs, LogNormal, MassDistribution, Model, Rrsb,
 };
 pub use draw::{
-    default_range, draw_by_number, truncated_q3, ParticleSet, DEFAULT_TRIM, GRID_CELLS,
-    MAX_CELL_WIDTH,
+    default_range, draw_by_number, sizes_drawn, truncated_q3, ParticleSet, DEFAULT_TRIM,
+    GRID_CELLS, MAX_CELL_WIDTH,
 };
 pub use fit::{fit_all, fit_model, linearised_fit, score, FitReport, ModelFit};
 pub use sieve::SieveData;
