@@ -17,6 +17,40 @@ const MAX_ATTEMPTS: usize = 20_000;
 /// placed last, they would find no gap left between the small ones of a wide distribution.
 /// The region should offer at least four times the spheres' volume.
 pub fn random_pack<R: Rng>(diameters: &[f64], lo: V3, hi: V3, rng: &mut R) -> Result<Vec<V3>> {
+    let volume = (0..3).map(|k| hi[k] - lo[k]).product();
+    pack(diameters, lo, hi, volume, |_, _| true, rng)
+}
+
+/// As [`random_pack`], in the vertical cylinder of `radius` about the z axis from `z_lo` to
+/// `z_hi`: a position is drawn in the enclosing box and taken only if the sphere lies inside
+/// the cylinder as well (a hopper's or a silo's fill).
+pub fn random_pack_cylinder<R: Rng>(
+    diameters: &[f64],
+    radius: f64,
+    z_lo: f64,
+    z_hi: f64,
+    rng: &mut R,
+) -> Result<Vec<V3>> {
+    pack(
+        diameters,
+        [-radius, -radius, z_lo],
+        [radius, radius, z_hi],
+        std::f64::consts::PI * radius * radius * (z_hi - z_lo),
+        |c: V3, r: f64| (c[0] * c[0] + c[1] * c[1]).sqrt() + r <= radius,
+        rng,
+    )
+}
+
+/// Random sequential insertion in the box `lo`..`hi`, a position taken only where `inside`
+/// (centre, radius) holds as well; `volume` is the region's, for the fraction an error reports.
+fn pack<R: Rng>(
+    diameters: &[f64],
+    lo: V3,
+    hi: V3,
+    volume: f64,
+    inside: impl Fn(V3, f64) -> bool,
+    rng: &mut R,
+) -> Result<Vec<V3>> {
     let d_max = diameters.iter().copied().fold(0.0, f64::max);
     if diameters.is_empty() {
         return Ok(Vec::new());
@@ -47,6 +81,9 @@ pub fn random_pack<R: Rng>(diameters: &[f64], lo: V3, hi: V3, rng: &mut R) -> Re
         let mut placed = false;
         for _ in 0..MAX_ATTEMPTS {
             let c: V3 = std::array::from_fn(|k| rng.random_range(lo[k] + r..hi[k] - r));
+            if !inside(c, r) {
+                continue;
+            }
             let [cx, cy, cz] = cell_of(c);
             let mut free = true;
             'search: for iz in cz.saturating_sub(1)..=(cz + 1).min(dims[2] - 1) {
@@ -73,7 +110,6 @@ pub fn random_pack<R: Rng>(diameters: &[f64], lo: V3, hi: V3, rng: &mut R) -> Re
             }
         }
         if !placed {
-            let v_region: f64 = (0..3).map(|k| hi[k] - lo[k]).product();
             let v_placed: f64 = order[..placed_before]
                 .iter()
                 .map(|&j| std::f64::consts::PI / 6.0 * diameters[j].powi(3))
@@ -83,7 +119,7 @@ pub fn random_pack<R: Rng>(diameters: &[f64], lo: V3, hi: V3, rng: &mut R) -> Re
                  attempts (solid fraction placed {:.3}); expected a larger region",
                 placed_before + 1,
                 diameters.len(),
-                v_placed / v_region
+                v_placed / volume
             )));
         }
     }
@@ -127,6 +163,36 @@ mod tests {
         // Same seed, same cloud.
         let again = random_pack(&d, [0.0; 3], [10.0, 10.0, h], &mut crate::test_rng(7)).unwrap();
         assert_eq!(x, again);
+    }
+
+    #[test]
+    fn a_cylinder_holds_every_sphere_inside_its_wall() {
+        let d: Vec<f64> = (0..1500)
+            .map(|i| 0.55 + 1.3 * ((i % 11) as f64 / 10.0))
+            .collect();
+        let (radius, h) = (6.0, 60.0);
+        let x = random_pack_cylinder(&d, radius, 0.0, h, &mut crate::test_rng(3)).unwrap();
+        for (i, c) in x.iter().enumerate() {
+            let r = 0.5 * d[i];
+            assert!(
+                (c[0] * c[0] + c[1] * c[1]).sqrt() + r <= radius,
+                "sphere {i} crosses the wall"
+            );
+            assert!(c[2] >= r && c[2] <= h - r, "sphere {i} leaves the column");
+            for j in 0..i {
+                let d2: f64 = (0..3).map(|k| (c[k] - x[j][k]).powi(2)).sum();
+                assert!(
+                    d2.sqrt() >= 0.5 * (d[i] + d[j]) - 1e-12,
+                    "{i} and {j} overlap"
+                );
+            }
+        }
+        // The whole cross-section is used, not only a square inside it.
+        let outer = x
+            .iter()
+            .filter(|c| (c[0] * c[0] + c[1] * c[1]).sqrt() > 0.8 * radius)
+            .count();
+        assert!(outer > 0, "no sphere near the wall");
     }
 
     #[test]

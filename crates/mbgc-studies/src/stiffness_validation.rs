@@ -552,7 +552,7 @@ mod tests {
             for (g, v) in [("ced_pp", &mut pp), ("ced_pw", &mut pw)] {
                 let c = mbgc::similarity::per_particle_weight(g)
                     .value(|n| at[names.iter().position(|m| m == n).unwrap()]);
-                assert!(c >= 0.0 && c <= 1.006 * C_TOP, "{g}: C = {c}");
+                assert!((0.0..=1.006 * C_TOP).contains(&c), "{g}: C = {c}");
                 let gd = model.group_of_input(g).unwrap();
                 let read = model.group_read_value(&gd.group, &x);
                 assert!(read <= gd.domain[1] * (1.0 + 1e-9), "{g}: {read}");

@@ -14,23 +14,22 @@
 //!
 //! Procedure
 //! 1. Fill: `fill` grains (d50, and sigma_ln when given: log-normal in mass about d50, drawn
-//!    by number) on a loose jittered lattice in the silo above the closed orifice; settle
-//!    until the translational kinetic energy per particle is that of a grain moving at 1 % of
-//!    sqrt(g d50). Known weakness: the lattice is spaced by 1.3 d_max in a silo sized by d50,
-//!    so a wide size distribution starts as a tall, sparse column (3000 grains of sigma_ln
-//!    0.26: 12 per layer, 6.7 m) that falls far into its pile; such fills need pouring in
-//!    batches before their runs are trusted (docs/propagation.md).
+//!    by number) inserted at random, none touching, in the silo above the closed orifice
+//!    (a column a little over twice as tall as the settled fill whatever the size distribution;
+//!    a lattice spaced for the largest grain stood 6.7 m tall for 3000 grains of sigma_ln
+//!    0.26); settle until the translational kinetic energy per particle is that of a grain
+//!    moving at 1 % of sqrt(g d50).
 //! 2. Open the orifice. A grain passes when its centre is one d_max below the orifice plane;
 //!    grains three d_max below it are removed, so that nothing piles up under the silo.
 //! 3. A clog: no grain has passed for [`QUIET_TIMES`] sqrt(D_o / g) (the hopper's criterion)
-//!    since the last grain passed or the last puff. The grains that passed since the flow
+//!    since the last grain passed or since the last puff's grains fell back (2 v / g after
+//!    the puff, v its largest upward speed). The grains that passed since the flow
 //!    (re)started make one avalanche. A puff then gives every grain whose centre lies within
 //!    D_o of the orifice's centre a random velocity: upward between 0.5 and 1 times
 //!    sqrt(2 g D_o) (enough to lift it by up to D_o), sideways up to half that, from the run's
 //!    seed. A puff after which no grain passes is counted (`failed_puffs`), and the silo is
-//!    puffed again, at most [`MAX_FAILED_PUFFS`] times in a row. (A clog before the first
-//!    grain passed counts as one too, and the quiet time after a puff starts with the puff,
-//!    while the puffed grains are still in the air.)
+//!    puffed again, harder ([`PUFF_BOOST`]), at most [`MAX_FAILED_PUFFS`] times in a row. A fill that clogs as the
+//!    orifice opens, before a grain has passed, is puffed as well; that is no failed puff.
 //! 4. Stop when `max_avalanches` avalanches are complete, or when fewer than half the fill is left
 //!    in the silo (the head over the orifice then falls; a silo's pressure at the orifice
 //!    does not depend on the head only above about one silo diameter, Janssen), or at a time
@@ -92,6 +91,13 @@ pub const DEFAULT_AVALANCHES: f64 = 30.0;
 pub const QUIET_TIMES: f64 = 4.0;
 /// Puffs in a row after which no grain passes before a run gives up (and warns).
 pub const MAX_FAILED_PUFFS: usize = 20;
+/// A puff after k failed ones in a row is `1 + PUFF_BOOST k` times as fast, up to
+/// [`MAX_PUFF_BOOST`] times: an operator blows harder on an arch that held, and an experiment's
+/// blow always restarts the flow, which a puff of fixed strength did not at 2 d (runs that
+/// ended on 20 failed puffs after a dozen avalanches).
+pub const PUFF_BOOST: f64 = 0.25;
+/// The strongest puff, in units of the first.
+pub const MAX_PUFF_BOOST: f64 = 3.0;
 /// Time step as a fraction of the Rayleigh time of the smallest particle.
 pub const DT_FRACTION: f64 = 0.2;
 /// Gravitational acceleration, m/s^2, along -z.
@@ -235,7 +241,7 @@ impl ClogSilo {
         rng.set_stream(1);
         let radius = 0.5 * s.silo;
         let particles =
-            super::cylinder_fill::lattice_fill(&diam, radius, s.d_max, s.rho, s.grain, &mut rng)?;
+            super::cylinder_fill::random_fill(&diam, radius, s.d_max, s.rho, s.grain, &mut rng)?;
         rng.set_stream(2);
         let z_top = particles.x.iter().map(|x| x[2]).fold(0.0, f64::max) + s.d_max;
         let (w, r_o) = (s.wall, 0.5 * s.orifice);
@@ -339,6 +345,9 @@ impl ClogSilo {
         let (z_pass, z_remove) = (-s.d_max, -3.0 * s.d_max);
         let t_quiet = QUIET_TIMES * (s.orifice / g).sqrt();
         let v_puff = (2.0 * g * s.orifice).sqrt();
+        // The fastest puffed grain is back down after 2 v / g: the quiet time after a puff
+        // counts from then, not while the puffed grains are still in the air.
+        let t_flight = 2.0 * MAX_PUFF_BOOST * v_puff / g;
         let mut passed = vec![false; n];
         let (mut discharged, mut current) = (0usize, 0usize);
         let (mut sizes, mut durations) = (Vec::new(), Vec::new());
@@ -346,10 +355,13 @@ impl ClogSilo {
         let mut started = sim.time;
         let mut last_pass = sim.time;
         let mut last_event = sim.time;
+        // Whether the flow was last restarted by a puff (false at the opening): a clog with no
+        // grain passed is a failed puff only then.
+        let mut after_puff = false;
         // Generous: eight quiet times per avalanche and per failed puff allowed in a row, and
         // half the fill flowing out at no less than 20 grains per quiet time.
         let t_cap = sim.time
-            + (s.avalanches + MAX_FAILED_PUFFS) as f64 * 8.0 * t_quiet
+            + (s.avalanches + MAX_FAILED_PUFFS) as f64 * (8.0 * t_quiet + t_flight)
             + n as f64 * t_quiet / 20.0;
         let t_open = sim.time;
         // Whether the run ended by its own rule (its avalanches, or half the fill passed), not
@@ -402,7 +414,7 @@ impl ClogSilo {
                 durations.push(last_pass - started);
                 current = 0;
                 failed_in_a_row = 0;
-            } else {
+            } else if after_puff {
                 failed_puffs += 1;
                 failed_in_a_row += 1;
             }
@@ -418,9 +430,11 @@ impl ClogSilo {
                 ));
                 break;
             }
-            puff(&mut sim, s.orifice, v_puff, &mut rng);
+            let boost = (1.0 + PUFF_BOOST * failed_in_a_row as f64).min(MAX_PUFF_BOOST);
+            puff(&mut sim, s.orifice, boost * v_puff, &mut rng);
+            after_puff = true;
             started = sim.time;
-            last_event = sim.time;
+            last_event = sim.time + 2.0 * boost * v_puff / g;
         }
         vtk(&sim, "clogging silo: final")?;
         let open_avalanche = current;

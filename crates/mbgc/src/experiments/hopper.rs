@@ -5,9 +5,11 @@
 //!
 //! Procedure
 //! 1. Fill: `fill_mass` of particles (d50 and sigma_ln; log-normal drawn by number with
-//!    [`draw_by_number`], monosized when sigma_ln is absent or 0) on a loose jittered lattice in
-//!    the cylinder above the closed orifice (a disk shutter); a fill tube above the rim holds the
-//!    lattice if it is taller than the container. Settle until the translational kinetic energy
+//!    [`draw_by_number`], monosized when sigma_ln is absent or 0) poured at random, none
+//!    touching, at a solid fraction of 0.2 in the cylinder above the closed orifice (a disk
+//!    shutter); a fill tube above the rim holds the column if it is taller than the container.
+//!    (Before the clogging silo's review the fill was a lattice spaced for the largest
+//!    particle, which stood a wide distribution 2-3 m tall; docs/propagation.md.) Settle until the translational kinetic energy
 //!    is small (EPSD2 has no rolling dashpot, so rotation keeps the total energy high long after
 //!    the packing is at rest).
 //! 2. Measure the bulk density of the settled fill: the solid fraction of the cylinder from the
@@ -737,7 +739,7 @@ impl Hopper {
         let mut rng = crate::sampling::rng(seed);
         // An own stream: the diameters used the seed's first stream.
         rng.set_stream(1);
-        let particles = super::cylinder_fill::lattice_fill(
+        let particles = super::cylinder_fill::random_fill(
             &diam, geo.radius, s.d_max, s.rho, s.grain, &mut rng,
         )?;
         let z_top = particles.x.iter().map(|x| x[2]).fold(0.0, f64::max) + s.d_max;
@@ -863,7 +865,7 @@ impl Hopper {
         };
         vtk(&sim, "hopper: filled")?;
 
-        // 1. Settle: at least the free-fall time from the top of the lattice, then until rest.
+        // 1. Settle: at least the free-fall time from the top of the column, then until rest.
         let t_fall = (2.0 * z_top / GRAVITY).sqrt();
         let settle_cap = 2.0 * t_fall + 2.0 * s.scale.sqrt();
         if let Some(w) =
