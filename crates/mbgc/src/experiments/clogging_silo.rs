@@ -42,7 +42,9 @@
 //!   / complete avalanches. Without an open avalanche that is their mean; with one it is the
 //!   maximum-likelihood mean of an exponential distribution whose last sample was cut off by
 //!   the end of the run, which the plain mean of the complete ones underestimates (long
-//!   avalanches are the ones cut off). NaN without a clog: `discharged` is then a lower bound.
+//!   avalanches are the ones cut off). NaN without a clog: `discharged` is then a lower bound,
+//!   and the run has the event [`NO_CLOG`] ([`NO_FLOW`] if no grain passed at all), whose
+//!   share over a posterior `mbgc propagate` reports.
 //! - `avalanche_cv`: the complete avalanches' standard deviation over their mean (1 for an
 //!   exponential distribution; NaN with fewer than 2).
 //! - `avalanches`: complete avalanches; `open_avalanche`: the censored one's size (0 if the
@@ -118,6 +120,15 @@ pub const RESPONSES: [&str; 7] = [
     "failed_puffs",
     "bulk_density",
 ];
+
+/// The event of a run that ended without a clog (half the fill passed in one avalanche, or the
+/// time limit came first): its mean avalanche is only known to exceed `discharged`.
+pub const NO_CLOG: &str = "no_clog";
+/// The event of a run in which no grain passed: the fill arched as the orifice opened and no
+/// puff broke the arch.
+pub const NO_FLOW: &str = "no_flow";
+/// What either event leaves without a value.
+const VOIDED: [&str; 2] = ["mean_avalanche", "avalanche_cv"];
 
 /// The clogging silo. Parameters: [`OWN_PARAMETERS`] (d50 in mm) and the model class's;
 /// optional `sigma_ln` (0 or absent: monosized), `orifice` (D_o / d50, default
@@ -564,6 +575,26 @@ impl Experiment for ClogSilo {
         RESPONSES.to_vec()
     }
 
+    fn events(&self) -> Vec<&'static str> {
+        vec![NO_CLOG, NO_FLOW]
+    }
+
+    fn voided_by(&self, event: &str) -> Vec<&'static str> {
+        match event {
+            NO_CLOG | NO_FLOW => VOIDED.to_vec(),
+            _ => Vec::new(),
+        }
+    }
+
+    fn event_of(&self, value: &dyn Fn(&str) -> Option<f64>) -> Option<&'static str> {
+        let (clogs, passed) = (value("avalanches")?, value("discharged")?);
+        match (clogs, passed) {
+            (c, d) if c == 0.0 && d == 0.0 => Some(NO_FLOW),
+            (c, d) if c == 0.0 && d > 0.0 => Some(NO_CLOG),
+            _ => None,
+        }
+    }
+
     fn check(&self, p: &ParamSet) -> Result<()> {
         self.setup(p).map(|_| ())
     }
@@ -576,6 +607,25 @@ impl Experiment for ClogSilo {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_run_without_a_clog_or_without_flow_is_an_event_that_voids_the_mean() {
+        let silo = ClogSilo::default();
+        let run = |clogs: f64, passed: f64| {
+            move |n: &str| match n {
+                "avalanches" => Some(clogs),
+                "discharged" => Some(passed),
+                _ => None,
+            }
+        };
+        assert_eq!(silo.event_of(&run(0.0, 1500.0)), Some(NO_CLOG));
+        assert_eq!(silo.event_of(&run(0.0, 0.0)), Some(NO_FLOW));
+        assert_eq!(silo.event_of(&run(3.0, 900.0)), None);
+        assert_eq!(silo.event_of(&|_: &str| None), None);
+        for e in silo.events() {
+            assert_eq!(silo.voided_by(e), vec!["mean_avalanche", "avalanche_cv"]);
+        }
+    }
 
     fn beads(orifice: f64, fill: f64, max_avalanches: f64) -> ParamSet {
         let mut p = ParamSet::new();
