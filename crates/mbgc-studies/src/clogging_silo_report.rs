@@ -11,7 +11,7 @@ use std::sync::Mutex;
 
 use anyhow::Context as _;
 
-use mbgc::experiments::clogging_silo::{mean_and_cv, ClogSilo};
+use mbgc::experiments::clogging_silo::{mean_and_cv, ClogSilo, MAX_FAILED_PUFFS};
 use mbgc::experiments::{ParamSet, RunOptions};
 
 use crate::rest_tables::{append, read_tsv, run_queue};
@@ -228,10 +228,12 @@ fn report(a: &Args, runs: &[Run]) -> String {
     let _ = writeln!(
         s,
         "Experiment: `clogging-silo` (`crates/mbgc/src/experiments/clogging_silo.rs`): {} beads of \
-         4 mm (E 5e6 Pa, rho_p 2500 kg/m3, e 0.5, mu 0.5, mu_r 0.1, walls alike) settle in a \
-         flat-bottomed silo 12 bead diameters wide (3 orifices if wider); the orifice opens; a clog is no bead passing \
-         for 4 sqrt(D_o / g); a puff from below breaks it; a run stops after {} avalanches or \
-         when half the fill has passed. The mean avalanche pools the seeds: all beads passed \
+         4 mm (E 5e6 Pa, rho_p 2500 kg/m3, e 0.5, mu 0.5, mu_r 0.1, walls alike), poured at \
+         random, settle in a flat-bottomed silo 12 bead diameters wide (3 orifices if wider); \
+         the orifice opens; a clog is no bead passing for 4 sqrt(D_o / g) (after a puff, from \
+         when the puffed beads have fallen back); a puff from below breaks it, faster after \
+         each one that failed; a run stops after {} avalanches or when half the fill has \
+         passed. The mean avalanche pools the seeds: all beads passed \
          over all clogs, the maximum-likelihood mean of an exponential distribution when a \
          run's last avalanche is cut off by its end; its standard error is mean / sqrt(clogs).\n",
         a.fill, a.max_avalanches
@@ -335,6 +337,34 @@ fn report(a: &Args, runs: &[Run]) -> String {
          checks the trend on a 600-bead silo.\n- The noise: the sd of the runs' means is the \
          run-to-run scatter of one run's mean avalanche, the figure a propagation separates \
          from the parametric spread."
+    );
+    // A run that stopped before its avalanches with more than half the fill left ended on an
+    // arch that MAX_FAILED_PUFFS puffs did not break, or at the time limit.
+    let early: Vec<String> = runs
+        .iter()
+        .filter(|r| r.sizes.len() < a.max_avalanches && 2 * r.discharged < a.fill)
+        .map(|r| {
+            format!(
+                "orifice {} after {} avalanches ({} beads passed)",
+                r.orifice,
+                r.sizes.len(),
+                r.discharged
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "- Runs that stopped early, with fewer than {} avalanches and more than half the fill \
+         left (an arch that {} puffs in a row did not break, or the time limit): {} of {}{}",
+        a.max_avalanches,
+        MAX_FAILED_PUFFS,
+        early.len(),
+        runs.len(),
+        if early.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", early.join("; "))
+        }
     );
     s
 }

@@ -83,7 +83,7 @@ pub const SILO_DIAMETER: f64 = 12.0;
 pub const DEFAULT_ORIFICE: f64 = 3.0;
 /// Accepted orifice diameters in d50: below 1.5 a single grain stops the flow; above 8 a clog
 /// would need far more grains than a run holds (at 4 d50 the mean avalanche of frictional beads
-/// is already about 560, docs/clogging_silo.md).
+/// is already about 450, docs/clogging_silo.md).
 pub const ORIFICE_RANGE: (f64, f64) = (1.5, 8.0);
 /// Default fill, grains.
 pub const DEFAULT_FILL: f64 = 3000.0;
