@@ -1,5 +1,5 @@
 //! Random sequential insertion: spheres placed one by one at uniformly random positions in a box
-//! region, a position taken only if the sphere overlaps no sphere placed before and stays inside
+//! region ([`random_pack`]) or a vertical cylinder ([`random_pack_cylinder`]), a position taken only if the sphere overlaps no sphere placed before and stays inside
 //! the region. This is what LIGGGHTS' `fix insert/pack ... overlapcheck yes` does, and it stands
 //! for material poured into a container: a random, dilute, isotropic cloud with no layering.
 

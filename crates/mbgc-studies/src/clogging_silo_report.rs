@@ -338,11 +338,12 @@ fn report(a: &Args, runs: &[Run]) -> String {
          run-to-run scatter of one run's mean avalanche, the figure a propagation separates \
          from the parametric spread."
     );
-    // A run that stopped before its avalanches with more than half the fill left ended on an
-    // arch that MAX_FAILED_PUFFS puffs did not break, or at the time limit.
+    // A run that stopped before its avalanches with at least half the fill left (the
+    // experiment stops at half passed when 2 (fill - discharged) < fill) ended on an arch that
+    // MAX_FAILED_PUFFS puffs did not break, or at the time limit.
     let early: Vec<String> = runs
         .iter()
-        .filter(|r| r.sizes.len() < a.max_avalanches && 2 * r.discharged < a.fill)
+        .filter(|r| r.sizes.len() < a.max_avalanches && 2 * (a.fill - r.discharged) >= a.fill)
         .map(|r| {
             format!(
                 "orifice {} after {} avalanches ({} beads passed)",
@@ -354,7 +355,7 @@ fn report(a: &Args, runs: &[Run]) -> String {
         .collect();
     let _ = writeln!(
         s,
-        "- Runs that stopped early, with fewer than {} avalanches and more than half the fill \
+        "- Runs that stopped early, with fewer than {} avalanches and at least half the fill \
          left (an arch that {} puffs in a row did not break, or the time limit): {} of {}{}",
         a.max_avalanches,
         MAX_FAILED_PUFFS,

@@ -10,8 +10,9 @@ use mbgc_dem::insertion::random_pack_cylinder;
 use mbgc_dem::particles::Particles;
 use mbgc_dem::sim::Simulation;
 
-/// Solid fraction of the poured column: the shear box's (docs/shear_box.md), well below random
-/// sequential insertion's jamming near 0.38, so that a free spot is quickly found.
+/// Solid fraction of the poured column: the shear box's (docs/shear_box.md), below random
+/// sequential insertion's jamming (near 0.38 in the bulk, lower beside walls), so that a free
+/// spot is quickly found.
 const POUR_FRACTION: f64 = 0.2;
 
 /// Particles of diameters `diam` (m) at random positions, none overlapping another or the wall,
@@ -38,7 +39,16 @@ pub(crate) fn random_fill(
     }
     let solid: f64 = diam.iter().map(|d| PI / 6.0 * d.powi(3)).sum();
     let height = (solid / (POUR_FRACTION * PI * radius * radius)).max(2.0 * d_max);
-    let centres = random_pack_cylinder(diam, radius, 0.0, height, rng)?;
+    let centres = random_pack_cylinder(diam, radius, 0.0, height, rng).map_err(|e| {
+        Error::invalid(format!(
+            "parameter d50: {} particles up to {:.3} mm could not be poured into the container \
+             ({:.1} mm wide, a column {:.1} mm tall): {e}",
+            diam.len(),
+            d_max * 1e3,
+            2e3 * radius,
+            height * 1e3
+        ))
+    })?;
     let mut particles = Particles::new();
     for (&d, &x) in diam.iter().zip(&centres) {
         particles.add(x, 0.5 * d, rho, material)?;

@@ -9,8 +9,8 @@
 //!    touching, at a solid fraction of 0.2 in the cylinder above the closed orifice (a disk
 //!    shutter); a fill tube above the rim holds the column if it is taller than the container.
 //!    (Before the clogging silo's review the fill was a lattice spaced for the largest
-//!    particle, which stood a wide distribution 2-3 m tall; docs/propagation.md.) Settle until the translational kinetic energy
-//!    is small (EPSD2 has no rolling dashpot, so rotation keeps the total energy high long after
+//!    particle, which stood a wide distribution 2-3 m tall; docs/propagation.md.) Settle until
+//!    the translational kinetic energy is small (EPSD2 has no rolling dashpot, so rotation keeps the total energy high long after
 //!    the packing is at rest).
 //! 2. Measure the bulk density of the settled fill: the solid fraction of the cylinder from the
 //!    bottom to one d_max below the mean free surface (the rough top would count as voids),
