@@ -19,8 +19,10 @@
 //! cleared it.
 //!
 //! Storage: row i's near entries are kept in the Verlet list's own range of row i
-//! (`near[start[i]..start[i] + near_len[i]]`, each the index of a list entry), so that every
-//! member of a thread team rebuilds the rows it computes without a global prefix sum.
+//! (`near[start[i]..start[i] + near_len[i]]`, each an [`Entry`]: the list entry's index with
+//! the partner, its radius and the pair's effective radius and mass, so that the force loop
+//! reads in order what it would otherwise look up through the list or divide anew every step),
+//! and every member of a thread team rebuilds the rows it computes without a global prefix sum.
 
 use super::contact::History;
 use super::periodic::PeriodicBox;
@@ -55,25 +57,51 @@ pub(crate) struct Rows<'a> {
     pub row0: usize,
 }
 
+/// One entry of the near list: besides the index `e` of its Verlet list entry, what the force
+/// loop of the common law would otherwise look up or divide anew every step. 32 bytes, read in
+/// order.
+#[derive(Debug, Default, Clone, Copy, PartialEq)]
+pub(crate) struct Entry {
+    /// Radius of the partner.
+    pub rj: f64,
+    /// Effective radius r_i r_j / (r_i + r_j).
+    pub r_eff: f64,
+    /// Effective mass m_i m_j / (m_i + m_j).
+    pub m_eff: f64,
+    /// Index of the Verlet list entry.
+    pub e: u32,
+    /// The partner j (`nb[e]`).
+    pub j: u32,
+}
+
+/// The near list of some rows, as the build writes it.
+pub(crate) struct Out<'a> {
+    pub near: &'a mut [Entry],
+    pub near_len: &'a mut [u32],
+}
+
 /// Rebuilds the near list of `rows` from positions `x` and each particle's reach (its radius
 /// plus its near skin): an entry is kept if its spheres are closer than the sum of their
 /// reaches, or always with `all`. Clears the history of every entry left out that still has one.
+/// The effective radius r_i r_j / (r_i + r_j) and mass m_i m_j / (m_i + m_j) of a kept pair are
+/// the force loop's operations in its order, so its results stay the same bits.
 #[allow(clippy::too_many_arguments)]
 #[allow(clippy::needless_range_loop)] // e indexes nb and, offset by base, hist and live
 pub(crate) fn build<const PERIODIC: bool>(
     rows: std::ops::Range<usize>,
     list: Rows,
-    x: &[V3],
+    (x, r, m): (&[V3], &[f64], &[f64]),
     reach: &[f64],
     pbox: &PeriodicBox,
     all: bool,
-    near: &mut [u32],
-    near_len: &mut [u32],
+    out: Out,
     hist: &mut [History],
     live: &mut [u8],
 ) {
     let n = x.len();
-    let (x, reach) = (&x[..n], &reach[..n]);
+    let (x, r, m) = (&x[..n], &r[..n], &m[..n]);
+    let reach = if all { reach } else { &reach[..n] };
+    let Out { near, near_len } = out;
     let Rows {
         start,
         nb,
@@ -96,7 +124,14 @@ pub(crate) fn build<const PERIODIC: bool>(
             // A NaN distance is kept, as the whole list's force loop takes it for a contact.
             let d2 = norm2(d);
             if all || d2 < cut * cut || d2.is_nan() {
-                near[kept] = e as u32;
+                let (ri, rj, mi, mj) = (r[i], r[j], m[i], m[j]);
+                near[kept] = Entry {
+                    rj,
+                    r_eff: ri * rj / (ri + rj),
+                    m_eff: mi * mj / (mi + mj),
+                    e: e as u32,
+                    j: j as u32,
+                };
                 kept += 1;
             } else if live[le] != 0 {
                 hist[le] = History::default();
@@ -142,7 +177,10 @@ mod tests {
         };
         let mut hist = vec![History::default(), stale, History::default()];
         let mut live = vec![0u8, 1, 0];
-        let mut near = vec![u32::MAX; 3];
+        // Radii a power of two, so that the effective radius is exactly half.
+        let r = vec![1.0 / 1024.0; 4];
+        let m = vec![1.0, 2.0, 3.0, 4.0];
+        let mut near = vec![Entry::default(); 3];
         let mut near_len = vec![0u32; 4];
         let rows = || Rows {
             start: &start,
@@ -150,34 +188,39 @@ mod tests {
             base: 0,
             row0: 0,
         };
-        let run = |all: bool,
-                   near: &mut Vec<u32>,
-                   near_len: &mut Vec<u32>,
-                   hist: &mut Vec<History>,
-                   live: &mut Vec<u8>| {
+        let mut run = |all: bool, hist: &mut Vec<History>, live: &mut Vec<u8>| {
             build::<false>(
                 0..4,
                 rows(),
-                &x,
+                (&x, &r, &m),
                 &reach,
                 &PeriodicBox::NONE,
                 all,
-                near,
-                near_len,
+                Out {
+                    near: &mut near,
+                    near_len: &mut near_len,
+                },
                 hist,
                 live,
-            )
+            );
+            (near.clone(), near_len.clone())
         };
-        run(false, &mut near, &mut near_len, &mut hist, &mut live);
+        let (near, near_len) = run(false, &mut hist, &mut live);
         assert_eq!(near_len, [2, 0, 0, 0]);
-        assert_eq!(&near[..2], &[0, 2]);
+        let kept: Vec<_> = near[..2].iter().map(|n| (n.e, n.j)).collect();
+        assert_eq!(kept, [(0, 1), (2, 3)], "entries and partners");
+        // Equal radii (a power of two) halve exactly; masses 1 and 2 give 2/3, 1 and 4 give 4/5.
+        let r = 1.0 / 1024.0;
+        let pairs: Vec<_> = near[..2].iter().map(|n| [n.rj, n.r_eff, n.m_eff]).collect();
+        assert_eq!(pairs, [[r, r / 2.0, 2.0 / 3.0], [r, r / 2.0, 0.8]]);
         assert!(
             hist[1].is_zero() && live[1] == 0,
             "the separated pair's history is cleared"
         );
         // `all` keeps everything.
-        run(true, &mut near, &mut near_len, &mut hist, &mut live);
+        let (near, near_len) = run(true, &mut hist, &mut live);
         assert_eq!(near_len[0], 3);
-        assert_eq!(near, [0, 1, 2]);
+        let kept: Vec<_> = near.iter().map(|n| (n.e, n.j)).collect();
+        assert_eq!(kept, [(0, 1), (1, 2), (2, 3)]);
     }
 }

@@ -11,6 +11,7 @@
 //! around it and distances are minimum-image ones.
 
 use super::contact::History;
+use super::near;
 use super::particles::{Particles, PermuteScratch};
 use super::periodic::PeriodicBox;
 use super::vec3::*;
@@ -33,9 +34,9 @@ pub struct NeighborList {
     /// the force loop then skips them without touching their 48-byte histories.
     pub live: Vec<u8>,
     /// The near list (`crate::near`): row i's entries closer than touching plus the near skin,
-    /// as list-entry indices in `near[start[i]..start[i] + near_len[i]]`. Rebuilt by the step
+    /// in `near[start[i]..start[i] + near_len[i]]`. Rebuilt by the step
     /// at the first step of every run and whenever it is used up.
-    pub(crate) near: Vec<u32>,
+    pub(crate) near: Vec<near::Entry>,
     pub(crate) near_len: Vec<u32>,
     /// Positions at the last near build.
     pub(crate) x_near: Vec<V3>,
@@ -415,7 +416,7 @@ impl NeighborList {
         self.x_build.clear();
         self.x_build.extend_from_slice(&p.x);
         // Sized for the step, which fills them (a near list lives no longer than its list).
-        self.near.resize(self.nb.len(), 0);
+        self.near.resize(self.nb.len(), near::Entry::default());
         self.near_len.resize(n, 0);
         self.x_near.clear();
         self.x_near.extend_from_slice(&p.x);

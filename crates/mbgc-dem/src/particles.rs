@@ -33,9 +33,11 @@ pub struct Particles {
     pub f: Vec<V3>,
     /// Total torques about the centres of the last force evaluation, N m.
     pub t: Vec<V3>,
-    /// Radii, m (> 0).
+    /// Radii, m (> 0). Read them; they are set by [`Particles::add`] only: the neighbour
+    /// list's cutoff and the near list's effective radii are made from them and kept.
     pub r: Vec<f64>,
-    /// Masses, kg: density times sphere volume.
+    /// Masses, kg: density times sphere volume. Set by [`Particles::add`] only, as the radii
+    /// (the near list keeps the pairs' effective masses).
     pub m: Vec<f64>,
     /// Inverse masses, 1/kg, kept so the integrator multiplies instead of dividing; zero for a
     /// driven particle (set through [`Particles::drive`] and [`Particles::release`], which keep

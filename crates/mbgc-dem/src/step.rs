@@ -32,7 +32,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::blowup::BlowUp;
 use super::contact::{lanes, Contact, ContactLaw, ContactOutput, History};
-use super::material::Materials;
+use super::material::{Materials, PairConstants};
 use super::near;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
@@ -135,7 +135,7 @@ pub(crate) struct Raw {
     entries: usize,
     /// The near list (`crate::near`), the positions and squared near skins at its build, and
     /// the reaches the particles' current speeds ask for.
-    near: *mut u32,
+    near: *mut near::Entry,
     near_len: *mut u32,
     x_near: *mut V3,
     near_s2: *mut f64,
@@ -148,6 +148,8 @@ pub(crate) struct Raw {
     pbox: PeriodicBox,
     /// Whether some particle is driven; the flags change only between runs.
     any_driven: bool,
+    /// Whether every particle has the same material (the pair loop's constants are then one).
+    one_material: bool,
 }
 
 impl Raw {
@@ -240,6 +242,7 @@ impl Raw {
             materials,
             pbox,
             any_driven: p.driven.contains(&true),
+            one_material: p.material.windows(2).all(|w| w[0] == w[1]),
         }
     }
 
@@ -251,7 +254,12 @@ impl Raw {
     /// # Safety
     /// The views are current and nobody else accesses these particles meanwhile.
     #[inline(always)]
-    unsafe fn kick_drift(&self, own: Range<usize>, dt: f64, g: V3) -> (f64, f64) {
+    unsafe fn kick_drift<const TWICE: bool>(
+        &self,
+        own: Range<usize>,
+        dt: f64,
+        g: V3,
+    ) -> (f64, f64) {
         let half = 0.5 * dt;
         let (lo, len) = (own.start, own.len());
         let x = std::slice::from_raw_parts_mut(self.x.add(lo), len);
@@ -276,6 +284,11 @@ impl Raw {
         for k in 0..len {
             let a = inv_m[k] * half;
             let vk = &mut v[k];
+            if TWICE {
+                vk[0] += a * f[k][0];
+                vk[1] += a * f[k][1];
+                vk[2] += a * f[k][2];
+            }
             vk[0] += a * f[k][0];
             vk[1] += a * f[k][1];
             vk[2] += a * f[k][2];
@@ -285,11 +298,20 @@ impl Raw {
             xk[2] += dt * vk[2];
             let b = inv_i[k] * half;
             let wk = &mut w[k];
+            if TWICE {
+                wk[0] += b * t[k][0];
+                wk[1] += b * t[k][1];
+                wk[2] += b * t[k][2];
+            }
             wk[0] += b * t[k][0];
             wk[1] += b * t[k][1];
             wk[2] += b * t[k][2];
             if let Some((xb, xn, s2)) = xb {
-                max_disp2 = max_disp2.max(norm2(sub(*xk, xb[k])));
+                // A select, not `f64::max`: the same value (a NaN never wins either way), but
+                // one instruction on the loop's carried chain instead of a NaN-safe sequence
+                // (perf: the sequence was the hottest part of this loop).
+                let d2 = norm2(sub(*xk, xb[k]));
+                max_disp2 = if d2 > max_disp2 { d2 } else { max_disp2 };
                 // A NaN position asks for a near build, as the whole list would see it.
                 let d2 = norm2(sub(*xk, xn[k]));
                 near_out |= d2 > s2[k] || d2.is_nan();
@@ -349,8 +371,12 @@ impl Raw {
         let (e0, e1) = (start[rows.start] as usize, start[rows.end] as usize);
         let hist = std::slice::from_raw_parts_mut(self.hist.add(e0), e1 - e0);
         let live = std::slice::from_raw_parts_mut(self.live.add(e0), e1 - e0);
-        let near_entries = std::slice::from_raw_parts_mut(self.near.add(e0), e1 - e0);
-        let near_len = std::slice::from_raw_parts_mut(self.near_len.add(rows.start), rows.len());
+        let out = near::Out {
+            near: std::slice::from_raw_parts_mut(self.near.add(e0), e1 - e0),
+            near_len: std::slice::from_raw_parts_mut(self.near_len.add(rows.start), rows.len()),
+        };
+        let r = std::slice::from_raw_parts(self.r, n);
+        let m = std::slice::from_raw_parts(self.m, n);
         let list = near::Rows {
             start,
             nb,
@@ -366,12 +392,11 @@ impl Raw {
         build(
             rows,
             list,
-            x,
+            (x, r, m),
             reach,
             &self.pbox,
             all,
-            near_entries,
-            near_len,
+            out,
             hist,
             live,
         );
@@ -427,8 +452,20 @@ impl Raw {
         if law.four_lanes() && materials.lanes_ready() {
             let periodic = self.pbox.any();
             pair_rows_lanes_dispatch(
-                periodic, materials, dt, rows, start, nb, near, hist, live, e0, view, &self.pbox,
-                f_out, t_out,
+                (periodic, self.one_material),
+                materials,
+                dt,
+                rows,
+                start,
+                nb,
+                near,
+                hist,
+                live,
+                e0,
+                view,
+                &self.pbox,
+                f_out,
+                t_out,
             );
         } else if self.pbox.any() {
             pair_rows::<L, true>(
@@ -662,12 +699,21 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
         } = self.params;
         let lim2 = 0.25 * skin * skin;
         let steps = self.plan.steps;
+        // Alone, the last step's second half kick is left to this step's kick_drift, which then
+        // kicks twice from the same forces: the same operations on the same values, one pass
+        // over the particles fewer (a team gathers its buffers first and kicks in phase 3).
+        let mut kick_pending = false;
         for s in 0..steps {
             // Phase 1.
             // SAFETY: own particles only; the leader alone touches the host and the walls.
             unsafe {
                 let raw = *self.raw.get();
-                let (md, nd) = raw.kick_drift(own.clone(), dt, gravity);
+                let (md, nd) = if kick_pending {
+                    raw.kick_drift::<true>(own.clone(), dt, gravity)
+                } else {
+                    raw.kick_drift::<false>(own.clone(), dt, gravity)
+                };
+                kick_pending = false;
                 if t == 0 {
                     self.lead_disp.store(md.to_bits(), Ordering::Relaxed);
                     self.lead_near.store(nd.to_bits(), Ordering::Relaxed);
@@ -752,27 +798,35 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             crew.meet()?;
 
             // Phase 3.
-            // SAFETY: own particles; the buffers are only read until every member has passed
-            // the next step's first meeting.
-            unsafe { self.gather_and_kick(own.clone(), dt) };
+            let done = s + 1;
+            let check_due = self
+                .plan
+                .check_every
+                .is_some_and(|every| done % every == 0 || done == steps);
+            if self.members == 1 && done < steps && !check_due {
+                // Nothing reads the velocities before the next step's kick_drift: the host moves
+                // only walls there, and a rebuild follows the kick.
+                kick_pending = true;
+            } else {
+                // SAFETY: own particles; the buffers are only read until every member has passed
+                // the next step's first meeting.
+                unsafe { self.gather_and_kick(own.clone(), dt) };
+            }
 
-            if let Some(every) = self.plan.check_every {
-                let done = s + 1;
-                if done % every == 0 || done == steps {
-                    crew.meet()?;
-                    if t == 0 {
-                        // SAFETY: the others wait at the meeting below.
-                        unsafe {
-                            if let Err(b) = (*self.host).check() {
-                                *self.failure.get() = Some(b);
-                                self.abort.store(true, Ordering::Relaxed);
-                            }
+            if check_due {
+                crew.meet()?;
+                if t == 0 {
+                    // SAFETY: the others wait at the meeting below.
+                    unsafe {
+                        if let Err(b) = (*self.host).check() {
+                            *self.failure.get() = Some(b);
+                            self.abort.store(true, Ordering::Relaxed);
                         }
                     }
-                    crew.meet()?;
-                    if self.abort.load(Ordering::Relaxed) {
-                        return Ok(());
-                    }
+                }
+                crew.meet()?;
+                if self.abort.load(Ordering::Relaxed) {
+                    return Ok(());
                 }
             }
         }
@@ -828,7 +882,7 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
 /// `entries[start[i] - base..][..len[i - row0]]`, each the index of a list entry.
 #[derive(Clone, Copy)]
 struct Near<'a> {
-    entries: &'a [u32],
+    entries: &'a [near::Entry],
     len: &'a [u32],
     row0: usize,
 }
@@ -973,7 +1027,7 @@ pub(crate) fn wall_force<L: ContactLaw>(
 /// bits either way.
 #[allow(clippy::too_many_arguments)]
 fn pair_rows_lanes_dispatch(
-    periodic: bool,
+    (periodic, one_material): (bool, bool),
     materials: &Materials,
     dt: f64,
     rows: Range<usize>,
@@ -988,31 +1042,33 @@ fn pair_rows_lanes_dispatch(
     f: &mut [V3],
     t: &mut [V3],
 ) {
+    // One instance per (periodic, one material): the common case carries neither the image
+    // test nor a lookup of the pair constants per contact.
+    macro_rules! call {
+        ($f:ident) => {
+            match (periodic, one_material) {
+                (true, true) => $f::<true, true>(
+                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
+                ),
+                (true, false) => $f::<true, false>(
+                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
+                ),
+                (false, true) => $f::<false, true>(
+                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
+                ),
+                (false, false) => $f::<false, false>(
+                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
+                ),
+            }
+        };
+    }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2, checked just above.
-        unsafe {
-            if periodic {
-                pair_rows_lanes_avx2::<true>(
-                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
-                );
-            } else {
-                pair_rows_lanes_avx2::<false>(
-                    materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
-                );
-            }
-        }
+        unsafe { call!(pair_rows_lanes_avx2) };
         return;
     }
-    if periodic {
-        pair_rows_lanes::<true>(
-            materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
-        );
-    } else {
-        pair_rows_lanes::<false>(
-            materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
-        );
-    }
+    call!(pair_rows_lanes)
 }
 
 /// # Safety
@@ -1020,7 +1076,7 @@ fn pair_rows_lanes_dispatch(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool>(
+unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool, const ONE_MATERIAL: bool>(
     materials: &Materials,
     dt: f64,
     rows: Range<usize>,
@@ -1035,7 +1091,7 @@ unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool>(
     f: &mut [V3],
     t: &mut [V3],
 ) {
-    pair_rows_lanes::<PERIODIC>(
+    pair_rows_lanes::<PERIODIC, ONE_MATERIAL>(
         materials, dt, rows, start, nb, near, hist, live, base, p, pbox, f, t,
     );
 }
@@ -1047,7 +1103,7 @@ unsafe fn pair_rows_lanes_avx2<const PERIODIC: bool>(
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // e indexes nb, hist and live at once (offset by base)
-fn pair_rows_lanes<const PERIODIC: bool>(
+fn pair_rows_lanes<const PERIODIC: bool, const ONE_MATERIAL: bool>(
     materials: &Materials,
     dt: f64,
     rows: Range<usize>,
@@ -1063,7 +1119,7 @@ fn pair_rows_lanes<const PERIODIC: bool>(
     t: &mut [V3],
 ) {
     let n = p.x.len();
-    let (x, r, m, inv_m, mat) = (&p.x[..n], &p.r[..n], &p.m[..n], &p.inv_m[..n], &p.mat[..n]);
+    let (x, r, inv_m, mat) = (&p.x[..n], &p.r[..n], &p.inv_m[..n], &p.mat[..n]);
     let (v, w) = (&p.v[..n], &p.w[..n]);
     let (f, t) = (&mut f[..n], &mut t[..n]);
     // Several batches are gathered before any is computed: a vector load of four values
@@ -1071,18 +1127,34 @@ fn pair_rows_lanes<const PERIODIC: bool>(
     // the stores get time to retire (the first version, one batch at a time, was 15 % slower
     // than the scalar loop).
     let mut a = [lanes::Lanes::default(); BATCHES];
+    // One material: every lane's pair constants are set once, not per contact.
+    if ONE_MATERIAL && n > 0 {
+        let pc = materials.pair(mat[0], mat[0]);
+        for b in &mut a {
+            for l in 0..lanes::LANES {
+                set_pair(b, l, pc);
+            }
+        }
+    }
     // Per lane: i, j and the history's index in `hist`.
     let mut who = [(0usize, 0usize, 0usize); BATCHES * lanes::LANES];
     let mut k = 0;
     for i in rows {
-        let (xi, ri, mi, mati) = (x[i], r[i], m[i], mat[i]);
+        let (xi, ri, mati) = (x[i], r[i], mat[i]);
         let driven_i = inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
         let q0 = start[i] as usize - base;
-        let listed = &near.entries[q0..q0 + near.len[i - near.row0] as usize];
-        for &e in listed {
-            let e = e as usize;
-            let j = nb[e] as usize;
+        let q1 = q0 + near.len[i - near.row0] as usize;
+        for &near::Entry {
+            rj,
+            r_eff,
+            m_eff,
+            e,
+            j,
+        } in &near.entries[q0..q1]
+        {
+            let (e, j) = (e as usize, j as usize);
+            debug_assert_eq!(j, nb[e] as usize, "the near list's partner is the list's");
             debug_assert!(j > i, "{i} -> {j} is not a half-list entry");
             assert!(j < n, "list entry {i} -> {j} beyond the {n} particles");
             let le = e - base;
@@ -1090,7 +1162,8 @@ fn pair_rows_lanes<const PERIODIC: bool>(
             if PERIODIC {
                 d = pbox.min_image(d);
             }
-            let rsum = ri + r[j];
+            debug_assert_eq!(rj.to_bits(), r[j].to_bits(), "the near list's radius");
+            let rsum = ri + rj;
             let dist2 = norm2(d);
             if dist2 >= rsum * rsum || (driven_i && inv_m[j] == 0.0) {
                 if live[le] != 0 {
@@ -1101,7 +1174,6 @@ fn pair_rows_lanes<const PERIODIC: bool>(
             }
             live[le] = 1;
             let v_rel = sub(v[i], v[j]);
-            let pc = materials.pair(mati, mat[j]);
             let (b, l) = (&mut a[k / lanes::LANES], k % lanes::LANES);
             for q in 0..3 {
                 b.d[q][l] = d[q];
@@ -1114,16 +1186,12 @@ fn pair_rows_lanes<const PERIODIC: bool>(
             b.dist2[l] = dist2;
             b.rsum[l] = rsum;
             b.ri[l] = ri;
-            b.rj[l] = r[j];
-            b.mi[l] = mi;
-            b.mj[l] = m[j];
-            b.y_eff[l] = pc.y_eff;
-            b.g_eff[l] = pc.g_eff;
-            b.beta[l] = pc.beta;
-            b.sqrt_2y[l] = pc.sqrt_2y;
-            b.sqrt_8g[l] = pc.sqrt_8g;
-            b.friction[l] = pc.friction;
-            b.rolling_friction[l] = pc.rolling_friction;
+            b.rj[l] = rj;
+            b.r_eff[l] = r_eff;
+            b.m_eff[l] = m_eff;
+            if !ONE_MATERIAL {
+                set_pair(b, l, materials.pair(mati, mat[j]));
+            }
             who[k] = (i, j, le);
             k += 1;
             if k == who.len() {
@@ -1141,6 +1209,18 @@ fn pair_rows_lanes<const PERIODIC: bool>(
         }
         flush_lanes(&mut a, &who, k, dt, hist, f, t);
     }
+}
+
+/// Lane `l` of batch `b` takes the pair constants `pc`.
+#[inline(always)]
+fn set_pair(b: &mut lanes::Lanes, l: usize, pc: &PairConstants) {
+    b.y_eff[l] = pc.y_eff;
+    b.g_eff[l] = pc.g_eff;
+    b.beta[l] = pc.beta;
+    b.sqrt_2y[l] = pc.sqrt_2y;
+    b.sqrt_8g[l] = pc.sqrt_8g;
+    b.friction[l] = pc.friction;
+    b.rolling_friction[l] = pc.rolling_friction;
 }
 
 /// Batches of four gathered before they are computed ([`pair_rows_lanes`]).
@@ -1210,8 +1290,10 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
         let driven_i = inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
         let q0 = start[i] as usize - base;
-        let listed = &near.entries[q0..q0 + near.len[i - near.row0] as usize];
-        for &e in listed {
+        let listed = near.entries[q0..q0 + near.len[i - near.row0] as usize]
+            .iter()
+            .map(|n| n.e);
+        for e in listed {
             let e = e as usize;
             let j = nb[e] as usize;
             let (h, lv) = (&mut hist[e - base], &mut live[e - base]);

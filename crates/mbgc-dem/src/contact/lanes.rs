@@ -32,10 +32,10 @@ pub struct Lanes {
     pub ri: L,
     /// Radius of j.
     pub rj: L,
-    /// Masses.
-    pub mi: L,
-    /// Mass of j.
-    pub mj: L,
+    /// Effective radius r_i r_j / (r_i + r_j), computed so by the near build.
+    pub r_eff: L,
+    /// Effective mass m_i m_j / (m_i + m_j), likewise.
+    pub m_eff: L,
     /// v_i - v_j.
     pub v_rel: V,
     /// Angular velocities.
@@ -82,8 +82,8 @@ impl Lanes {
             &mut self.rsum,
             &mut self.ri,
             &mut self.rj,
-            &mut self.mi,
-            &mut self.mj,
+            &mut self.r_eff,
+            &mut self.m_eff,
             &mut self.y_eff,
             &mut self.g_eff,
             &mut self.beta,
@@ -145,8 +145,7 @@ pub fn forces(a: &mut Lanes, dt: f64) -> LaneForces {
     let inv = map(|l| 1.0 / dist[l]);
     let n = vmap(|k, l| a.d[k][l] * inv[l]);
     let overlap = map(|l| a.rsum[l] - dist[l]);
-    let r_eff = map(|l| a.ri[l] * a.rj[l] / a.rsum[l]);
-    let m_eff = map(|l| a.mi[l] * a.mj[l] / (a.mi[l] + a.mj[l]));
+    let (r_eff, m_eff) = (a.r_eff, a.m_eff);
     let lever_i = map(|l| a.ri[l] - 0.5 * overlap[l]);
     let lever_j = map(|l| a.rj[l] - 0.5 * overlap[l]);
     // Contact::new.
@@ -286,7 +285,9 @@ mod tests {
                 }
                 a.dist2[l] = dist2;
                 a.rsum[l] = rsum;
-                (a.ri[l], a.rj[l], a.mi[l], a.mj[l]) = (ri, rj, mi, mj);
+                (a.ri[l], a.rj[l]) = (ri, rj);
+                // As the near build computes them.
+                (a.r_eff[l], a.m_eff[l]) = (ri * rj / (ri + rj), mi * mj / (mi + mj));
                 a.y_eff[l] = p.y_eff;
                 a.g_eff[l] = p.g_eff;
                 a.beta[l] = p.beta;
