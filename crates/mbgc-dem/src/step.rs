@@ -16,7 +16,9 @@
 //!    contacts of its particles. The leader accumulates into the particle forces, the others into
 //!    their own buffers, which they clear only from the lowest index they can write. Meet.
 //! 3. the buffers added into its particles' forces, and the second half kick. No meeting: the
-//!    next step's first phase touches only the member's own particles.
+//!    next step's first phase touches only the member's own particles. Alone, unless the run
+//!    ends or checks after this step, the second half kick is left to the next step's first
+//!    phase, which kicks twice from the same forces (one pass over the particles fewer).
 //!
 //! Every `check_every` steps the members meet, the leader looks for a blow-up, and they meet
 //! again so that all stop at the same step.
