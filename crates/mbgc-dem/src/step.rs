@@ -34,7 +34,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::blowup::BlowUp;
 use super::contact::{lanes, Contact, ContactLaw, ContactOutput, History};
-use super::material::{Materials, PairConstants};
+use super::material::Materials;
 use super::near;
 use super::neighbor::NeighborList;
 use super::particles::Particles;
@@ -1134,7 +1134,7 @@ fn pair_rows_lanes<const PERIODIC: bool, const ONE_MATERIAL: bool>(
         let pc = materials.pair(mat[0], mat[0]);
         for b in &mut a {
             for l in 0..lanes::LANES {
-                set_pair(b, l, pc);
+                b.set_pair(l, pc);
             }
         }
     }
@@ -1192,7 +1192,7 @@ fn pair_rows_lanes<const PERIODIC: bool, const ONE_MATERIAL: bool>(
             b.r_eff[l] = r_eff;
             b.m_eff[l] = m_eff;
             if !ONE_MATERIAL {
-                set_pair(b, l, materials.pair(mati, mat[j]));
+                b.set_pair(l, materials.pair(mati, mat[j]));
             }
             who[k] = (i, j, le);
             k += 1;
@@ -1211,18 +1211,6 @@ fn pair_rows_lanes<const PERIODIC: bool, const ONE_MATERIAL: bool>(
         }
         flush_lanes(&mut a, &who, k, dt, hist, f, t);
     }
-}
-
-/// Lane `l` of batch `b` takes the pair constants `pc`.
-#[inline(always)]
-fn set_pair(b: &mut lanes::Lanes, l: usize, pc: &PairConstants) {
-    b.y_eff[l] = pc.y_eff;
-    b.g_eff[l] = pc.g_eff;
-    b.beta[l] = pc.beta;
-    b.sqrt_2y[l] = pc.sqrt_2y;
-    b.sqrt_8g[l] = pc.sqrt_8g;
-    b.friction[l] = pc.friction;
-    b.rolling_friction[l] = pc.rolling_friction;
 }
 
 /// Batches of four gathered before they are computed ([`pair_rows_lanes`]).

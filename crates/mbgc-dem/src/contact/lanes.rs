@@ -12,6 +12,7 @@
 //! order, so a run's sums are the scalar path's too.
 
 use super::hertz::SQRT_5_6;
+use crate::material::PairConstants;
 
 /// Contacts per batch.
 pub const LANES: usize = 4;
@@ -63,6 +64,18 @@ pub struct Lanes {
 }
 
 impl Lanes {
+    /// Lane `l` takes the pair constants `pc`.
+    #[inline(always)]
+    pub fn set_pair(&mut self, l: usize, pc: &PairConstants) {
+        self.y_eff[l] = pc.y_eff;
+        self.g_eff[l] = pc.g_eff;
+        self.beta[l] = pc.beta;
+        self.sqrt_2y[l] = pc.sqrt_2y;
+        self.sqrt_8g[l] = pc.sqrt_8g;
+        self.friction[l] = pc.friction;
+        self.rolling_friction[l] = pc.rolling_friction;
+    }
+
     /// Copies lane `from`'s inputs into lane `to`.
     pub fn copy_lane(&mut self, from: usize, to: usize) {
         for v in [
@@ -288,13 +301,7 @@ mod tests {
                 (a.ri[l], a.rj[l]) = (ri, rj);
                 // As the near build computes them.
                 (a.r_eff[l], a.m_eff[l]) = (ri * rj / (ri + rj), mi * mj / (mi + mj));
-                a.y_eff[l] = p.y_eff;
-                a.g_eff[l] = p.g_eff;
-                a.beta[l] = p.beta;
-                a.sqrt_2y[l] = p.sqrt_2y;
-                a.sqrt_8g[l] = p.sqrt_8g;
-                a.friction[l] = p.friction;
-                a.rolling_friction[l] = p.rolling_friction;
+                a.set_pair(l, &p);
                 // The scalar path, as the pair loop runs it.
                 let dist = dist2.sqrt();
                 let inv = 1.0 / dist;
