@@ -1272,20 +1272,27 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
     // Every per-particle slice cut to the same length n, and each partner index tested once
     // against it: the compiler then drops the bounds checks of the many loads and stores by j.
     let n = p.x.len();
-    let (x, r, m, inv_m, mat) = (&p.x[..n], &p.r[..n], &p.m[..n], &p.inv_m[..n], &p.mat[..n]);
+    let (x, r, inv_m, mat) = (&p.x[..n], &p.r[..n], &p.inv_m[..n], &p.mat[..n]);
     let (v, w) = (&p.v[..n], &p.w[..n]);
     let (f, t) = (&mut f[..n], &mut t[..n]);
     for i in rows {
-        let (xi, ri, mi, mati) = (x[i], r[i], m[i], mat[i]);
+        let (xi, ri, mati) = (x[i], r[i], mat[i]);
         let driven_i = inv_m[i] == 0.0;
         debug_assert!(start[i] <= start[i + 1], "row starts ascending");
         let q0 = start[i] as usize - base;
-        let listed = near.entries[q0..q0 + near.len[i - near.row0] as usize]
-            .iter()
-            .map(|n| n.e);
-        for e in listed {
-            let e = e as usize;
-            let j = nb[e] as usize;
+        let listed = &near.entries[q0..q0 + near.len[i - near.row0] as usize];
+        // The near build has computed the partner, its radius and the effective radius and mass
+        // with this loop's operations (`near::Entry`).
+        for &near::Entry {
+            rj,
+            r_eff,
+            m_eff,
+            e,
+            j,
+        } in listed
+        {
+            let (e, j) = (e as usize, j as usize);
+            debug_assert_eq!(j, nb[e] as usize, "the near list's partner is the list's");
             let (h, lv) = (&mut hist[e - base], &mut live[e - base]);
             // A half list: the team's buffers are cleared only from a member's first row on.
             debug_assert!(j > i, "{i} -> {j} is not a half-list entry");
@@ -1294,7 +1301,7 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
             if PERIODIC {
                 d = pbox.min_image(d);
             }
-            let rsum = ri + r[j];
+            let rsum = ri + rj;
             let dist2 = norm2(d);
             // A glued layer of driven particles exerts nothing on itself; the test costs a load
             // only for touching pairs.
@@ -1307,13 +1314,10 @@ fn pair_rows<L: ContactLaw, const PERIODIC: bool>(
                 continue;
             }
             *lv = 1;
-            let rj = r[j];
             let dist = dist2.sqrt();
             let inv = 1.0 / dist;
             let n = scale(d, inv);
             let overlap = rsum - dist;
-            let r_eff = ri * rj / rsum;
-            let m_eff = mi * m[j] / (mi + m[j]);
             let area = if L::NEEDS_AREA {
                 // Area of the intersection circle of the two spheres.
                 let q = (dist - ri - rj) * (dist + ri - rj) * (dist - ri + rj) * (dist + ri + rj);
