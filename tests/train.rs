@@ -237,6 +237,104 @@ fn impact_space(class: &str, extra: &str) -> String {
     )
 }
 
+/// Issue 40: a model carried to a wider range (stiffer materials) keeps its runs: the old rows
+/// come first in the new design, unchanged, are copied rather than run, and the new rows fill
+/// the widened space around them. Narrowing or rescaling a range is refused by name.
+#[test]
+fn extends_widens_a_range_and_runs_only_new_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("base.toml"), impact_space("hertz,mindlin", "")).unwrap();
+    let wide = impact_space("hertz,mindlin", "")
+        .replace(
+            "impact_angle = { min = 10, max = 60 }",
+            "impact_angle = { min = 10, max = 80 }",
+        )
+        .replace(
+            "mu_pw = { min = 0.1, max = 0.5 }",
+            "mu_pw = { min = 0.02, max = 0.5 }",
+        );
+    std::fs::write(d.join("wide.toml"), &wide).unwrap();
+    std::fs::write(
+        d.join("narrow.toml"),
+        wide.replace("min = 0.02, max = 0.5", "min = 0.2, max = 0.5"),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("log.toml"),
+        wide.replace(
+            "min = 0.02, max = 0.5",
+            "min = 0.02, max = 0.5, scale = \"log\"",
+        ),
+    )
+    .unwrap();
+    let train = |space: &'static str, name: &'static str, n: &'static str, v: &'static str| {
+        let mut a = vec![
+            "train",
+            "--space",
+            space,
+            "--experiment",
+            "wall-impact",
+            "--name",
+            name,
+            "--n",
+            n,
+            "--validation",
+            v,
+            "--threads",
+            "1",
+            "--no-fit",
+        ];
+        if name != "base" {
+            a.extend(["--extends", "base"]);
+        }
+        a
+    };
+    ok(d, &train("base.toml", "base", "10", "4"));
+    for (args, want) in [
+        (train("narrow.toml", "wide", "16", "4"), "parameters.mu_pw"),
+        (train("log.toml", "wide", "16", "4"), "parameters.mu_pw"),
+        (train("wide.toml", "wide", "16", "3"), "--validation 3"),
+        (train("wide.toml", "wide", "10", "4"), "--n 10"),
+    ] {
+        let o = mbgc(d, &args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{args:?}: {e}");
+        assert!(!d.join("training_data/wide.csv").exists(), "{args:?}");
+    }
+    let err = ok(d, &train("wide.toml", "wide", "16", "4"));
+    assert!(
+        err.contains("copied 10 runs") && err.contains("inside the old ranges"),
+        "{err}"
+    );
+    assert!(err.contains("10 already done, ran 6"), "{err}");
+    assert!(err.contains("4 already done, ran 0"), "{err}");
+    let old = std::fs::read_to_string(d.join("sampling/base.csv")).unwrap();
+    let new = std::fs::read_to_string(d.join("sampling/wide.csv")).unwrap();
+    let new: Vec<&str> = new.lines().collect();
+    assert_eq!(new.len(), 17);
+    for (o, n) in old.lines().zip(&new) {
+        assert_eq!(o, *n);
+    }
+    // The new rows go where the old ones left the widened space empty: outside the old box.
+    let col = |line: &str, name: &str| -> f64 {
+        let i = new[0].split(',').position(|h| h == name).unwrap();
+        line.split(',').nth(i).unwrap().parse().unwrap()
+    };
+    let outside = new[11..]
+        .iter()
+        .filter(|l| col(l, "impact_angle") > 60.0 || col(l, "mu_pw") < 0.1)
+        .count();
+    assert!(outside >= 4, "{outside} of 6 new rows outside the old box");
+    let rec: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(d.join("training_data/wide.train.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(rec["extends"]["added"].as_array().unwrap().len(), 0);
+    assert_eq!(rec["extends"]["widened"][0][0], "impact_angle");
+    assert_eq!(rec["extends"]["widened"][1][0], "mu_pw");
+}
+
 #[test]
 fn extends_copies_the_old_runs_onto_the_effect_off_face_and_runs_only_new_rows() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,14 +1,22 @@
-//! Adding an effect to a trained model (`mbgc train --extends OLD`): the new space is OLD's
-//! space plus the parameters of effects OLD's class lacks. OLD's runs were made with those
-//! effects switched off, so they are the new space's runs on its effect-off face (a cohesion or
-//! rolling friction of 0): they become the first rows of the new design and are copied into the
-//! new tables instead of being run again, and the sequential design fills the rest of the space
-//! around them. Only the new rows are simulated.
+//! Extending a trained model (`mbgc train --extends OLD`) in two ways that keep OLD's runs
+//! valid, alone or together:
 //!
-//! The copy is a statistical, not a bitwise, equivalence: with cohesion switched on at 0 the
-//! engine projects the stored rolling torque onto the tangent plane (`dem::contact::law`), so a
-//! rerun drifts apart chaotically like a replicate with another seed. Each copied line says where
-//! it came from in its `warnings` field.
+//! - **Adding an effect.** The new space is OLD's space plus the parameters of effects OLD's
+//!   class lacks. OLD's runs were made with those effects switched off, so they are the new
+//!   space's runs on its effect-off face (a cohesion or rolling friction of 0).
+//! - **Widening a range.** A parameter's range grows on either side (same scale, not fixed):
+//!   OLD's runs lie inside the old ranges, a part of the new box. This is how a model is carried
+//!   to stiffer or softer materials than it was trained on (issue 40).
+//!
+//! Either way OLD's runs become the first rows of the new design and are copied into the new
+//! tables instead of being run again, and the sequential design fills the rest of the space
+//! around them, so the new runs go where the old ones left the space emptiest. Only the new rows
+//! are simulated.
+//!
+//! The copy of an added effect's runs is a statistical, not a bitwise, equivalence: with
+//! cohesion switched on at 0 the engine projects the stored rolling torque onto the tangent plane
+//! (`dem::contact::law`), so a rerun drifts apart chaotically like a replicate with another
+//! seed. Each copied line says where it came from in its `warnings` field.
 
 use std::path::Path;
 
@@ -27,11 +35,46 @@ pub struct Extension {
     pub added: Vec<String>,
     /// The new parameters with the value that switches their effect off: where the old runs lie.
     pub off_face: Vec<(String, f64)>,
+    /// Old parameters whose range the new space widens, with the old range: the old runs lie
+    /// inside it.
+    pub widened: Vec<(String, [f64; 2])>,
+}
+
+impl Extension {
+    /// Where the old runs lie in the new space, for notes and the copied lines' warnings:
+    /// "without sjkr (ced_pp = 0)", "inside the old ranges E_p [2.5e6, 5e7]" or both.
+    pub fn old_runs(&self) -> String {
+        let mut parts = Vec::new();
+        if !self.added.is_empty() {
+            parts.push(format!(
+                "without {} ({})",
+                self.added.join(", "),
+                self.off_face
+                    .iter()
+                    .map(|(n, v)| format!("{n} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        if !self.widened.is_empty() {
+            parts.push(format!(
+                "inside the old ranges {}",
+                self.widened
+                    .iter()
+                    .map(|(n, r)| format!("{n} [{:e}, {:e}]", r[0], r[1]))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        parts.join(", ")
+    }
 }
 
 /// Checks that `new` (with class `new_class`) is `old` plus the parameters of effects `old_class`
-/// lacks, each of which can be switched off by a value the new space holds. Everything else must
-/// be as it was: the old runs stay valid only if nothing they were run at moved.
+/// lacks, each of which can be switched off by a value the new space holds, and with some of
+/// `old`'s ranges widened. Everything else must be as it was: the old runs stay valid only if
+/// nothing they were run at moved, and stay a space-filling part of the new design only if each
+/// old range lies inside the new one on the same scale.
 pub fn check(
     old: &Space,
     old_class: &ModelClass,
@@ -57,16 +100,7 @@ pub fn check(
         .into_iter()
         .map(String::from)
         .collect();
-    if added.is_empty() {
-        return Err(Error::input(
-            src,
-            "model.class",
-            format!(
-                "{new_class} adds no effect to {old_class}: nothing to extend; to add runs to \
-                 the same class, train it again with a larger --n"
-            ),
-        ));
-    }
+    let mut widened = Vec::new();
     for p in &old.parameters {
         let Some(q) = new.get(&p.name) else {
             return Err(Error::input(
@@ -78,18 +112,43 @@ pub fn check(
                 ),
             ));
         };
-        if q.min != p.min || q.max != p.max || q.scale != p.scale || q.fixed != p.fixed {
+        let same_range = q.min == p.min && q.max == p.max;
+        let wider = q.min <= p.min && q.max >= p.max && p.fixed.is_none();
+        if q.scale != p.scale || q.fixed != p.fixed || !(same_range || wider) {
             return Err(Error::input(
                 src,
                 format!("parameters.{}", p.name),
                 format!(
-                    "differs from the old space {} (min, max, scale or fixed value): an \
-                     extension keeps the old parameters as they were, so that the old design \
-                     stays a space-filling part of the new one",
-                    old.source
+                    "[{}, {}] ({:?}{}) where the old space {} has [{}, {}] ({:?}{}): an \
+                     extension keeps an old parameter's scale and fixed value and may only \
+                     widen its range, so that the old runs lie inside the new space",
+                    q.min,
+                    q.max,
+                    q.scale,
+                    q.fixed.map(|f| format!(", fixed {f}")).unwrap_or_default(),
+                    old.source,
+                    p.min,
+                    p.max,
+                    p.scale,
+                    p.fixed.map(|f| format!(", fixed {f}")).unwrap_or_default(),
                 ),
             ));
         }
+        if !same_range {
+            widened.push((p.name.clone(), [p.min, p.max]));
+        }
+    }
+    if added.is_empty() && widened.is_empty() {
+        return Err(Error::input(
+            src,
+            "model.class",
+            format!(
+                "{new_class} adds no effect to {old_class} and no range is wider than in the old \
+                 space {}: nothing to extend; to add runs to the same space, train it again with \
+                 a larger --n",
+                old.source
+            ),
+        ));
     }
     let owned = new_class.parameters(pairs);
     let mut off_face = Vec::new();
@@ -145,7 +204,11 @@ pub fn check(
         }
         off_face.push((q.name.clone(), off));
     }
-    Ok(Extension { added, off_face })
+    Ok(Extension {
+        added,
+        off_face,
+        widened,
+    })
 }
 
 /// The old design's rows in the new space: the old values unchanged (bit for bit, so that the old
@@ -282,14 +345,9 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
             let mut v = col(name).map(|c| rec[c].to_string()).unwrap_or_default();
             if name == "warnings" {
                 let note = format!(
-                    "copied from {file} row {row}, run by {} without {} ({})",
+                    "copied from {file} row {row}, run by {} {}",
                     &rec[4],
-                    ext.added.join(", "),
-                    ext.off_face
-                        .iter()
-                        .map(|(n, v)| format!("{n} = {v}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    ext.old_runs()
                 );
                 v = if v.is_empty() {
                     note
@@ -376,8 +434,47 @@ mod tests {
         .unwrap();
         let e = refused(&old, &moved);
         assert!(
-            e.contains("parameters.mu_pp") && e.contains("differs"),
+            e.contains("parameters.mu_pp") && e.contains("may only widen"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn an_extension_may_widen_ranges_on_the_same_scale() {
+        let old = space("hertz,mindlin", "");
+        let wide = |mu: &str, d50: &str| {
+            Space::from_toml_str(
+                &format!(
+                    "name = \"t\"\n[model]\nclass = \"hertz,mindlin\"\n[parameters]\n\
+                     mu_pp = {{ {mu} }}\nd50 = {{ {d50} }}\n"
+                ),
+                "new.toml",
+            )
+            .unwrap()
+        };
+        let ext = check(
+            &old,
+            &old.class(),
+            &wide(
+                "min = 0.2, max = 0.9",
+                "min = 0.4, max = 20, scale = \"log\"",
+            ),
+            &old.class(),
+            &Pair::BOTH,
+        )
+        .unwrap();
+        assert!(ext.added.is_empty() && ext.off_face.is_empty());
+        assert_eq!(ext.widened, vec![("d50".to_string(), [1.0, 20.0])]);
+        assert_eq!(ext.old_runs(), "inside the old ranges d50 [1e0, 2e1]");
+        // Refused: the same space, a range moved past an old run, a scale changed.
+        let e = refused(&old, &old);
+        assert!(e.contains("nothing to extend"), "{e}");
+        let e = refused(
+            &old,
+            &wide("min = 0.3, max = 1.0", "min = 1, max = 20, scale = \"log\""),
+        );
+        assert!(e.contains("parameters.mu_pp"), "{e}");
+        let e = refused(&old, &wide("min = 0.2, max = 0.9", "min = 0.5, max = 20"));
+        assert!(e.contains("parameters.d50") && e.contains("Log"), "{e}");
     }
 }

@@ -380,10 +380,10 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
                 observer.note(
                     TrainStage::Simulate,
                     &format!(
-                        "{} ({what}): copied {n} runs of {} (without {})",
+                        "{} ({what}): copied {n} runs of {} ({})",
                         table.display(),
                         old_table.display(),
-                        ext.added.join(", ")
+                        ext.old_runs()
                     ),
                 );
             }
@@ -474,6 +474,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             from: req.extends.clone().unwrap_or_default(),
             added: e.added.clone(),
             off_face: e.off_face.clone(),
+            widened: e.widened.clone(),
             correction: req.correction,
         }),
         space_parameters: Some(space_parameters(&space)),
@@ -855,6 +856,9 @@ fn prepare_extension(
     let new_class = class.unwrap_or_default();
     let ext = extend::check(&old_space, &old_class, space, &new_class, pairs)?;
     let paths = TrainPaths::new(dir, name);
+    // Every count is checked before any design is written: a refused extension leaves nothing
+    // behind that a corrected one would take for its own.
+    let mut projected = Vec::new();
     for (old_design, new_design, n, what) in [
         (&old.design, &paths.design, req.n, "--n"),
         (
@@ -868,14 +872,29 @@ fn prepare_extension(
             continue;
         }
         let d = extend::project_design(old_design, &old_space, space, &ext)?;
-        if n <= d.len() {
+        // The validation runs may stay as they were (an independent design checks the new
+        // region); the training runs must grow, or nothing is extended.
+        if n < d.len() || (what == "--n" && n == d.len()) {
             return Err(Error::invalid(format!(
-                "{what} {n}: {from} has {} such runs already; an extension adds runs (pass more \
-                 than {})",
+                "{what} {n}: {from} has {} such runs already; an extension keeps them and {} \
+                 (pass {} {})",
                 d.len(),
+                if what == "--n" {
+                    "adds runs"
+                } else {
+                    "may add runs"
+                },
+                if what == "--n" {
+                    "more than"
+                } else {
+                    "at least"
+                },
                 d.len()
             )));
         }
+        projected.push((old_design, new_design, d));
+    }
+    for (old_design, new_design, d) in projected {
         if let Some(parent) = new_design.parent() {
             std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
         }
@@ -883,15 +902,11 @@ fn prepare_extension(
         observer.note(
             TrainStage::Extend,
             &format!(
-                "{}: the {} rows of {} with {}",
+                "{}: the {} rows of {}, {}",
                 new_design.display(),
                 d.len(),
                 old_design.display(),
-                ext.off_face
-                    .iter()
-                    .map(|(n, v)| format!("{n} = {v}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                ext.old_runs()
             ),
         );
     }

@@ -252,6 +252,9 @@ pub struct ExtendsRecord {
     pub added: Vec<String>,
     /// Each added parameter at the value where the old runs lie.
     pub off_face: Vec<(String, f64)>,
+    /// Each widened parameter with its old range, inside which the old runs lie.
+    #[serde(default)]
+    pub widened: Vec<(String, [f64; 2])>,
     /// Whether the fit was a correction of the extended model's equations (`--correction`).
     #[serde(default)]
     pub correction: bool,
