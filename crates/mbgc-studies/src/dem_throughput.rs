@@ -32,6 +32,12 @@ pub struct BenchReport {
     pub coordination_liggghts: Option<f64>,
     pub liggghts_version: Option<String>,
     pub liggghts_warnings: Vec<String>,
+    /// mbgc's one-thread rate in each timed segment, particle-steps/s.
+    pub mbgc_segments: Vec<f64>,
+    /// LIGGGHTS' rate in each timed segment (each run just before mbgc's of the same index).
+    pub liggghts_segments: Vec<f64>,
+    /// mbgc over LIGGGHTS, segment by segment.
+    pub segment_ratios: Vec<f64>,
 }
 
 /// Settles the scene in mbgc, times it on one thread and on `threads` threads, and optionally
@@ -64,7 +70,7 @@ pub fn run_benchmark(
         Ok(spec.particles as f64 * seg_steps as f64 / start.elapsed().as_secs_f64())
     };
     let (mut ones, mut manys) = (Vec::new(), Vec::new());
-    for k in 0..segments {
+    let mut segment = |k: usize| -> Result<()> {
         progress(&format!(
             "mbgc: timing segment {}/{segments}: {seg_steps} steps on 1 thread{}",
             k + 1,
@@ -78,13 +84,36 @@ pub fn run_benchmark(
         if threads > 1 {
             manys.push(time(&mut sim, threads)?);
         }
+        Ok(())
+    };
+    // With the reference, its timed segments alternate with mbgc's: LIGGGHTS settles (mbgc
+    // waits), then runs segment k while mbgc waits, then mbgc times its segment k while
+    // LIGGGHTS waits.
+    let mut reference = None;
+    if let Some(dir) = liggghts_dir {
+        progress(&format!(
+            "LIGGGHTS: settling {settle} steps, then {segments} timed segments of {seg_steps} \
+             steps, each followed by mbgc's"
+        ));
+        let case = liggghts_case(spec, x, r, settle, seg_steps * segments);
+        reference = Some(mbgc::liggghts::closed_box::run_interleaved(
+            dir,
+            &case,
+            segments,
+            &mut segment,
+        )?);
+    } else {
+        for k in 0..segments as usize {
+            segment(k)?;
+        }
     }
-    let median = |v: &mut Vec<f64>| {
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let one = median(&mut ones);
-    let many = if threads > 1 { median(&mut manys) } else { one };
+    let one = median(&ones);
+    let many = if threads > 1 { median(&manys) } else { one };
     let mut rep = BenchReport {
         particles: spec.particles,
         settle_steps: settle,
@@ -102,20 +131,27 @@ pub fn run_benchmark(
         coordination_liggghts: None,
         liggghts_version: None,
         liggghts_warnings: Vec::new(),
+        mbgc_segments: ones,
+        liggghts_segments: Vec::new(),
+        segment_ratios: Vec::new(),
     };
-    if let Some(dir) = liggghts_dir {
-        progress(&format!(
-            "LIGGGHTS: settling {settle} + timing {timed} steps (one process)"
-        ));
-        let case = liggghts_case(spec, x, r, settle, timed);
-        let res = mbgc::liggghts::closed_box::run(dir, &case)?;
-        let (phi_l, z_l, _) = settled_measures(spec, &res.settled_positions, &res.settled_radii);
-        rep.liggghts_particle_steps_per_s = Some(res.particle_steps_per_s);
-        rep.ratio = Some(one / res.particle_steps_per_s);
+    if let Some(res) = reference {
+        let l = res.result;
+        let (phi_l, z_l, _) = settled_measures(spec, &l.settled_positions, &l.settled_radii);
+        let n_steps = spec.particles as f64 * seg_steps as f64;
+        rep.liggghts_segments = res.segment_s.iter().map(|t| n_steps / t).collect();
+        rep.segment_ratios = rep
+            .mbgc_segments
+            .iter()
+            .zip(&rep.liggghts_segments)
+            .map(|(m, l)| m / l)
+            .collect();
+        rep.liggghts_particle_steps_per_s = Some(l.particle_steps_per_s);
+        rep.ratio = Some(one / l.particle_steps_per_s);
         rep.packing_fraction_liggghts = Some(phi_l);
         rep.coordination_liggghts = Some(z_l);
-        rep.liggghts_version = Some(res.version);
-        rep.liggghts_warnings = res.warnings;
+        rep.liggghts_version = Some(l.version);
+        rep.liggghts_warnings = l.warnings;
     }
     Ok(rep)
 }
@@ -257,8 +293,25 @@ fn report(a: &Args, spec: &BenchSpec, rep: &BenchReport) -> String {
     ) {
         let _ = writeln!(
             s,
-            "- Speed ratio mbgc / LIGGGHTS per core: **{r:.2}** (target 2)."
+            "- Speed ratio mbgc / LIGGGHTS per core: **{r:.2}** (the medians' ratio; issue 38's \
+             target 3)."
         );
+        if !rep.segment_ratios.is_empty() {
+            let list = |v: &[f64], scale: f64| {
+                v.iter()
+                    .map(|x| format!("{:.2}", x / scale))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let _ = writeln!(
+                s,
+                "- Segment by segment (LIGGGHTS' segment, then mbgc's): mbgc {} M, LIGGGHTS {} M; \
+                 ratios {}.",
+                list(&rep.mbgc_segments, 1e6),
+                list(&rep.liggghts_segments, 1e6),
+                list(&rep.segment_ratios, 1.0)
+            );
+        }
         let _ = writeln!(s, "- Packing fraction differs by {:+.2} % (target within 1 %), coordination number by {:+.2} % (target within 5 %).",
             100.0 * (rep.packing_fraction_mbgc / phi - 1.0), 100.0 * (rep.coordination_mbgc / z - 1.0));
     }
@@ -272,9 +325,11 @@ fn report(a: &Args, spec: &BenchSpec, rep: &BenchReport) -> String {
     }
     let _ = writeln!(s, "\n## How the numbers are taken\n");
     let _ = writeln!(s, "- LIGGGHTS runs as one serial process (`OMP_NUM_THREADS=1`, no MPI) on the deck mbgc writes to \
-        `--work-dir`; its figure is its own \"Loop time\" of the timed run. mbgc's one-thread figure is the median of three \
-        segments of a third of the timed steps, alternated with the multi-thread segments from the same settled state: the \
-        shared machine's speed drifts by several percent, and alternating lets a slow spell hit both alike.");
+        `--work-dir`, driven through its standard input (`mbgc::liggghts::session`). Both codes settle, then the timed \
+        steps run in three segments per code, alternated: LIGGGHTS' segment k (mbgc waits), then mbgc's on one thread and \
+        on the team (LIGGGHTS waits). Each code's figure is the median of its three segments (LIGGGHTS' own \"Loop time\" \
+        of each). The shared machine's speed drifts by tens of percent within minutes: one code after the other, three \
+        invocations gave ratios of 2.27, 2.55 and 3.37; alternating lets a slow spell hit both alike.");
     let _ = writeln!(s, "- Both codes run the same contact law (Hertz, restitution damping, history tangential spring with \
         LIGGGHTS' Coulomb cap, EPSD2), the same walls (six planes), the same time step and the same neighbour skin; they \
         differ in the order of floating-point operations, so their settled packings are statistically, not bitwise, alike. \

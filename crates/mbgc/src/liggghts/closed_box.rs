@@ -232,6 +232,16 @@ fn model_keywords(cohesive: bool) -> &'static str {
 
 /// The LIGGGHTS input script: settle, dump the settled state, then the timed run.
 pub fn input_script(case: &LiggghtsCase) -> String {
+    format!(
+        "{}\nrun             {}",
+        settle_script(case),
+        case.timed_steps
+    )
+}
+
+/// The input script up to the timed run: the setup, the settling run and the dump of the
+/// settled state.
+pub fn settle_script(case: &LiggghtsCase) -> String {
     let pair_model = model_keywords(case.cohesion_energy_density > 0.0);
     let wall_model = model_keywords(case.wall_cohesion_energy_density > 0.0);
     let (lo, hi) = (case.box_lo, case.box_hi);
@@ -304,10 +314,8 @@ pub fn input_script(case: &LiggghtsCase) -> String {
          \n\
          run             {settle}\n\
          write_dump      all custom {DUMP_FILE} id radius x y z modify format \
-         \"%d %.17g %.17g %.17g %.17g\"\n\
-         run             {timed}",
+         \"%d %.17g %.17g %.17g %.17g\"",
         settle = case.settle_steps,
-        timed = case.timed_steps,
     );
     s
 }
@@ -353,6 +361,76 @@ pub fn run_with_binary(binary: &Path, dir: &Path, case: &LiggghtsCase) -> Result
         settled_radii,
         version: parsed.version,
         warnings: parsed.warnings,
+    })
+}
+
+/// What [`run_interleaved`] measured.
+#[derive(Debug, Clone)]
+pub struct Interleaved {
+    /// The run's result; its rate is the median of the segments' rates.
+    pub result: LiggghtsResult,
+    /// Loop time of each timed segment, s, in order.
+    pub segment_s: Vec<f64>,
+}
+
+/// As [`run`], but LIGGGHTS runs its timed steps as `segments` runs of `timed_steps / segments`
+/// steps, and `between(k)` runs after its k-th segment while LIGGGHTS waits: the caller's timed
+/// work alternates with LIGGGHTS', so that a slow spell of the machine hits both alike.
+pub fn run_interleaved(
+    dir: &Path,
+    case: &LiggghtsCase,
+    segments: u64,
+    mut between: impl FnMut(usize) -> Result<()>,
+) -> Result<Interleaved> {
+    let binary = require_binary()?;
+    let seg_steps = case.timed_steps / segments.max(1);
+    if segments == 0 || seg_steps == 0 {
+        return Err(Error::invalid(format!(
+            "LiggghtsCase: {} timed steps in {segments} segments: expected at least one step \
+             per segment",
+            case.timed_steps
+        )));
+    }
+    write_case(dir, case)?;
+    let log = dir.join(LOG_FILE);
+    let dump = dir.join(DUMP_FILE);
+    for stale in [&log, &dump] {
+        if stale.exists() {
+            std::fs::remove_file(stale).map_err(|e| Error::io(stale, e))?;
+        }
+    }
+    let mut s = super::session::Session::start(&binary, dir, LOG_FILE)?;
+    s.command(&settle_script(case))?;
+    let n = case.positions.len();
+    let mut segment_s = Vec::new();
+    for k in 0..segments as usize {
+        let out = s.command(&format!("run {seg_steps}"))?;
+        segment_s.push(super::session::loop_time(&out, seg_steps, n)?);
+        between(k)?;
+    }
+    s.finish()?;
+    let log_text = crate::error::read_to_string(&log)?;
+    let parsed = parse_log(&log.display().to_string(), &log_text, n, seg_steps)?;
+    let (settled_positions, settled_radii) = parse_dump(
+        &dump.display().to_string(),
+        &crate::error::read_to_string(&dump)?,
+        n,
+    )?;
+    let mut rates: Vec<f64> = segment_s
+        .iter()
+        .map(|t| n as f64 * seg_steps as f64 / t)
+        .collect();
+    rates.sort_by(f64::total_cmp);
+    Ok(Interleaved {
+        result: LiggghtsResult {
+            timed_wall_s: segment_s.iter().sum(),
+            particle_steps_per_s: rates[rates.len() / 2],
+            settled_positions,
+            settled_radii,
+            version: parsed.version,
+            warnings: parsed.warnings,
+        },
+        segment_s,
     })
 }
 

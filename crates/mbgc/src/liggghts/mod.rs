@@ -12,6 +12,8 @@
 //! - [`shear_cell`]: the shear cell (pour, loaded lid, pre-shear, three failure tests from a
 //!   restart) as one deck; [`shear_cell_experiment`] makes it the shear-cell experiment of
 //!   `mbgc simulate --backend liggghts`.
+//! - [`session`]: a LIGGGHTS process driven command by command, its timed runs alternating
+//!   with the caller's.
 //! - [`mesh`]: STL walls; [`number`]: numbers as LIGGGHTS reads them; [`parse`]: logs, dumps.
 
 pub mod binary;
@@ -20,6 +22,7 @@ pub mod fill_run;
 pub mod mesh;
 pub mod number;
 pub mod parse;
+pub mod session;
 pub mod shear_box;
 pub mod shear_box_experiment;
 pub mod shear_box_fill;
