@@ -220,6 +220,25 @@ fn partial_fits_on_the_rows_there_are_and_says_so() {
     assert!(!o.status.success());
 }
 
+/// `train` of the wall impact on one thread: the arguments every extension test starts from.
+fn impact_train<'a>(space: &'a str, name: &'a str, n: &'a str, v: &'a str) -> Vec<&'a str> {
+    vec![
+        "train",
+        "--space",
+        space,
+        "--experiment",
+        "wall-impact",
+        "--name",
+        name,
+        "--n",
+        n,
+        "--validation",
+        v,
+        "--threads",
+        "1",
+    ]
+}
+
 /// The wall impact (a few milliseconds a run) with sliding friction, then with EPSD2 rolling
 /// friction added by `--extends`.
 fn impact_space(class: &str, extra: &str) -> String {
@@ -269,22 +288,8 @@ fn extends_widens_a_range_and_runs_only_new_rows() {
     )
     .unwrap();
     let train = |space: &'static str, name: &'static str, n: &'static str, v: &'static str| {
-        let mut a = vec![
-            "train",
-            "--space",
-            space,
-            "--experiment",
-            "wall-impact",
-            "--name",
-            name,
-            "--n",
-            n,
-            "--validation",
-            v,
-            "--threads",
-            "1",
-            "--no-fit",
-        ];
+        let mut a = impact_train(space, name, n, v);
+        a.push("--no-fit");
         if name != "base" {
             a.extend(["--extends", "base"]);
         }
@@ -673,27 +678,15 @@ fn a_correction_keeps_the_extended_equation_and_adds_to_it() {
     )
     .unwrap();
     let train = |space: &str, name: &str, n: &str, v: &str, extra: &[&str]| {
-        let mut a = vec![
-            "train",
-            "--space",
-            space,
-            "--experiment",
-            "wall-impact",
-            "--name",
-            name,
-            "--n",
-            n,
-            "--validation",
-            v,
-            "--threads",
-            "1",
+        let mut a = impact_train(space, name, n, v);
+        a.extend([
             "--population",
             "300",
             "--generations",
             "5",
             "--select",
             "best",
-        ];
+        ]);
         a.extend_from_slice(extra);
         ok(d, &a)
     };

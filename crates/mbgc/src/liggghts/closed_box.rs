@@ -328,6 +328,19 @@ pub fn write_case(dir: &Path, case: &LiggghtsCase) -> Result<()> {
     crate::error::write_atomic(&dir.join(INPUT_FILE), input_script(case).as_bytes())
 }
 
+/// Writes the case into `dir` and removes the log and dump of an earlier run, which must not be
+/// read as this run's: their paths.
+fn prepare(dir: &Path, case: &LiggghtsCase) -> Result<(std::path::PathBuf, std::path::PathBuf)> {
+    write_case(dir, case)?;
+    let (log, dump) = (dir.join(LOG_FILE), dir.join(DUMP_FILE));
+    for stale in [&log, &dump] {
+        if stale.exists() {
+            std::fs::remove_file(stale).map_err(|e| Error::io(stale, e))?;
+        }
+    }
+    Ok((log, dump))
+}
+
 /// Writes the case into `dir`, runs LIGGGHTS from [`super::find_binary`] there and reads the
 /// results.
 pub fn run(dir: &Path, case: &LiggghtsCase) -> Result<LiggghtsResult> {
@@ -336,15 +349,7 @@ pub fn run(dir: &Path, case: &LiggghtsCase) -> Result<LiggghtsResult> {
 
 /// As [`run`], with an explicit LIGGGHTS executable.
 pub fn run_with_binary(binary: &Path, dir: &Path, case: &LiggghtsCase) -> Result<LiggghtsResult> {
-    write_case(dir, case)?;
-    let log = dir.join(LOG_FILE);
-    let dump = dir.join(DUMP_FILE);
-    // A stale log or dump from an earlier run must not be read as this run's.
-    for stale in [&log, &dump] {
-        if stale.exists() {
-            std::fs::remove_file(stale).map_err(|e| Error::io(stale, e))?;
-        }
-    }
+    let (log, dump) = prepare(dir, case)?;
     run_deck(binary, dir, INPUT_FILE, LOG_FILE)?;
     let log_text = crate::error::read_to_string(&log)?;
     let n = case.positions.len();
@@ -391,14 +396,7 @@ pub fn run_interleaved(
             case.timed_steps
         )));
     }
-    write_case(dir, case)?;
-    let log = dir.join(LOG_FILE);
-    let dump = dir.join(DUMP_FILE);
-    for stale in [&log, &dump] {
-        if stale.exists() {
-            std::fs::remove_file(stale).map_err(|e| Error::io(stale, e))?;
-        }
-    }
+    let (log, dump) = prepare(dir, case)?;
     let mut s = super::session::Session::start(&binary, dir, LOG_FILE)?;
     s.command(&settle_script(case))?;
     let n = case.positions.len();
