@@ -138,8 +138,7 @@ pub fn run_benchmark(
     if let Some(res) = reference {
         let l = res.result;
         let (phi_l, z_l, _) = settled_measures(spec, &l.settled_positions, &l.settled_radii);
-        let n_steps = spec.particles as f64 * seg_steps as f64;
-        rep.liggghts_segments = res.segment_s.iter().map(|t| n_steps / t).collect();
+        rep.liggghts_segments = res.segment_rates;
         rep.segment_ratios = rep
             .mbgc_segments
             .iter()

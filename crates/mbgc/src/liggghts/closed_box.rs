@@ -376,6 +376,8 @@ pub struct Interleaved {
     pub result: LiggghtsResult,
     /// Loop time of each timed segment, s, in order.
     pub segment_s: Vec<f64>,
+    /// Each segment's particle-steps per second, in order.
+    pub segment_rates: Vec<f64>,
 }
 
 /// As [`run`], but LIGGGHTS runs its timed steps as `segments` runs of `timed_steps / segments`
@@ -414,10 +416,11 @@ pub fn run_interleaved(
         &crate::error::read_to_string(&dump)?,
         n,
     )?;
-    let mut rates: Vec<f64> = segment_s
+    let segment_rates: Vec<f64> = segment_s
         .iter()
         .map(|t| n as f64 * seg_steps as f64 / t)
         .collect();
+    let mut rates = segment_rates.clone();
     rates.sort_by(f64::total_cmp);
     Ok(Interleaved {
         result: LiggghtsResult {
@@ -429,6 +432,7 @@ pub fn run_interleaved(
             warnings: parsed.warnings,
         },
         segment_s,
+        segment_rates,
     })
 }
 
