@@ -96,6 +96,7 @@ pub mod contact;
 pub mod error;
 pub mod impact;
 pub mod insertion;
+mod kick;
 pub mod material;
 mod near;
 pub mod neighbor;

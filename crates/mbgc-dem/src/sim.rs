@@ -605,6 +605,7 @@ impl Host for Simulation {
             gravity: self.gravity,
             skin: self.neighbors.skin,
             near_fresh: self.neighbors.near_fresh,
+            near_bounded: self.neighbors.near_bounded,
         }
     }
 
@@ -642,7 +643,8 @@ impl Host for Simulation {
         Simulation::check(self)
     }
 
-    fn near_done(&mut self) {
+    fn near_done(&mut self, bounded: bool) {
         self.neighbors.near_fresh = true;
+        self.neighbors.near_bounded = bounded;
     }
 }

@@ -34,6 +34,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::blowup::BlowUp;
 use super::contact::{lanes, Contact, ContactLaw, ContactOutput, History};
+use super::kick;
 use super::material::Materials;
 use super::near;
 use super::neighbor::NeighborList;
@@ -58,8 +59,9 @@ pub(crate) trait Host {
     fn tick(&mut self);
     fn step_count(&self) -> u64;
     fn check(&self) -> Result<(), BlowUp>;
-    /// Marks the near list valid for the state a finished run leaves.
-    fn near_done(&mut self);
+    /// Marks the near list valid for the state a finished run leaves, and records whether every
+    /// particle is bounded ([`Raw::build_near`]).
+    fn near_done(&mut self, bounded: bool);
 }
 
 #[derive(Clone, Copy)]
@@ -69,6 +71,9 @@ pub(crate) struct Params {
     pub skin: f64,
     /// Whether the near list is valid for the particles as they are ([`NeighborList`]).
     pub near_fresh: bool,
+    /// With `near_fresh`: whether every particle was bounded ([`Raw::build_near`]) when the
+    /// last run ended.
+    pub near_bounded: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -249,20 +254,26 @@ impl Raw {
     }
 
     /// Half kick and drift of the particles in `own`, forces reset to gravity (to zero for
-    /// driven particles, whose zero inverse mass makes the kick a no-op). Returns their largest squared
-    /// displacement since the list build, and 1 if one of them has moved beyond its near skin
-    /// since the near build, else 0 (infinite and 1 without a list).
+    /// driven particles, whose zero inverse mass makes the kick a no-op). Returns 1 if one of
+    /// them has moved more than `lim2` (squared) since the list build, else 0, and 1 if one has
+    /// moved beyond its near skin since the near build, else 0 (both 1 without a list).
+    ///
+    /// With `BOUNDED`, the last near build found every particle's near skin plus its distance
+    /// from its list build position below `lim2`'s root ([`Raw::build_near`]): a particle still
+    /// inside its near skin then cannot be beyond the list's limit, so only those that left it
+    /// are measured against their build positions. The same decisions, one distance per particle
+    /// fewer in most steps of a settled state.
     ///
     /// # Safety
     /// The views are current and nobody else accesses these particles meanwhile.
     #[inline(always)]
-    unsafe fn kick_drift<const TWICE: bool>(
+    unsafe fn kick_drift<const TWICE: bool, const BOUNDED: bool>(
         &self,
         own: Range<usize>,
         dt: f64,
         g: V3,
+        lim2: f64,
     ) -> (f64, f64) {
-        let half = 0.5 * dt;
         let (lo, len) = (own.start, own.len());
         let x = std::slice::from_raw_parts_mut(self.x.add(lo), len);
         let v = std::slice::from_raw_parts_mut(self.v.add(lo), len);
@@ -281,46 +292,34 @@ impl Raw {
                 std::slice::from_raw_parts(self.near_s2.add(lo), len),
             ))
         };
-        let mut max_disp2 = 0.0f64;
+        kick::kick_drift::<TWICE>(
+            kick::Block {
+                x: &mut *x,
+                v,
+                w,
+                f: &mut *f,
+                t,
+                m,
+                inv_m,
+                inv_i,
+            },
+            dt,
+            g,
+        );
+        let mut over = false;
         let mut near_out = false;
-        for k in 0..len {
-            let a = inv_m[k] * half;
-            let vk = &mut v[k];
-            if TWICE {
-                vk[0] += a * f[k][0];
-                vk[1] += a * f[k][1];
-                vk[2] += a * f[k][2];
+        if let Some((xb, xn, s2)) = xb {
+            for k in 0..len {
+                // A NaN position asks for a near build, as the whole list would see it, but no
+                // list rebuild (NaN compares false), so that a blown-up particle does not
+                // trigger endless rebuilds.
+                let d2 = norm2(sub(x[k], xn[k]));
+                let out = d2 > s2[k] || d2.is_nan();
+                near_out |= out;
+                if !BOUNDED || out {
+                    over |= norm2(sub(x[k], xb[k])) > lim2;
+                }
             }
-            vk[0] += a * f[k][0];
-            vk[1] += a * f[k][1];
-            vk[2] += a * f[k][2];
-            let xk = &mut x[k];
-            xk[0] += dt * vk[0];
-            xk[1] += dt * vk[1];
-            xk[2] += dt * vk[2];
-            let b = inv_i[k] * half;
-            let wk = &mut w[k];
-            if TWICE {
-                wk[0] += b * t[k][0];
-                wk[1] += b * t[k][1];
-                wk[2] += b * t[k][2];
-            }
-            wk[0] += b * t[k][0];
-            wk[1] += b * t[k][1];
-            wk[2] += b * t[k][2];
-            if let Some((xb, xn, s2)) = xb {
-                // A select, not `f64::max`: the same value (a NaN never wins either way), but
-                // one instruction on the loop's carried chain instead of a NaN-safe sequence
-                // (perf: the sequence was the hottest part of this loop).
-                let d2 = norm2(sub(*xk, xb[k]));
-                max_disp2 = if d2 > max_disp2 { d2 } else { max_disp2 };
-                // A NaN position asks for a near build, as the whole list would see it.
-                let d2 = norm2(sub(*xk, xn[k]));
-                near_out |= d2 > s2[k] || d2.is_nan();
-            }
-            // Forces restart from gravity; the contacts accumulate onto them in phase 2.
-            f[k] = scale(g, m[k]);
-            t[k] = [0.0; 3];
         }
         // A driven particle's force is its contacts alone: what a lid's servo needs. A pass of
         // its own, so that scenes without driven particles pay nothing in the loop above.
@@ -332,10 +331,11 @@ impl Raw {
             }
         }
         if xb.is_none() {
-            max_disp2 = f64::INFINITY;
+            over = true;
             near_out = true;
         }
-        (max_disp2, if near_out { 1.0 } else { 0.0 })
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        (flag(over), flag(near_out))
     }
 
     /// Sets the reach of the particles in `own` from their speeds: their radii plus their near
@@ -353,13 +353,22 @@ impl Raw {
     }
 
     /// Rebuilds the near list of `rows` (every entry with `all`) and records the positions and
-    /// near skins of the particles in `own` as those of its build.
+    /// near skins of the particles in `own` as those of its build. Returns whether each of them
+    /// is, by its near skin plus its distance from its list build position, closer than `lim`
+    /// to that position (with a margin for rounding): then none can pass the list's limit
+    /// before it leaves its near skin, which [`Raw::kick_drift`] checks anyway.
     ///
     /// # Safety
     /// The views are current and the reaches set; nobody writes positions or reaches
     /// meanwhile, nor the histories and near entries of these rows, nor the build positions and
     /// skins of `own`.
-    unsafe fn build_near(&self, rows: Range<usize>, own: Range<usize>, all: bool) {
+    unsafe fn build_near(
+        &self,
+        rows: Range<usize>,
+        own: Range<usize>,
+        all: bool,
+        lim: f64,
+    ) -> bool {
         let n = self.n;
         let x = std::slice::from_raw_parts(self.x, n);
         let reach: &[f64] = if self.x_build.is_null() {
@@ -402,13 +411,21 @@ impl Raw {
             hist,
             live,
         );
-        if !self.x_build.is_null() {
-            for i in own {
-                *self.x_near.add(i) = *self.x.add(i);
-                let s = *self.reach.add(i) - *self.r.add(i);
-                *self.near_s2.add(i) = s * s;
-            }
+        if self.x_build.is_null() {
+            return false;
         }
+        // Relative rounding of the distances is of order 1e-16; the margin dwarfs it.
+        let bound = lim * (1.0 - 1e-9);
+        let mut bounded = true;
+        for i in own {
+            let xi = *self.x.add(i);
+            *self.x_near.add(i) = xi;
+            let s = *self.reach.add(i) - *self.r.add(i);
+            *self.near_s2.add(i) = s * s;
+            // False for a NaN too.
+            bounded &= s + norm(sub(xi, *self.x_build.add(i))) < bound;
+        }
+        bounded
     }
 
     /// Contacts of `rows` of the half list and wall contacts of the particles in `own`, added
@@ -515,7 +532,8 @@ pub(crate) fn add_contact_forces<H: Host, L: ContactLaw>(host: &mut H, law: &L) 
     unsafe {
         // Every entry: the positions may have moved anyhow since the last step. The next run
         // builds its own near list at its first step.
-        raw.build_near(0..n, 0..0, true);
+        // No particle of its own: the run's bound is not asked for.
+        let _ = raw.build_near(0..n, 0..0, true, 0.0);
         let f = std::slice::from_raw_parts_mut(raw.f, n);
         let t = std::slice::from_raw_parts_mut(raw.t, n);
         raw.contacts(law, dt, 0..n, 0..n, f, t);
@@ -536,10 +554,13 @@ pub(crate) fn run_alone<H: Host, L: ContactLaw>(
 
 /// What members 1..T keep on the board.
 struct Slot {
-    /// Largest squared displacement of its particles since the list build (f64 bits).
+    /// 1 if one of its particles has moved beyond the list's limit since the list build, else
+    /// 0 (f64 bits).
     disp: AtomicU64,
     /// 1 if one of its particles has moved beyond its near skin since the near build, else 0.
     near: AtomicU64,
+    /// Whether its particles were bounded ([`Raw::build_near`]) at its last near build.
+    bounded: AtomicBool,
     /// First row of the half list it handles (its last is the next member's first).
     row_start: UnsafeCell<usize>,
     /// Lowest particle index it can write in phase 2: a row i only touches j > i, and walls
@@ -570,6 +591,8 @@ pub(crate) struct Board<'a, H, L> {
     fail_at: Option<(usize, u64)>,
     #[cfg(test)]
     near_all: bool,
+    #[cfg(test)]
+    no_bound: bool,
     _host: PhantomData<&'a mut H>,
 }
 
@@ -588,6 +611,9 @@ thread_local! {
     /// Test hook: runs started on this thread keep every list entry in the near list, so that
     /// a test can compare the near list's results with the whole list's.
     pub(crate) static NEAR_ALL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// Test hook: runs started on this thread never skip the list's displacement check
+    /// ([`Raw::build_near`]'s bound), so that a test can compare the decisions of both.
+    pub(crate) static NO_BOUND: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
@@ -599,6 +625,7 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             .map(|_| Slot {
                 disp: AtomicU64::new(0),
                 near: AtomicU64::new(0),
+                bounded: AtomicBool::new(params.near_fresh && params.near_bounded),
                 row_start: UnsafeCell::new(0),
                 low: UnsafeCell::new(0),
                 buf: UnsafeCell::new((vec![[0.0; 3]; n], vec![[0.0; 3]; n])),
@@ -622,6 +649,8 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             fail_at: FAIL_AT.with(|f| f.take()),
             #[cfg(test)]
             near_all: NEAR_ALL.with(|f| f.get()),
+            #[cfg(test)]
+            no_bound: NO_BOUND.with(|f| f.get()),
             _host: PhantomData,
         };
         // SAFETY: nobody else sees the board yet.
@@ -698,6 +727,7 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
             gravity,
             skin,
             near_fresh,
+            near_bounded,
         } = self.params;
         let lim2 = 0.25 * skin * skin;
         let steps = self.plan.steps;
@@ -705,15 +735,21 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
         // kicks twice from the same forces: the same operations on the same values, one pass
         // over the particles fewer (a team gathers its buffers first and kicks in phase 3).
         let mut kick_pending = false;
+        // Whether this member's particles are bounded ([`Raw::build_near`]): as the last run
+        // left them if the near list carries over, else decided by this run's first near build.
+        let mut bounded = near_fresh && near_bounded;
         for s in 0..steps {
             // Phase 1.
             // SAFETY: own particles only; the leader alone touches the host and the walls.
             unsafe {
                 let raw = *self.raw.get();
-                let (md, nd) = if kick_pending {
-                    raw.kick_drift::<true>(own.clone(), dt, gravity)
-                } else {
-                    raw.kick_drift::<false>(own.clone(), dt, gravity)
+                let (md, nd) = match (kick_pending, bounded) {
+                    (true, true) => raw.kick_drift::<true, true>(own.clone(), dt, gravity, lim2),
+                    (true, false) => raw.kick_drift::<true, false>(own.clone(), dt, gravity, lim2),
+                    (false, true) => raw.kick_drift::<false, true>(own.clone(), dt, gravity, lim2),
+                    (false, false) => {
+                        raw.kick_drift::<false, false>(own.clone(), dt, gravity, lim2)
+                    }
                 };
                 kick_pending = false;
                 if t == 0 {
@@ -730,12 +766,12 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
                 }
             }
             crew.meet()?;
-            let max_disp2 = self.max_over_members(|o| &o.disp, &self.lead_disp);
+            let over = self.max_over_members(|o| &o.disp, &self.lead_disp);
             let near_out = self.max_over_members(|o| &o.near, &self.lead_near);
             let wall_moved = f64::from_bits(self.wall_moved.load(Ordering::Relaxed));
             // A moving wall uses up the skin too: rebuild before it can reach unlisted particles.
-            // NaN compares false, so a blown-up particle does not trigger endless rebuilds.
-            let rebuild = wall_moved > 0.25 * skin || max_disp2 > lim2;
+            // A blown-up (NaN) particle raises no flag (`kick_drift`): no endless rebuilds.
+            let rebuild = wall_moved > 0.25 * skin || over > 0.0;
             if rebuild {
                 if t == 0 {
                     // SAFETY: the others wait at the meeting below and hold no references.
@@ -765,7 +801,15 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
                     let all = false;
                     #[cfg(test)]
                     let all = self.near_all;
-                    raw.build_near(self.rows(t), own.clone(), all);
+                    bounded = raw.build_near(self.rows(t), own.clone(), all, 0.5 * skin);
+                    #[cfg(test)]
+                    if self.no_bound {
+                        bounded = false;
+                    }
+                    if t > 0 {
+                        // Read by the leader after the run's last meeting.
+                        self.others[t - 1].bounded.store(bounded, Ordering::Relaxed);
+                    }
                 }
             }
 
@@ -835,7 +879,13 @@ impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
         if t == 0 {
             // SAFETY: the leader alone touches the host; the near list is valid after every
             // step, so the next run need not rebuild it unless the lists are rebuilt meanwhile.
-            unsafe { (*self.host).near_done() };
+            // Every member's last near build came before the last step's phase 2 meeting.
+            let all = bounded
+                && self
+                    .others
+                    .iter()
+                    .all(|o| o.bounded.load(Ordering::Relaxed));
+            unsafe { (*self.host).near_done(all) };
         }
         Ok(())
     }

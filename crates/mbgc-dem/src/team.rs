@@ -123,7 +123,7 @@ impl Crew for SpinBarrier {
 #[cfg(test)]
 mod tests {
     use crate::contact::ModelClass;
-    use crate::step::{FAIL_AT, NEAR_ALL};
+    use crate::step::{FAIL_AT, NEAR_ALL, NO_BOUND};
     use crate::walls::box_planes;
     use crate::{BlowUp, Interaction, Materials, Particles, Scene, Simulation, Solid};
     use std::time::Duration;
@@ -279,6 +279,41 @@ mod tests {
             assert!(
                 near == whole,
                 "{threads} thread(s): the near list changed the run"
+            );
+        }
+    }
+
+    #[test]
+    fn the_bound_on_displacements_changes_no_decision() {
+        // The lattice falls and piles up: near skins widen and narrow with the speeds, and the
+        // bound holds in some steps and not in others. Skipping the list's displacement check
+        // where it holds must neither miss nor add a list build.
+        for threads in [1, 3] {
+            let run = |no_bound: bool| {
+                let mut sim = sim();
+                sim.set_threads(threads);
+                NO_BOUND.with(|f| f.set(no_bound));
+                let mut held = false;
+                for _ in 0..8 {
+                    sim.run(250).unwrap();
+                    held |= sim.neighbors.near_bounded;
+                }
+                NO_BOUND.with(|f| f.set(false));
+                (bits(&sim), sim.neighbors.builds, held)
+            };
+            let ((bounded, builds, held), (checked, builds_checked, _)) = (run(false), run(true));
+            assert!(
+                held,
+                "{threads} thread(s): the bound never held, so nothing was tested"
+            );
+            assert!(builds > 3, "only {builds} list builds");
+            assert_eq!(
+                builds, builds_checked,
+                "{threads} thread(s): list builds differ"
+            );
+            assert!(
+                bounded == checked,
+                "{threads} thread(s): the bound changed the run"
             );
         }
     }
