@@ -22,6 +22,7 @@ TABLES = [
     ("near list", "shear_box_cost_near.tsv"),
     ("rebuild's fine search", "shear_box_cost_fine.tsv"),
     ("near entries, fused kick (quiet machine)", "shear_box_cost_fused_full.tsv"),
+    ("vector kick, bounded check (quiet machine)", "shear_box_cost_kick.tsv"),
 ]
 POINTS = ["a-5cls", "b-5cls", "a2-5cls", "b2-5cls"]
 
