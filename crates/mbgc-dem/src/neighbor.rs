@@ -43,10 +43,12 @@ pub struct NeighborList {
     /// Whether the near list is valid for the particles as the last step left them: false after
     /// a rebuild outside the step, which the step's next run then follows with a near build.
     pub(crate) near_fresh: bool,
-    /// With `near_fresh`: whether every particle's near skin plus its distance from its list
-    /// build position stayed within half the skin at the near build (`crate::step`), which
-    /// spares the step the list's displacement check of particles inside their near skin.
-    pub(crate) near_bounded: bool,
+    /// With `near_fresh`: the skin for which every particle's near skin plus its distance from
+    /// its list build position stayed within half the skin at the near build (`crate::step`),
+    /// which spares the step the list's displacement check of particles inside their near skin.
+    /// `None` if not, after a rebuild, and while a run is under way (a run stopped by a failed
+    /// check leaves it so).
+    pub(crate) near_bounded: Option<f64>,
     /// Per particle: its squared near skin at the last near build (how far it may move).
     pub(crate) near_s2: Vec<f64>,
     /// Per particle: radius plus the near skin its speed asked for at the near build.
@@ -142,7 +144,7 @@ impl NeighborList {
         let n = p.len();
         self.builds += 1;
         self.near_fresh = false;
-        self.near_bounded = false;
+        self.near_bounded = None;
         if n == 0 {
             self.start.clear();
             self.start.push(0);

@@ -605,7 +605,8 @@ impl Host for Simulation {
             gravity: self.gravity,
             skin: self.neighbors.skin,
             near_fresh: self.neighbors.near_fresh,
-            near_bounded: self.neighbors.near_bounded,
+            // A skin changed since (it is public) voids the bound.
+            near_bounded: self.neighbors.near_bounded == Some(self.neighbors.skin),
         }
     }
 
@@ -645,6 +646,10 @@ impl Host for Simulation {
 
     fn near_done(&mut self, bounded: bool) {
         self.neighbors.near_fresh = true;
-        self.neighbors.near_bounded = bounded;
+        self.neighbors.near_bounded = bounded.then_some(self.neighbors.skin);
+    }
+
+    fn forget_bound(&mut self) {
+        self.neighbors.near_bounded = None;
     }
 }

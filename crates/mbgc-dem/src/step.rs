@@ -62,6 +62,9 @@ pub(crate) trait Host {
     /// Marks the near list valid for the state a finished run leaves, and records whether every
     /// particle is bounded ([`Raw::build_near`]).
     fn near_done(&mut self, bounded: bool);
+    /// Forgets the bound recorded by [`Host::near_done`]: a run under way rewrites the near
+    /// builds' positions and skins, and one stopped by a failed check does not record it anew.
+    fn forget_bound(&mut self);
 }
 
 #[derive(Clone, Copy)]
@@ -619,6 +622,12 @@ thread_local! {
 impl<'a, H: Host, L: ContactLaw> Board<'a, H, L> {
     pub(crate) fn new(host: &'a mut H, law: &'a L, plan: Plan, members: usize) -> Self {
         let params = host.params();
+        host.forget_bound();
+        #[cfg(test)]
+        let params = Params {
+            near_bounded: params.near_bounded && !NO_BOUND.with(|f| f.get()),
+            ..params
+        };
         let raw = host.views();
         let n = raw.n;
         let others = (1..members)

@@ -296,7 +296,7 @@ mod tests {
                 let mut held = false;
                 for _ in 0..8 {
                     sim.run(250).unwrap();
-                    held |= sim.neighbors.near_bounded;
+                    held |= sim.neighbors.near_bounded.is_some();
                 }
                 NO_BOUND.with(|f| f.set(false));
                 (bits(&sim), sim.neighbors.builds, held)
@@ -316,5 +316,36 @@ mod tests {
                 "{threads} thread(s): the bound changed the run"
             );
         }
+    }
+
+    #[test]
+    fn a_changed_skin_or_a_stopped_run_voids_the_bound() {
+        use crate::step::Host;
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut sim = sim();
+            sim.run(250).unwrap();
+            let skin = sim.neighbors.skin;
+            let held = sim.neighbors.near_bounded == Some(skin) && Host::params(&sim).near_bounded;
+            // Proven for half the old skin, not the new one.
+            sim.neighbors.skin = 0.5 * skin;
+            let after_skin = Host::params(&sim).near_bounded;
+            sim.neighbors.skin = skin;
+            // A run stopped midway leaves near builds whose bound nobody recorded.
+            sim.set_threads(2);
+            FAIL_AT.with(|f| f.set(Some((1, 5))));
+            let failed = sim.run(100).is_err();
+            let _ = tx.send((held, after_skin, failed, sim.neighbors.near_bounded));
+        });
+        let (held, after_skin, failed, after_stop) = rx
+            .recv_timeout(Duration::from_secs(60))
+            .expect("the team hung");
+        assert!(
+            held,
+            "the bound did not hold in the lattice at rest: nothing is tested"
+        );
+        assert!(!after_skin, "a smaller skin kept the bound");
+        assert!(failed, "the injected failure did not stop the run");
+        assert_eq!(after_stop, None, "a stopped run kept a bound");
     }
 }
