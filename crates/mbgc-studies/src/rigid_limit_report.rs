@@ -39,6 +39,11 @@ pub struct Args {
     /// bounded by the lines' reach.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 5e8))]
     pub e_max: f64,
+    /// A line's run this close to the model's edge of K_p (in decades, at most 0.05) stands for
+    /// the edge. The lines were run at the shipped model's edges; a model whose campaign ends
+    /// elsewhere (the widened one's 9.77e6, 0.0101 decades below the lines' 1e7) needs more.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = mbgc::metamodel::rigid_fit::EDGE_DECADES))]
+    pub edge_decades: f64,
     /// The model with its rigid limit (never the input model).
     #[cfg_attr(feature = "cli", arg(long))]
     pub out: PathBuf,
@@ -71,6 +76,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         wall: Some(("K_w", "E_w")),
         along_max: a.e_max,
         source: source.join(", "),
+        edge_decades: a.edge_decades,
     };
     let mut extended = fit_rigid_limit(&model, &fit, &lines)?;
     if !a.cohesion_tables.is_empty() {
@@ -135,7 +141,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     extended.save(&a.out)?;
-    let text = report(a, &model, &extended, &lines);
+    let text = report(a, &model, &extended);
     crate::emit_report(
         a.json,
         a.report.as_deref(),
@@ -249,7 +255,7 @@ fn lines(model: &Metamodel, rows: &[Row], bond: f64) -> anyhow::Result<Vec<Line>
     Ok(out)
 }
 
-fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String {
+fn report(a: &Args, before: &Metamodel, m: &Metamodel) -> String {
     let mut w = String::new();
     let Some(lim) = &m.rigid_limit else {
         return w;
@@ -259,7 +265,7 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
     let _ = writeln!(
         w,
         "# The rigid limit of `{}`\n\nRegenerate with `cargo run --release -- bench rigid-limit \
-         --model {} --tables {} --bond {}{} --out {}{}` (reads the stiffness tables, a second).\n",
+         --model {} --tables {} --bond {}{}{} --out {}{}` (reads the stiffness tables, a second).\n",
         a.model.display(),
         a.model.display(),
         join(&a.tables),
@@ -268,6 +274,11 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
             String::new()
         } else {
             format!(" --cohesion-tables {}", join(&a.cohesion_tables))
+        },
+        if a.edge_decades == mbgc::metamodel::rigid_fit::EDGE_DECADES {
+            String::new()
+        } else {
+            format!(" --edge-decades {}", a.edge_decades)
         },
         a.out.display(),
         a.report
@@ -293,10 +304,19 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel, lines: &[Line]) -> String
         domain[1],
         lim.reach[0],
         lim.reach[1],
-        lines.len(),
+        lim.lines.len(),
         lim.lines.join(", "),
         lim.source
     );
+    if a.edge_decades != mbgc::metamodel::rigid_fit::EDGE_DECADES {
+        let _ = writeln!(
+            w,
+            "The edge's value on a line is its run nearest the edge within {} decades (the \
+             lines were run for another model's edge), so a curve's shifts count from that \
+             run.\n",
+            a.edge_decades
+        );
+    }
     let _ = writeln!(
         w,
         "Two forms are fitted per response and side; the one with the smaller error predicting \

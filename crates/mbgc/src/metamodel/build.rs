@@ -1395,6 +1395,7 @@ mod tests {
             wall: None,
             along_max: 1e12,
             source: "test".into(),
+            edge_decades: crate::metamodel::rigid_fit::EDGE_DECADES,
         };
         let lm = fit_rigid_limit(&m, &fit, &lines).unwrap();
         let lim = lm.rigid_limit.as_ref().unwrap();

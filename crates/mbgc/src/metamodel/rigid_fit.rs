@@ -35,10 +35,18 @@ pub struct RigidFit<'a> {
     pub along_max: f64,
     /// What the tables were, for the record.
     pub source: String,
+    /// A run this close to the domain's edge (in decades) stands for the edge
+    /// ([`EDGE_DECADES`] unless the lines were run for another model's edge).
+    pub edge_decades: f64,
 }
 
-/// A run this close to the domain's edge (in decades) stands for the edge.
+/// A run this close to the domain's edge (in decades) stands for the edge: the lines run for a
+/// model hit its edge to within rounding.
 pub const EDGE_DECADES: f64 = 0.01;
+
+/// The largest [`RigidFit::edge_decades`] taken: the edge's value is read from the run nearest
+/// it, and a run farther than this would stand for a response that still moves.
+pub const EDGE_DECADES_MAX: f64 = 0.05;
 
 /// The model with the rigid limit measured on `lines`.
 pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Result<Metamodel> {
@@ -62,6 +70,12 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
         ),
         None => None,
     };
+    if !(fit.edge_decades > 0.0 && fit.edge_decades <= EDGE_DECADES_MAX) {
+        return Err(bad(format!(
+            "the edge tolerance must lie in (0, {EDGE_DECADES_MAX}] decades, got {}",
+            fit.edge_decades
+        )));
+    }
     if !(fit.along_max.is_finite() && fit.along_max > 0.0) {
         return Err(bad(format!(
             "the largest {} must be positive, got {}",
@@ -84,7 +98,9 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
             let edge = gd.domain[usize::from(stiff)];
             let shifts: Vec<LineShifts> = lines
                 .iter()
-                .filter_map(|l| line_shifts(model, l, r, k_along, wall_along, edge, stiff))
+                .filter_map(|l| {
+                    line_shifts(model, l, r, (k_along, wall_along), (edge, fit.edge_decades), stiff)
+                })
                 .collect();
             for l in shifts.iter().filter(|l| !l.shifts.is_empty()) {
                 if !used.contains(&l.label) {
@@ -126,8 +142,8 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
     if curves.is_empty() {
         return Err(bad(format!(
             "no response has two lines with runs at the edge of {} ({:.4e} or {:.4e}, within \
-             {EDGE_DECADES} decades) and at a common value beyond it",
-            fit.group, gd.domain[0], gd.domain[1]
+             {} decades) and at a common value beyond it",
+            fit.group, gd.domain[0], gd.domain[1], fit.edge_decades
         )));
     }
     let mut m = model.clone();
@@ -155,9 +171,8 @@ fn line_shifts(
     model: &Metamodel,
     line: &Line,
     r: usize,
-    k_along: usize,
-    wall_along: Option<usize>,
-    edge: f64,
+    (k_along, wall_along): (usize, Option<usize>),
+    (edge, tolerance): (f64, f64),
     stiff: bool,
 ) -> Option<LineShifts> {
     // The seed means at each group value (runs at the same value are replicates).
@@ -179,7 +194,7 @@ fn line_shifts(
         means.iter().map(|m| (m.0, m.1 / m.2 as f64, m.2)).collect();
     let &(_, at_edge, n_edge) = means
         .iter()
-        .filter(|m| (m.0 / edge).log10().abs() < EDGE_DECADES)
+        .filter(|m| (m.0 / edge).log10().abs() < tolerance)
         .min_by(|a, b| {
             (a.0 / edge)
                 .log10()
@@ -211,7 +226,7 @@ fn line_shifts(
         .iter()
         .filter(|m| {
             let d = (m.0 / edge).log10();
-            d.abs() >= EDGE_DECADES && (d > 0.0) == stiff
+            d.abs() >= tolerance && (d > 0.0) == stiff
         })
         .collect();
     Some(LineShifts {
