@@ -1460,6 +1460,63 @@ mod tests {
         );
     }
 
+    /// Lines run for another model's edge: their first run 0.0101 decades beyond this one's
+    /// (the widened shear-box model's 9.77e6 against the lines' 1e7) stands for the edge only
+    /// with a wider tolerance, which is bounded.
+    #[test]
+    fn a_line_run_just_off_the_edge_stands_for_it_only_within_the_stated_tolerance() {
+        use crate::metamodel::rigid_fit::{fit_rigid_limit, Line, RigidFit, EDGE_DECADES};
+        let (m, _, _) = grouped_fixture();
+        let hi = m.groups[0].domain[1];
+        let off = 10f64.powf(0.0101);
+        let lines: Vec<Line> = [0.2, 0.8]
+            .iter()
+            .map(|&mu| Line {
+                label: format!("mu {mu}"),
+                inputs: vec![1e6, 2000.0, 4.0, mu],
+                runs: [off, 10.0, 100.0]
+                    .iter()
+                    .map(|&f| {
+                        let dec = f64::log10(f);
+                        (hi * f, vec![1000.0 - 5.0 * dec, 30.0 + mu + 0.5 * dec])
+                    })
+                    .collect(),
+            })
+            .collect();
+        let fit = |edge_decades: f64| RigidFit {
+            group: "K",
+            along: "E",
+            wall: None,
+            along_max: 1e12,
+            source: "test".into(),
+            edge_decades,
+        };
+        let err = fit_rigid_limit(&m, &fit(EDGE_DECADES), &lines).unwrap_err();
+        assert!(err.to_string().contains("within 0.01 decades"), "{err}");
+        let lim = fit_rigid_limit(&m, &fit(0.02), &lines)
+            .unwrap()
+            .rigid_limit
+            .unwrap();
+        assert!(
+            (lim.reach[1] / (100.0 * hi) - 1.0).abs() < 1e-9,
+            "{:?}",
+            lim.reach
+        );
+        // The angle's shifts count from the run nearest the edge: +0.5 deg per decade beyond it.
+        let angle = lim
+            .curves
+            .iter()
+            .find(|c| c.response == m.responses[1].name && c.stiff)
+            .unwrap();
+        let last = angle.knots.last().unwrap();
+        assert!((last.decades - 2.0).abs() < 1e-9, "{last:?}");
+        assert!((last.value - 0.5 * (2.0 - 0.0101)).abs() < 1e-9, "{last:?}");
+        for bad in [0.0, -0.01, 0.06, f64::NAN] {
+            let err = fit_rigid_limit(&m, &fit(bad), &lines).unwrap_err();
+            assert!(err.to_string().contains("edge tolerance"), "{bad}: {err}");
+        }
+    }
+
     #[test]
     fn a_support_group_bounds_the_model_where_the_fitted_groups_box_holds_no_run() {
         // Runs over K = E / (rho d) 250-2500 and C = ced / (rho d) 0-100, fitted in K and the

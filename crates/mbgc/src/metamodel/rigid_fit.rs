@@ -99,7 +99,14 @@ pub fn fit_rigid_limit(model: &Metamodel, fit: &RigidFit, lines: &[Line]) -> Res
             let shifts: Vec<LineShifts> = lines
                 .iter()
                 .filter_map(|l| {
-                    line_shifts(model, l, r, (k_along, wall_along), (edge, fit.edge_decades), stiff)
+                    line_shifts(
+                        model,
+                        l,
+                        r,
+                        (k_along, wall_along),
+                        (edge, fit.edge_decades),
+                        stiff,
+                    )
                 })
                 .collect();
             for l in shifts.iter().filter(|l| !l.shifts.is_empty()) {
