@@ -15,6 +15,15 @@ use mbgc::outputs::refuse_overwriting_inputs;
 use mbgc::propagate::{self, resample, Band, DrawDesign, EventRate, PosteriorFile, RecordedRuns};
 use mbgc_output::{say, Output};
 
+/// `--metamodel-outside`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MetamodelOutside {
+    /// Refuse the band when a draw lies outside the model's domain.
+    Refuse,
+    /// Leave such draws out of the metamodel's band, counted and listed in the report.
+    Skip,
+}
+
 #[derive(Debug, Args)]
 pub struct PropagateArgs {
     /// Posterior samples written by `mbgc calibrate --bayes --posterior-out`.
@@ -44,6 +53,10 @@ pub struct PropagateArgs {
     /// through its equations, with and without its own error, beside the DEM band.
     #[arg(long, value_name = "MODEL.json")]
     pub metamodel: Option<PathBuf>,
+    /// What a draw outside the metamodel's domain does: `refuse` the band, or `skip` the draw
+    /// (left out of the metamodel's band, counted and listed in the report).
+    #[arg(long, value_enum, default_value_t = MetamodelOutside::Refuse, requires = "metamodel")]
+    pub metamodel_outside: MetamodelOutside,
     /// Constants the experiment needs beyond the posterior's parameters (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
@@ -229,7 +242,12 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
                 rows.iter_mut().for_each(|r| r.push(*v));
             }
             Some(propagate::through_metamodel(
-                &model, &header, &rows, &responses, a.seed,
+                &model,
+                &header,
+                &rows,
+                &responses,
+                a.seed,
+                a.metamodel_outside == MetamodelOutside::Skip,
             )?)
         }
     };
@@ -453,6 +471,9 @@ pub fn run(a: &PropagateArgs) -> anyhow::Result<()> {
                 "mean": b.mean, "sd": b.sd, "q05": b.q05, "q95": b.q95,
             })),
             "error_source": m.error_source,
+            "outside": m.outside.iter().map(|(k, what)| serde_json::json!({
+                "draw": k, "what": what,
+            })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>()),
     }))
 }
@@ -577,6 +598,19 @@ fn report(
                 num(w.q05),
                 num(w.q95),
                 b.error_source
+            ));
+        }
+        if let Some(out) = bands.first().map(|b| &b.outside).filter(|o| !o.is_empty()) {
+            s.push_str(&format!(
+                "\n{} of {} draws lie outside the metamodel's domain and are left out of its \
+                 band (`--metamodel-outside skip`): {}. The band is of the others, so it is \
+                 biased where the quantity differs there; the DEM band above holds them.\n",
+                out.len(),
+                bands[0].predictions.len(),
+                out.iter()
+                    .map(|(k, what)| format!("draw {k} ({what})"))
+                    .collect::<Vec<_>>()
+                    .join("; ")
             ));
         }
         let missing: Vec<&String> = rows

@@ -148,6 +148,48 @@ fn draws_run_and_the_band_follows_the_posterior() {
         with_error >= 0.98 * cheap["sd"].as_f64().unwrap(),
         "{cheap}"
     );
+    // A model whose domain ends inside the draws (as a hopper model's does where its runs
+    // clogged) refuses the band, or with --metamodel-outside skip leaves those draws out and
+    // lists them.
+    let mut narrow: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("cnr.json")).unwrap()).unwrap();
+    let input = narrow["inputs"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|i| i["name"] == "e_pw")
+        .unwrap();
+    input["domain"][1] = serde_json::json!(0.6);
+    std::fs::write(d.join("narrow.json"), narrow.to_string()).unwrap();
+    let mut refused = extra.to_vec();
+    refused.extend(["--metamodel", "narrow.json"]);
+    let o = propagate(d, &refused);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("outside the model's domain") && e.contains("skip"),
+        "{e}"
+    );
+    let mut skipped = refused.clone();
+    skipped.extend(["--metamodel-outside", "skip", "--report", "skip.md"]);
+    let o = propagate(d, &skipped);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let cheap = &m["metamodel"][0];
+    let out = cheap["outside"].as_array().unwrap().len();
+    // The draws spread e_pw evenly over [0.3, 0.7]: a quarter lie above 0.6.
+    assert!((8..=12).contains(&out), "{cheap}");
+    // The band is of the draws inside: their cnr (= e_pw) averages about 0.45.
+    assert!(
+        (cheap["mean"].as_f64().unwrap() - 0.45).abs() < 0.02,
+        "{cheap}"
+    );
+    let report = std::fs::read_to_string(d.join("skip.md")).unwrap();
+    assert!(
+        report.contains(&format!(
+            "{out} of 40 draws lie outside the metamodel's domain"
+        )),
+        "{report}"
+    );
     // A model whose input the draws do not hold is refused before anything runs.
     std::fs::write(
         d.join("other.json"),

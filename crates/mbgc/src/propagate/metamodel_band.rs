@@ -26,19 +26,26 @@ pub struct MetamodelBand {
     pub with_error: Option<Band>,
     /// Where the error came from, in words (or why there is none).
     pub error_source: String,
-    /// The prediction at each draw.
+    /// The prediction at each draw (NaN at a draw left out as outside the domain).
     pub predictions: Vec<f64>,
+    /// The draws left out as outside the model's domain (with `skip_outside`): each draw's
+    /// index and what lies outside. The band is then of the others, and biased where the
+    /// quantity differs there (a hopper's runs above some friction clog and leave no rate).
+    pub outside: Vec<(usize, String)>,
 }
 
 /// The draws `rows` (columns `header`) through `model`, for each of `responses` it predicts.
-/// Refuses a model input that no column holds and a draw outside the model's domain (naming the
-/// input, the value and the domain): an equation is not evaluated where it was never fitted.
+/// Refuses a model input that no column holds. An equation is not evaluated where it was never
+/// fitted: a draw outside the model's domain is refused (naming the input, the value and the
+/// domain), or with `skip_outside` left out of the band and listed in
+/// [`MetamodelBand::outside`].
 pub fn through_metamodel(
     model: &Metamodel,
     header: &[String],
     rows: &[Vec<f64>],
     responses: &[String],
     seed: u64,
+    skip_outside: bool,
 ) -> Result<Vec<MetamodelBand>> {
     let columns = model
         .input_names()
@@ -95,12 +102,20 @@ pub fn through_metamodel(
                 })
         })
         .collect();
-    if let Some((k, what)) = outside.first() {
+    if let (Some((k, what)), false) = (outside.first(), skip_outside) {
         return Err(Error::invalid(format!(
             "--metamodel: {} of {} draws lie outside the model's domain (draw {k}: {what}); an \
-             equation is not evaluated where it was never fitted",
+             equation is not evaluated where it was never fitted. --metamodel-outside skip \
+             leaves them out of the metamodel's band and lists them",
             outside.len(),
             points.len()
+        )));
+    }
+    if outside.len() == points.len() {
+        return Err(Error::invalid(format!(
+            "--metamodel: all {} draws lie outside the model's domain (draw 0: {}): no band",
+            points.len(),
+            outside.first().map_or("", |o| o.1.as_str())
         )));
     }
     let cols: Vec<Vec<f64>> = (0..columns.len())
@@ -123,7 +138,10 @@ pub fn through_metamodel(
     let mut bands = Vec::new();
     for r in responses {
         let Some(m) = model.response(r) else { continue };
-        let predicted = model.predict(m, &cols);
+        let mut predicted = model.predict(m, &cols);
+        for (k, _) in &outside {
+            predicted[*k] = f64::NAN;
+        }
         let Some(without_error) = Band::of(&predicted.iter().map(|&p| vec![p]).collect::<Vec<_>>())
         else {
             continue;
@@ -149,13 +167,18 @@ pub fn through_metamodel(
                         .collect(),
                 ),
                 format!(
-                    "its {} RMSE {} (beyond its stiffness data with the rigid limit's sd)",
+                    "its {} RMSE {}{}",
                     if m.validation.is_some() {
                         "validation"
                     } else {
                         "test"
                     },
-                    crate::numeric::round_significant(rmse, 4)
+                    crate::numeric::round_significant(rmse, 4),
+                    if model.rigid_limit.is_some() {
+                        " (beyond its stiffness data with the rigid limit's sd)"
+                    } else {
+                        ""
+                    }
                 ),
             )
         } else {
@@ -182,6 +205,7 @@ pub fn through_metamodel(
             with_error,
             error_source,
             predictions: predicted,
+            outside: outside.clone(),
         });
     }
     Ok(bands)
