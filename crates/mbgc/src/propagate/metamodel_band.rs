@@ -111,7 +111,7 @@ pub fn through_metamodel(
             points.len()
         )));
     }
-    if outside.len() == points.len() {
+    if !points.is_empty() && outside.len() == points.len() {
         return Err(Error::invalid(format!(
             "--metamodel: all {} draws lie outside the model's domain (draw 0: {}): no band",
             points.len(),
