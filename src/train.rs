@@ -64,6 +64,25 @@ pub struct TrainArgs {
     /// saved equation is its equation plus the fitted correction) instead of refitting whole.
     #[arg(long, requires = "extends")]
     pub correction: bool,
+    /// Fit only what the data add to this model's equations (the saved equation is its equation
+    /// plus the fitted correction): like --correction, for a model other than the extended one,
+    /// e.g. a cohesive train's runs corrected onto a base model widened since. Its inputs must be
+    /// among this train's.
+    #[arg(long, value_name = "MODEL.json", conflicts_with = "correction")]
+    pub correct: Option<PathBuf>,
+    /// Groups of the experiment's similarity the equations may not read, comma-separated (e.g.
+    /// K_p,K_w); their range over the runs still bounds the model. With --correct and the
+    /// cohesive shear box, the correction then reads the stiffness only through the cohesion's
+    /// contact pull Ca = C K^(-2/3), the similarity measured in the DEM beyond the cohesive runs
+    /// (docs/cohesion_stiffness.md).
+    #[arg(long, value_delimiter = ',', value_name = "GROUPS")]
+    pub unread_groups: Vec<String>,
+    /// Another campaign's tables, TRAIN.csv,VALIDATION.csv, whose runs inside this space are
+    /// fitted and validated with this train's own (repeatable). A run equal to one already there
+    /// is not counted twice; an input the table lacks must be the parameter of an effect its runs
+    /// were made without, taken at its off value (ced = 0 for a base model's runs).
+    #[arg(long, value_name = "TRAIN.csv,VALIDATION.csv", value_parser = parse_table_pair)]
+    pub also_fit: Vec<(PathBuf, PathBuf)>,
     /// Stop after the simulate stage.
     #[arg(long)]
     pub no_fit: bool,
@@ -134,6 +153,9 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         no_similarity: a.no_similarity,
         extends: a.extends.clone(),
         correction: a.correction,
+        correct: a.correct.clone(),
+        unread_groups: a.unread_groups.clone(),
+        also_fit: a.also_fit.clone(),
         no_fit: a.no_fit,
         partial: a.partial,
         figures: true,
@@ -197,4 +219,16 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// `TRAIN.csv,VALIDATION.csv` of `--also-fit`.
+fn parse_table_pair(s: &str) -> Result<(PathBuf, PathBuf), String> {
+    match s.split_once(',') {
+        Some((t, v)) if !t.is_empty() && !v.is_empty() && !v.contains(',') => {
+            Ok((PathBuf::from(t), PathBuf::from(v)))
+        }
+        _ => Err(format!(
+            "expected TRAIN.csv,VALIDATION.csv (two paths, one comma), got `{s}`"
+        )),
+    }
 }

@@ -726,3 +726,139 @@ fn a_correction_keeps_the_extended_equation_and_adds_to_it() {
         assert!(n.contains(o), "{n} does not hold {o}");
     }
 }
+
+/// `--correct` and `--also-fit` (issue 40): an effect model's runs refitted, without a run, as a
+/// correction of a base model widened since, beside that base's runs. The widened base's table
+/// lacks the effect's parameter: its runs are taken at the value that switches the effect off,
+/// and the runs both tables copied from the first base count once.
+#[test]
+fn an_effect_model_is_refitted_onto_a_widened_base_beside_its_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let widen = |s: String| {
+        s.replace(
+            "impact_angle = { min = 10, max = 60 }",
+            "impact_angle = { min = 10, max = 80 }",
+        )
+    };
+    let rolling = |s: String| format!("{s}mu_r_pw = {{ min = 0, max = 0.3 }}\n");
+    std::fs::write(d.join("base.toml"), impact_space("hertz,mindlin", "")).unwrap();
+    std::fs::write(
+        d.join("wide.toml"),
+        widen(impact_space("hertz,mindlin", "")),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("rolling.toml"),
+        rolling(impact_space("hertz,mindlin,epsd2", "")),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("rolling_wide.toml"),
+        rolling(widen(impact_space("hertz,mindlin,epsd2", ""))),
+    )
+    .unwrap();
+    let fit = [
+        "--population",
+        "300",
+        "--generations",
+        "5",
+        "--select",
+        "best",
+    ];
+    let train = |space: &'static str,
+                 name: &'static str,
+                 n: &'static str,
+                 extra: &[&'static str]|
+     -> Vec<&'static str> {
+        let mut a = impact_train(space, name, n, "4");
+        a.extend(fit);
+        a.extend_from_slice(extra);
+        a
+    };
+    ok(d, &train("base.toml", "base", "10", &[]));
+    ok(d, &train("wide.toml", "wide", "16", &["--extends", "base"]));
+    ok(
+        d,
+        &train("rolling.toml", "rolling", "16", &["--extends", "base"]),
+    );
+    let also = "training_data/wide.csv,training_data/wide_validation.csv";
+    let refit = |extra: &[&'static str]| {
+        let mut a = train(
+            "rolling_wide.toml",
+            "rolling_wide",
+            "16",
+            &["--extends", "rolling"],
+        );
+        a.extend_from_slice(extra);
+        mbgc(d, &a)
+    };
+    // No new run and nothing else new to fit: nothing is extended.
+    let o = refit(&[]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("--n 16") && e.contains("--correct"),
+        "{e}"
+    );
+    // A table missing an input that is no effect's parameter is refused by name.
+    let bad = d.join("bad.csv");
+    let wide_table = std::fs::read_to_string(d.join("training_data/wide.csv")).unwrap();
+    std::fs::write(&bad, wide_table.replace("impact_angle", "angle")).unwrap();
+    let o = refit(&["--also-fit", "bad.csv,training_data/wide_validation.csv"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("bad.csv") && e.contains("column impact_angle"),
+        "{e}"
+    );
+    let o = refit(&["--correct", "models/wide.json", "--correction"]);
+    assert!(!o.status.success());
+    // Groups need a similarity; the wall impact has none.
+    let o = refit(&["--correct", "models/wide.json", "--unread-groups", "K_p"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("--unread-groups"), "{e}");
+    let err = String::from_utf8_lossy(
+        &refit(&["--correct", "models/wide.json", "--also-fit", also]).stderr,
+    )
+    .to_string();
+    assert!(err.contains("ran 0"), "{err}");
+    let read = |p: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join(p)).unwrap()).unwrap()
+    };
+    let (wide, new) = (read("models/wide.json"), read("models/rolling_wide.json"));
+    for k in 0..2 {
+        let (w, n) = (
+            wide["responses"][k]["equation"].as_str().unwrap(),
+            new["responses"][k]["equation"].as_str().unwrap(),
+        );
+        assert!(n.contains(w), "{n} does not hold the widened base's {w}");
+    }
+    // The rolling model's 16 runs (10 copied from base) and the widened base's 6 new ones: its
+    // 10 copies of base are the rolling table's at mu_r_pw = 0, counted once.
+    let source = new["data"]["file"].as_str().unwrap();
+    assert!(source.contains("wide.csv (at mu_r_pw = 0)"), "{source}");
+    let settled = |p: &str| {
+        std::fs::read_to_string(d.join(p))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .filter(|l| l.contains(",done,"))
+            .count()
+    };
+    let wide_new = settled("training_data/wide.csv") - 10;
+    assert_eq!(
+        new["data"]["rows"].as_u64().unwrap() as usize,
+        settled("training_data/rolling_wide.csv") + wide_new,
+        "{source}"
+    );
+    // The angle's range is the widened base's, from its runs.
+    let angle = new["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["name"] == "impact_angle")
+        .unwrap();
+    assert!(angle["domain"][1].as_f64().unwrap() > 60.0, "{angle}");
+    let rec = read("training_data/rolling_wide.train.json");
+    assert_eq!(rec["correct"], "models/wide.json");
+    assert_eq!(rec["also_fit"][0][0], "training_data/wide.csv");
+}

@@ -206,6 +206,30 @@ impl Similarity {
         self
     }
 
+    /// The similarity with the groups `names` moved to the support: the equations no longer read
+    /// them, but their range over the runs still bounds the model. A correction fitted this way
+    /// reads the stiffness only through the cohesion's contact pull (`Ca_pp = C_pp K_p^(-2/3)`)
+    /// when `K_p` and `K_w` are left unread, so beyond the stiffness of its cohesive runs it
+    /// carries the similarity the DEM measured (docs/cohesion_stiffness.md) instead of a trend in
+    /// K_p that no cohesive run constrains. Refuses a name that is no fitted group.
+    pub fn with_unread(mut self, names: &[String]) -> std::result::Result<Similarity, String> {
+        for name in names {
+            let Some(k) = self.groups.iter().position(|g| &g.name == name) else {
+                return Err(format!(
+                    "{name} is not one of the groups the equations read (they are: {})",
+                    self.groups
+                        .iter()
+                        .map(|g| g.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            };
+            let g = self.groups.remove(k);
+            self.support.push(g);
+        }
+        Ok(self)
+    }
+
     /// Every input the similarity reads: those its groups absorb and those its scaled responses'
     /// factors are made of (a fixed one must still be an input, or the factor has no value).
     pub fn needed_inputs(&self) -> Vec<String> {
@@ -220,10 +244,12 @@ impl Similarity {
         v
     }
 
-    /// Inputs that act only through the groups: the equations are fitted without them.
+    /// Inputs that act only through the groups: the equations are fitted without them. A
+    /// support group's inputs count: an input the equations may not read through its group
+    /// ([`Similarity::with_unread`]) must not come back as a raw variable.
     pub fn absorbed(&self) -> Vec<String> {
         let mut v: Vec<String> = Vec::new();
-        for g in &self.groups {
+        for g in self.groups.iter().chain(&self.support) {
             for (n, _) in &g.monomial.powers {
                 if !v.contains(n) {
                     v.push(n.clone());

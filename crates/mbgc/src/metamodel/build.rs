@@ -1610,6 +1610,86 @@ mod tests {
     }
 
     #[test]
+    fn a_group_left_unread_bounds_the_model_but_moves_no_prediction() {
+        // y = 10 + 5 A with A = ced E^(-2/3) (rho d)^(-1/3): fitted in K and A with K left
+        // unread, the equation cannot follow K, and K's range over the runs still bounds it.
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("t.csv");
+        let third = 1.0 / 3.0;
+        let a_of = |e: f64, ced: f64| ced * e.powf(-2.0 * third) * 8000f64.powf(-third);
+        let mut text = String::from("E,rho,d,ced,y\n");
+        for r in 0..40 {
+            let e = 2e6 * (1.0 + 9.0 * (r as f64 * 0.377).fract());
+            let ced = 8000.0 * 100.0 * (r as f64 * 0.618).fract();
+            text.push_str(&format!("{e},2000,4,{ced},{}\n", 10.0 + 5.0 * a_of(e, ced)));
+        }
+        std::fs::write(&data, text).unwrap();
+        let mono = |powers: &[(&str, f64)]| Monomial {
+            coefficient: 1.0,
+            powers: powers.iter().map(|(n, p)| (n.to_string(), *p)).collect(),
+        };
+        let group = |name: &str, monomial: Monomial| Group {
+            name: name.into(),
+            what: name.into(),
+            monomial,
+        };
+        let similarity = Similarity {
+            groups: vec![
+                group("K", mono(&[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
+                group(
+                    "A",
+                    mono(&[
+                        ("ced", 1.0),
+                        ("rho", -third),
+                        ("d", -third),
+                        ("E", -2.0 * third),
+                    ]),
+                ),
+            ],
+            support: vec![],
+            scaled: vec![],
+        };
+        let err = similarity.clone().with_unread(&["Z".into()]).unwrap_err();
+        assert!(err.contains("Z") && err.contains("K, A"), "{err}");
+        let similarity = similarity.with_unread(&["K".into()]).unwrap();
+        // E enters only the unread K and A: still not a raw variable of the fit.
+        assert_eq!(similarity.absorbed(), ["ced", "rho", "d", "E"]);
+        let inputs: Vec<String> = ["E", "rho", "d", "ced"].map(String::from).to_vec();
+        let settings = FitSettings::new(inputs.clone(), vec!["y".into()])
+            .test_fraction(0.0)
+            .config(gp::Config {
+                population: 200,
+                generations: 5,
+                ..gp::Config::default()
+            })
+            .similarity(similarity);
+        let table = TrainingTable::read_csv(&data, &inputs, &["y".to_string()]).unwrap();
+        let m = fit(&table, &settings, |_, _| {}).unwrap().model;
+        let names: Vec<(&str, bool)> = m
+            .groups
+            .iter()
+            .map(|g| (g.group.name.as_str(), g.support))
+            .collect();
+        assert_eq!(names, [("A", false), ("K", true)]);
+        // Two points with the same A and K 4x apart: the same prediction.
+        let (e1, ced1) = (4e6, 2e5);
+        let (e2, ced2) = (16e6, 2e5 * 4f64.powf(2.0 * third));
+        assert!((a_of(e1, ced1) - a_of(e2, ced2)).abs() < 1e-12);
+        let r = &m.responses[0];
+        let p1 = m.predict_point(r, &[e1, 2000.0, 4.0, ced1]);
+        let p2 = m.predict_point(r, &[e2, 2000.0, 4.0, ced2]);
+        assert!(
+            p1.is_finite() && (p1 - p2).abs() < 1e-9 * p1.abs(),
+            "{p1} {p2}"
+        );
+        // K's range over the runs (E 2e6 to 2e7 at rho d 8000) bounds the model.
+        let [k_lo, k_hi] = m.groups[1].domain;
+        assert!(k_lo > 200.0 && k_hi < 2600.0, "{k_lo} {k_hi}");
+        let out = m.outside_domain(&[5e7, 2000.0, 4.0, ced1]);
+        assert!(out.iter().any(|o| o.0 == "K"), "{out:?}");
+    }
+
+    #[test]
     fn a_cohesion_group_is_carried_to_the_stiffness_edge_with_its_scatter() {
         use crate::metamodel::rigid_fit::{fit_cohesion, CohesionLine};
         use crate::metamodel::rigid_limit::{Curve, Form, Knot, LeaveOneOut, RigidLimit};

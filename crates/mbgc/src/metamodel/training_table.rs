@@ -81,7 +81,9 @@ impl TrainingTable {
 
     /// This table with the rows of `other` appended for which `keep` holds (given each row's
     /// values in this table's column order). `other` must have the same columns; the model class
-    /// labels are kept where both tables have them. The source names both tables.
+    /// labels are kept where both tables have them. The source names both tables. A row equal to
+    /// one this table holds in every column is the same run copied into both campaigns (an
+    /// extension copies its base's runs): it is not added twice.
     pub fn with_rows_of(
         mut self,
         other: &TrainingTable,
@@ -103,6 +105,11 @@ impl TrainingTable {
             idx.push(k);
         }
         let rows = other.columns.first().map_or(0, |c| c.1.len());
+        let mine = self.columns.first().map_or(0, |c| c.1.len());
+        let key = |vals: &mut dyn Iterator<Item = f64>| vals.map(f64::to_bits).collect::<Vec<_>>();
+        let mut seen: std::collections::HashSet<Vec<u64>> = (0..mine)
+            .map(|r| key(&mut self.columns.iter().map(|(_, c)| c[r])))
+            .collect();
         let mut classes = match (&mut self.model_class, &other.model_class) {
             (Some(a), Some(b)) => Some((a, b)),
             _ => None,
@@ -115,7 +122,7 @@ impl TrainingTable {
                 .zip(&idx)
                 .map(|((n, _), &k)| (n.clone(), other.columns[k].1[r]))
                 .collect();
-            if !keep(&row) {
+            if !keep(&row) || !seen.insert(key(&mut row.iter().map(|(_, v)| *v))) {
                 continue;
             }
             for ((_, col), (_, v)) in self.columns.iter_mut().zip(&row) {

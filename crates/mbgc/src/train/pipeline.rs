@@ -102,6 +102,13 @@ pub struct TrainRequest {
     pub extends: Option<String>,
     /// With `extends`: fit only what the new runs add to the extended model's equations.
     pub correction: bool,
+    /// Fit only what the data add to this model's equations (any model whose inputs are among
+    /// this train's, e.g. a base model widened since `extends` was trained): the saved equation
+    /// is its equation plus the fitted correction.
+    pub correct: Option<PathBuf>,
+    /// Groups of the experiment's similarity the fitted equations may not read; their range
+    /// over the rows still bounds the model (`Similarity::with_unread`).
+    pub unread_groups: Vec<String>,
     /// Tables of an earlier train over a wider space, as (training, validation): their runs
     /// that lie inside this space's ranges are fitted (and validated) with this train's own, so
     /// that a train near a material reuses the runs a wider one made there.
@@ -137,6 +144,8 @@ impl TrainRequest {
             no_similarity: false,
             extends: None,
             correction: false,
+            correct: None,
+            unread_groups: Vec::new(),
             also_fit: Vec::new(),
             no_fit: false,
             partial: false,
@@ -197,6 +206,21 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             "--correction corrects the model given with --extends; none was",
         ));
     }
+    if req.correction && req.correct.is_some() {
+        return Err(Error::invalid(
+            "--correction corrects the extended model and --correct another one: give one",
+        ));
+    }
+    if !req.unread_groups.is_empty() && req.no_similarity {
+        return Err(Error::invalid(
+            "--unread-groups names groups of the similarity, which --no-similarity switches off",
+        ));
+    }
+    if req.validation == 0 && !req.also_fit.is_empty() {
+        return Err(Error::invalid(
+            "--also-fit: its validation table would be read for nothing, since --validation is 0",
+        ));
+    }
     if req.extends.is_some() && req.shard.is_some() {
         return Err(Error::invalid(
             "--extends cannot be combined with --shard: extend first, then shard",
@@ -250,7 +274,16 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         experiment
             .similarity()
             .map(|s| s.without_constant_groups(|n| space.get(n).is_some_and(|p| p.is_fixed())))
+            .map(|s| s.with_unread(&req.unread_groups))
+            .transpose()
+            .map_err(|e| Error::invalid(format!("--unread-groups: {e}")))?
     };
+    if !req.unread_groups.is_empty() && similarity.is_none() {
+        return Err(Error::invalid(format!(
+            "--unread-groups: {} has no similarity, so there are no groups to leave unread",
+            req.experiment
+        )));
+    }
     let responses: Vec<String> = if req.responses.is_empty() {
         experiment
             .calibration_responses()
@@ -478,6 +511,13 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             correction: req.correction,
         }),
         space_parameters: Some(space_parameters(&space)),
+        correct: req.correct.as_ref().map(|m| m.display().to_string()),
+        unread_groups: req.unread_groups.clone(),
+        also_fit: req
+            .also_fit
+            .iter()
+            .map(|(t, v)| (t.display().to_string(), v.display().to_string()))
+            .collect(),
     };
     let record_json = serde_json::to_string_pretty(&record)
         .map_err(|e| Error::invalid(format!("{}: {e}", paths.record.display())))?;
@@ -526,16 +566,27 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         })?;
         fit_settings.extends = Some(Box::new(Metamodel::load(&old.model)?));
     }
+    if let Some(m) = &req.correct {
+        fit_settings.extends = Some(Box::new(Metamodel::load(m)?));
+    }
     fit_settings.check()?;
     let mut table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
     let mut validation = (req.validation > 0)
         .then(|| TrainingTable::read_csv(&paths.validation_table, &record.inputs, &responses))
         .transpose()?;
+    let class_params = class.map(|c| c.parameters(experiment.pairs()));
+    let off_value = |name: &str| {
+        class_params
+            .as_ref()?
+            .iter()
+            .find(|(n, _, _)| *n == name)
+            .and_then(|(_, spec, _)| spec.off)
+    };
     for (t, v) in &req.also_fit {
-        let other = TrainingTable::read_csv(t, &record.inputs, &responses)?;
+        let other = read_also_fit(t, &record.inputs, &responses, &off_value)?;
         table = table.with_rows_of(&other, &inside)?;
         if let Some(val) = validation.take() {
-            let other = TrainingTable::read_csv(v, &record.inputs, &responses)?;
+            let other = read_also_fit(v, &record.inputs, &responses, &off_value)?;
             validation = Some(val.with_rows_of(&other, &inside)?);
         }
     }
@@ -703,6 +754,10 @@ fn fit_stamp(
     if let (true, Some((old, _))) = (req.correction, extension) {
         files.push(old.model.clone());
     }
+    if let Some(m) = &req.correct {
+        files.push(m.clone());
+    }
+    h.str(&req.unread_groups.join(","));
     // Contents only: another spelling of the same directory fits the same.
     for f in files {
         let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
@@ -710,6 +765,66 @@ fn fit_stamp(
         h.bytes(&bytes);
     }
     Ok(format!("{:016x}", h.0))
+}
+
+/// A table of `--also-fit`: its columns `inputs` and `responses`, where an input it lacks is
+/// the parameter of an effect its campaign ran without, taken at the value that switches the
+/// effect off (`off_value`; a base model's runs are a cohesive model's at ced = 0, as
+/// `--extends` copies them). Its rows then carry no model class label: they are of the train's
+/// class with the effect off.
+fn read_also_fit(
+    path: &Path,
+    inputs: &[String],
+    responses: &[String],
+    off_value: &dyn Fn(&str) -> Option<f64>,
+) -> Result<TrainingTable> {
+    let header: Vec<String> = csv::Reader::from_path(path)
+        .and_then(|mut r| r.headers().map(|h| h.iter().map(str::to_string).collect()))
+        .map_err(|e| Error::input(path.display(), "header", format!("a CSV header ({e})")))?;
+    let mut fills = Vec::new();
+    for name in inputs.iter().filter(|n| !header.contains(n)) {
+        let Some(off) = off_value(name) else {
+            return Err(Error::input(
+                path.display(),
+                format!("column {name}"),
+                format!(
+                    "the input {name}; only the parameter of an effect the table's runs were                      made without may be missing (it is then taken at its off value)"
+                ),
+            ));
+        };
+        fills.push((name.clone(), off));
+    }
+    if fills.is_empty() {
+        return TrainingTable::read_csv(path, inputs, responses);
+    }
+    let present: Vec<String> = inputs
+        .iter()
+        .filter(|n| header.contains(n))
+        .cloned()
+        .collect();
+    let mut t = TrainingTable::read_csv(path, &present, responses)?;
+    let rows = t.rows();
+    let mut columns = Vec::with_capacity(t.columns.len() + fills.len());
+    let mut read = std::mem::take(&mut t.columns).into_iter();
+    for name in inputs {
+        match fills.iter().find(|(n, _)| n == name) {
+            Some((_, off)) => columns.push((name.clone(), vec![*off; rows])),
+            None => columns.extend(read.next()),
+        }
+    }
+    columns.extend(read);
+    t.columns = columns;
+    t.model_class = None;
+    t.source = format!(
+        "{} (at {})",
+        t.source,
+        fills
+            .iter()
+            .map(|(n, v)| format!("{n} = {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(t)
 }
 
 /// The rest rule as a train record holds it: absent for the kinetic rule (every record from
@@ -873,11 +988,14 @@ fn prepare_extension(
         }
         let d = extend::project_design(old_design, &old_space, space, &ext)?;
         // The validation runs may stay as they were (an independent design checks the new
-        // region); the training runs must grow, or nothing is extended.
-        if n < d.len() || (what == "--n" && n == d.len()) {
+        // region); the training runs must grow, or nothing is extended, unless the fit takes
+        // something else new: another model to correct or another campaign's runs.
+        let refit = req.correct.is_some() || !req.also_fit.is_empty();
+        if n < d.len() || (what == "--n" && n == d.len() && !refit) {
             return Err(Error::invalid(format!(
                 "{what} {n}: {from} has {} such runs already; an extension keeps them and {} \
-                 (pass {} {})",
+                 (pass {} {}, or refit them onto another model with --correct or beside \
+                 other runs with --also-fit)",
                 d.len(),
                 if what == "--n" {
                     "adds runs"

@@ -172,6 +172,15 @@ pub struct TrainRecord {
     /// written before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub space_parameters: Option<Vec<String>>,
+    /// The model whose equations the fit corrected (`--correct`), if not the extended one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub correct: Option<String>,
+    /// Groups the equations were not allowed to read (`--unread-groups`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unread_groups: Vec<String>,
+    /// Other campaigns' (training, validation) tables fitted beside this train's (`--also-fit`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub also_fit: Vec<(String, String)>,
 }
 
 impl TrainRecord {
@@ -206,6 +215,15 @@ impl TrainRecord {
             if e.correction {
                 c += " --correction";
             }
+        }
+        if let Some(m) = &self.correct {
+            c += &format!(" --correct {m}");
+        }
+        if !self.unread_groups.is_empty() {
+            c += &format!(" --unread-groups {}", self.unread_groups.join(","));
+        }
+        for (t, v) in &self.also_fit {
+            c += &format!(" --also-fit {t},{v}");
         }
         c += &format!(
             " --n {} --validation {} --seed {}",
