@@ -605,6 +605,26 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             ),
         );
     }
+    // A correction adds to the corrected model's value: where that model does not hold (a wall
+    // friction below its runs', where a material without cohesion slides off the walls and has
+    // no angle) there is nothing to add to, so such rows are left out and the new model's
+    // ranges are those of the rows it keeps.
+    if let Some(base) = fit_settings.extends.as_deref() {
+        let base_name = req
+            .correct
+            .as_ref()
+            .map(|m| m.display().to_string())
+            .or_else(|| {
+                extension
+                    .as_ref()
+                    .map(|(o, _)| o.model.display().to_string())
+            })
+            .unwrap_or_default();
+        table = inside_corrected(table, base, &base_name, "training", observer)?;
+        validation = validation
+            .map(|v| inside_corrected(v, base, &base_name, "validation", observer))
+            .transpose()?;
+    }
     fit_settings.validation = validation;
     // A resumed train whose tables, record and settings are those of the saved fit would only
     // fit the same equations again (a GP search of up to hours): the saved model is kept.
@@ -825,6 +845,56 @@ fn read_also_fit(
             .join(", ")
     );
     Ok(t)
+}
+
+/// The rows of `table` inside where the corrected model `base` holds (its inputs' and groups'
+/// ranges, its rigid limit's reach included); the rows left out are counted in a note naming
+/// the bounds that left them out.
+fn inside_corrected(
+    table: TrainingTable,
+    base: &Metamodel,
+    base_name: &str,
+    what: &str,
+    observer: &dyn TrainObserver,
+) -> Result<TrainingTable> {
+    let columns: Vec<&[f64]> = base
+        .inputs
+        .iter()
+        .map(|i| table.column(&i.name))
+        .collect::<Result<_>>()?;
+    let mut bounds: Vec<(String, usize)> = Vec::new();
+    let keep: Vec<bool> = (0..table.rows())
+        .map(|r| {
+            let x: Vec<f64> = columns.iter().map(|c| c[r]).collect();
+            let out = base.outside_domain(&x);
+            for (name, _, _) in &out {
+                match bounds.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, k)) => *k += 1,
+                    None => bounds.push((name.to_string(), 1)),
+                }
+            }
+            out.is_empty()
+        })
+        .collect();
+    let left_out = keep.iter().filter(|k| !**k).count();
+    if left_out == 0 {
+        return Ok(table);
+    }
+    observer.note(
+        TrainStage::Fit,
+        &format!(
+            "{left_out} of the {} {what} rows ({}) lie outside where {base_name} holds ({}): \
+             left out, since a correction adds to that model's value and it has none there",
+            table.rows(),
+            table.source,
+            bounds
+                .iter()
+                .map(|(n, k)| format!("{n} on {k}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    Ok(table.retain_rows(&keep))
 }
 
 /// The rest rule as a train record holds it: absent for the kinetic rule (every record from
