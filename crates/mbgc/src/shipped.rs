@@ -15,6 +15,8 @@ use crate::psd::SieveData;
 pub const SHEAR_BOX: &str = "models/shear_box.json";
 /// The shipped cohesive shear-box model (class hertz,mindlin,epsd2,sjkr).
 pub const SHEAR_BOX_SJKR: &str = "models/shear_box_sjkr.json";
+/// The shear-box model trained from K_p 6.5e3 to 9.8e6 (issue 40; docs/metamodel_wide.md).
+pub const SHEAR_BOX_WIDE: &str = "models/shear_box_wide.json";
 /// The shipped shear-cell model (class hertz,mindlin,epsd2).
 pub const SHEAR_CELL: &str = "models/shear_cell.json";
 /// The shipped cohesive shear-cell model (class hertz,mindlin,epsd2,sjkr).
@@ -33,6 +35,7 @@ macro_rules! built_in {
 const MODELS: &[(&str, &str)] = &[
     built_in!("models/shear_box.json"),
     built_in!("models/shear_box_sjkr.json"),
+    built_in!("models/shear_box_wide.json"),
     built_in!("models/shear_cell.json"),
     built_in!("models/shear_cell_sjkr.json"),
 ];
@@ -172,6 +175,7 @@ mod tests {
             [
                 "shear_box",
                 "shear_box_sjkr",
+                "shear_box_wide",
                 "shear_cell",
                 "shear_cell_sjkr"
             ]
@@ -187,8 +191,8 @@ mod tests {
         let e = model("shear_cube").unwrap_err().to_string();
         assert_eq!(
             e,
-            "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr, shear_cell, \
-             shear_cell_sjkr"
+            "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr, \
+             shear_box_wide, shear_cell, shear_cell_sjkr"
         );
     }
 
