@@ -77,6 +77,12 @@ pub struct TrainArgs {
     /// (docs/cohesion_stiffness.md).
     #[arg(long, value_delimiter = ',', value_name = "GROUPS")]
     pub unread_groups: Vec<String>,
+    /// Support groups whose range over the runs should not bound the model, comma-separated
+    /// (e.g. C_pp,C_pw): with --unread-groups K_p,K_w a cohesion's reach at a stiffness is its
+    /// contact pull's range (Ca), which the DEM keeps at fixed Ca over K, not the C range the
+    /// runs held at their own stiffness.
+    #[arg(long, value_delimiter = ',', value_name = "GROUPS")]
+    pub unbounded_groups: Vec<String>,
     /// Another campaign's tables, TRAIN.csv,VALIDATION.csv, whose runs inside this space are
     /// fitted and validated with this train's own (repeatable). A run equal to one already there
     /// is not counted twice; an input the table lacks must be the parameter of an effect its runs
@@ -155,6 +161,7 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
         correction: a.correction,
         correct: a.correct.clone(),
         unread_groups: a.unread_groups.clone(),
+        unbounded_groups: a.unbounded_groups.clone(),
         also_fit: a.also_fit.clone(),
         no_fit: a.no_fit,
         partial: a.partial,

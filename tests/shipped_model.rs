@@ -131,6 +131,12 @@ fn every_point_of_seed_004s_box_is_answered_by_the_widened_model_with_its_error(
     box_points("models/shear_box_wide.json");
 }
 
+/// And for its cohesive companion, whose cohesion is bounded by its contact pull's range.
+#[test]
+fn every_point_of_seed_004s_box_is_answered_by_the_widened_cohesive_model_with_its_error() {
+    box_points("models/shear_box_sjkr_wide.json");
+}
+
 fn box_points(path: &str) {
     use mbgc::calibrate::session::{self, SessionOptions};
     use mbgc::material::Material;

@@ -17,6 +17,9 @@ pub const SHEAR_BOX: &str = "models/shear_box.json";
 pub const SHEAR_BOX_SJKR: &str = "models/shear_box_sjkr.json";
 /// The shear-box model trained from K_p 6.5e3 to 9.8e6 (issue 40; docs/metamodel_wide.md).
 pub const SHEAR_BOX_WIDE: &str = "models/shear_box_wide.json";
+/// Its cohesive companion: the widened base plus a cohesion correction in the contact's pull
+/// (class hertz,mindlin,epsd2,sjkr; docs/metamodel_wide.md).
+pub const SHEAR_BOX_SJKR_WIDE: &str = "models/shear_box_sjkr_wide.json";
 /// The shipped shear-cell model (class hertz,mindlin,epsd2).
 pub const SHEAR_CELL: &str = "models/shear_cell.json";
 /// The shipped cohesive shear-cell model (class hertz,mindlin,epsd2,sjkr).
@@ -36,6 +39,7 @@ const MODELS: &[(&str, &str)] = &[
     built_in!("models/shear_box.json"),
     built_in!("models/shear_box_sjkr.json"),
     built_in!("models/shear_box_wide.json"),
+    built_in!("models/shear_box_sjkr_wide.json"),
     built_in!("models/shear_cell.json"),
     built_in!("models/shear_cell_sjkr.json"),
 ];
@@ -176,6 +180,7 @@ mod tests {
                 "shear_box",
                 "shear_box_sjkr",
                 "shear_box_wide",
+                "shear_box_sjkr_wide",
                 "shear_cell",
                 "shear_cell_sjkr"
             ]
@@ -192,7 +197,7 @@ mod tests {
         assert_eq!(
             e,
             "shipped model \"shear_cube\": expected one of shear_box, shear_box_sjkr, \
-             shear_box_wide, shear_cell, shear_cell_sjkr"
+             shear_box_wide, shear_box_sjkr_wide, shear_cell, shear_cell_sjkr"
         );
     }
 

@@ -230,6 +230,28 @@ impl Similarity {
         Ok(self)
     }
 
+    /// The similarity without the support groups `names`: their range over the runs no longer
+    /// bounds the model. With the stiffness left unread ([`Similarity::with_unread`]) a
+    /// cohesion's reach at a stiffness is its contact pull's range (Ca), which the DEM keeps
+    /// from K 1.94e5 to 1e7 at fixed Ca (docs/cohesion_stiffness.md), not the C range the runs
+    /// held at their own stiffness. Refuses a name that is no support group.
+    pub fn without_support(mut self, names: &[String]) -> std::result::Result<Similarity, String> {
+        for name in names {
+            let Some(k) = self.support.iter().position(|g| &g.name == name) else {
+                return Err(format!(
+                    "{name} is not one of the support groups (they are: {})",
+                    self.support
+                        .iter()
+                        .map(|g| g.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            };
+            self.support.remove(k);
+        }
+        Ok(self)
+    }
+
     /// Every input the similarity reads: those its groups absorb and those its scaled responses'
     /// factors are made of (a fixed one must still be an input, or the factor has no value).
     pub fn needed_inputs(&self) -> Vec<String> {

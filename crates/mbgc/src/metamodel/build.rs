@@ -1652,6 +1652,11 @@ mod tests {
         let err = similarity.clone().with_unread(&["Z".into()]).unwrap_err();
         assert!(err.contains("Z") && err.contains("K, A"), "{err}");
         let similarity = similarity.with_unread(&["K".into()]).unwrap();
+        // A fitted group is no support group to drop; the unread one is.
+        let err = similarity.clone().without_support(&["A".into()]).unwrap_err();
+        assert!(err.contains("A") && err.contains("(they are: K)"), "{err}");
+        let unbounded = similarity.clone().without_support(&["K".into()]).unwrap();
+        assert!(unbounded.support.is_empty() && unbounded.groups.len() == 1);
         // E enters only the unread K and A: still not a raw variable of the fit.
         assert_eq!(similarity.absorbed(), ["ced", "rho", "d", "E"]);
         let inputs: Vec<String> = ["E", "rho", "d", "ced"].map(String::from).to_vec();

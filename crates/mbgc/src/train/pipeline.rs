@@ -109,6 +109,9 @@ pub struct TrainRequest {
     /// Groups of the experiment's similarity the fitted equations may not read; their range
     /// over the rows still bounds the model (`Similarity::with_unread`).
     pub unread_groups: Vec<String>,
+    /// Support groups whose range over the rows does not bound the model
+    /// (`Similarity::without_support`).
+    pub unbounded_groups: Vec<String>,
     /// Tables of an earlier train over a wider space, as (training, validation): their runs
     /// that lie inside this space's ranges are fitted (and validated) with this train's own, so
     /// that a train near a material reuses the runs a wider one made there.
@@ -146,6 +149,7 @@ impl TrainRequest {
             correction: false,
             correct: None,
             unread_groups: Vec::new(),
+            unbounded_groups: Vec::new(),
             also_fit: Vec::new(),
             no_fit: false,
             partial: false,
@@ -211,10 +215,15 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             "--correction corrects the extended model and --correct another one: give one",
         ));
     }
-    if !req.unread_groups.is_empty() && req.no_similarity {
-        return Err(Error::invalid(
-            "--unread-groups names groups of the similarity, which --no-similarity switches off",
-        ));
+    for (flag, names) in [
+        ("--unread-groups", &req.unread_groups),
+        ("--unbounded-groups", &req.unbounded_groups),
+    ] {
+        if !names.is_empty() && req.no_similarity {
+            return Err(Error::invalid(format!(
+                "{flag} names groups of the similarity, which --no-similarity switches off"
+            )));
+        }
     }
     if req.validation == 0 && !req.also_fit.is_empty() {
         return Err(Error::invalid(
@@ -277,10 +286,13 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             .map(|s| s.with_unread(&req.unread_groups))
             .transpose()
             .map_err(|e| Error::invalid(format!("--unread-groups: {e}")))?
+            .map(|s| s.without_support(&req.unbounded_groups))
+            .transpose()
+            .map_err(|e| Error::invalid(format!("--unbounded-groups: {e}")))?
     };
-    if !req.unread_groups.is_empty() && similarity.is_none() {
+    if (!req.unread_groups.is_empty() || !req.unbounded_groups.is_empty()) && similarity.is_none() {
         return Err(Error::invalid(format!(
-            "--unread-groups: {} has no similarity, so there are no groups to leave unread",
+            "--unread-groups, --unbounded-groups: {} has no similarity, so there are no groups",
             req.experiment
         )));
     }
@@ -513,6 +525,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         space_parameters: Some(space_parameters(&space)),
         correct: req.correct.as_ref().map(|m| m.display().to_string()),
         unread_groups: req.unread_groups.clone(),
+        unbounded_groups: req.unbounded_groups.clone(),
         also_fit: req
             .also_fit
             .iter()
@@ -778,6 +791,7 @@ fn fit_stamp(
         files.push(m.clone());
     }
     h.str(&req.unread_groups.join(","));
+    h.str(&req.unbounded_groups.join(","));
     // Contents only: another spelling of the same directory fits the same.
     for f in files {
         let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;

@@ -178,6 +178,9 @@ pub struct TrainRecord {
     /// Groups the equations were not allowed to read (`--unread-groups`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub unread_groups: Vec<String>,
+    /// Support groups that were not to bound the model (`--unbounded-groups`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unbounded_groups: Vec<String>,
     /// Other campaigns' (training, validation) tables fitted beside this train's (`--also-fit`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub also_fit: Vec<(String, String)>,
@@ -221,6 +224,9 @@ impl TrainRecord {
         }
         if !self.unread_groups.is_empty() {
             c += &format!(" --unread-groups {}", self.unread_groups.join(","));
+        }
+        if !self.unbounded_groups.is_empty() {
+            c += &format!(" --unbounded-groups {}", self.unbounded_groups.join(","));
         }
         for (t, v) in &self.also_fit {
             c += &format!(" --also-fit {t},{v}");
