@@ -214,17 +214,7 @@ impl Similarity {
     /// K_p that no cohesive run constrains. Refuses a name that is no fitted group.
     pub fn with_unread(mut self, names: &[String]) -> std::result::Result<Similarity, String> {
         for name in names {
-            let Some(k) = self.groups.iter().position(|g| &g.name == name) else {
-                return Err(format!(
-                    "{name} is not one of the groups the equations read (they are: {})",
-                    self.groups
-                        .iter()
-                        .map(|g| g.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ));
-            };
-            let g = self.groups.remove(k);
+            let g = take_group(&mut self.groups, name, "the groups the equations read")?;
             self.support.push(g);
         }
         Ok(self)
@@ -237,17 +227,7 @@ impl Similarity {
     /// held at their own stiffness. Refuses a name that is no support group.
     pub fn without_support(mut self, names: &[String]) -> std::result::Result<Similarity, String> {
         for name in names {
-            let Some(k) = self.support.iter().position(|g| &g.name == name) else {
-                return Err(format!(
-                    "{name} is not one of the support groups (they are: {})",
-                    self.support
-                        .iter()
-                        .map(|g| g.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ));
-            };
-            self.support.remove(k);
+            take_group(&mut self.support, name, "the support groups")?;
         }
         Ok(self)
     }
@@ -284,6 +264,21 @@ impl Similarity {
     /// The scaling of `response`, if it is a scaled response.
     pub fn scaled(&self, response: &str) -> Option<&ScaledResponse> {
         self.scaled.iter().find(|s| s.response == response)
+    }
+}
+
+/// Removes the group `name` from `list` (described as `what` in the refusal, which names the
+/// groups there are).
+fn take_group(list: &mut Vec<Group>, name: &str, what: &str) -> std::result::Result<Group, String> {
+    match list.iter().position(|g| g.name == name) {
+        Some(k) => Ok(list.remove(k)),
+        None => Err(format!(
+            "{name} is not one of {what} (they are: {})",
+            list.iter()
+                .map(|g| g.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
     }
 }
 

@@ -1093,6 +1093,23 @@ mod tests {
     use super::*;
     use crate::similarity::{Group, Monomial, ScaledResponse, Similarity};
 
+    /// `coefficient` times the product of `powers`.
+    fn mono(coefficient: f64, powers: &[(&str, f64)]) -> Monomial {
+        Monomial {
+            coefficient,
+            powers: powers.iter().map(|(n, p)| (n.to_string(), *p)).collect(),
+        }
+    }
+
+    /// A group named (and described) `name`.
+    fn group(name: &str, monomial: Monomial) -> Group {
+        Group {
+            name: name.into(),
+            what: name.into(),
+            monomial,
+        }
+    }
+
     /// The saved equation computes a group through a sum of logs; GP must have seen exactly those
     /// values, the smallest scaled to exactly 0 (a tree with sqrt(K_u) fitted on them was NaN at
     /// the training row of smallest K once saved, and its training metrics were computed on
@@ -1531,15 +1548,6 @@ mod tests {
             text.push_str(&format!("{e},2000,4,{ced},{}\n", 10.0 + ced / 8000.0));
         }
         std::fs::write(&data, text).unwrap();
-        let mono = |coefficient: f64, powers: &[(&str, f64)]| Monomial {
-            coefficient,
-            powers: powers.iter().map(|(n, p)| (n.to_string(), *p)).collect(),
-        };
-        let group = |name: &str, monomial: Monomial| Group {
-            name: name.into(),
-            what: name.into(),
-            monomial,
-        };
         let third = 1.0 / 3.0;
         let inputs: Vec<String> = ["E", "rho", "d", "ced"].map(String::from).to_vec();
         let settings = FitSettings::new(inputs.clone(), vec!["y".into()])
@@ -1624,26 +1632,20 @@ mod tests {
             text.push_str(&format!("{e},2000,4,{ced},{}\n", 10.0 + 5.0 * a_of(e, ced)));
         }
         std::fs::write(&data, text).unwrap();
-        let mono = |powers: &[(&str, f64)]| Monomial {
-            coefficient: 1.0,
-            powers: powers.iter().map(|(n, p)| (n.to_string(), *p)).collect(),
-        };
-        let group = |name: &str, monomial: Monomial| Group {
-            name: name.into(),
-            what: name.into(),
-            monomial,
-        };
         let similarity = Similarity {
             groups: vec![
-                group("K", mono(&[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
+                group("K", mono(1.0, &[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
                 group(
                     "A",
-                    mono(&[
-                        ("ced", 1.0),
-                        ("rho", -third),
-                        ("d", -third),
-                        ("E", -2.0 * third),
-                    ]),
+                    mono(
+                        1.0,
+                        &[
+                            ("ced", 1.0),
+                            ("rho", -third),
+                            ("d", -third),
+                            ("E", -2.0 * third),
+                        ],
+                    ),
                 ),
             ],
             support: vec![],
@@ -1653,7 +1655,10 @@ mod tests {
         assert!(err.contains("Z") && err.contains("K, A"), "{err}");
         let similarity = similarity.with_unread(&["K".into()]).unwrap();
         // A fitted group is no support group to drop; the unread one is.
-        let err = similarity.clone().without_support(&["A".into()]).unwrap_err();
+        let err = similarity
+            .clone()
+            .without_support(&["A".into()])
+            .unwrap_err();
         assert!(err.contains("A") && err.contains("(they are: K)"), "{err}");
         let unbounded = similarity.clone().without_support(&["K".into()]).unwrap();
         assert!(unbounded.support.is_empty() && unbounded.groups.len() == 1);
