@@ -339,7 +339,9 @@ which reads its cohesion there at C_pp (E*_edge / E*)^(2/3), the cohesion a cont
 stiffness edge pulls with (docs/cohesion_stiffness.md).\n\n\
 Cases 13-15 (issue 40) are the materials of cases 10 and 11 with a hidden cohesion between the \
 particles (walls not cohesive): ced_pp 1e4 and 2.5e4 J/m3, read at the edge as C_pp 430-680 \
-and 310-490 of the model's 0-978, and 1.4e4 J/m3 on the material of case 10 (600-950).\n\n\
+and 310-490 of the model's 0-978, and 1.4e4 J/m3 on the material of case 10 (600-950). The \
+same six sets diagnosed with the widened pair (`models/shear_box_wide.json`, \
+`models/shear_box_sjkr_wide.json`) are in docs/metamodel_wide.md.\n\n\
 The models. Cases 1, 3 and 4 (rolling friction known, 0.3) use two versions of a local model \
 around the material, its known values fixed (recorded in the model files as constants). Version \
 1, `models/diagnose_local.json`, is the class without cohesion (`mbgc train --space \
