@@ -812,6 +812,50 @@ fn an_effect_model_is_refitted_onto_a_widened_base_beside_its_runs() {
     );
     let o = refit(&["--correct", "models/wide.json", "--correction"]);
     assert!(!o.status.success());
+    // Fit settings on a train that does not fit, a group both unread and unbounded, a model of
+    // another experiment, a table of another class: refused by name.
+    let other = std::fs::read_to_string(d.join("models/wide.json"))
+        .unwrap()
+        .replace(
+            "\"experiment\": \"wall-impact\"",
+            "\"experiment\": \"hopper\"",
+        );
+    assert!(other.contains("hopper"));
+    std::fs::write(d.join("hopper.json"), other).unwrap();
+    for (extra, want) in [
+        (
+            &["--correct", "models/wide.json", "--no-fit"][..],
+            "--no-fit",
+        ),
+        (
+            &["--unread-groups", "K_p", "--unbounded-groups", "K_p"][..],
+            "--unbounded-groups K_p",
+        ),
+        (&["--correct", "hopper.json"][..], "experiment"),
+        (
+            &[
+                "--correct",
+                "models/wide.json",
+                "--also-fit",
+                "training_data/rolling.csv,training_data/rolling_validation.csv",
+            ][..],
+            "column model_class",
+        ),
+    ] {
+        let mut a = train("wide.toml", "wide", "16", &["--extends", "base"]);
+        if want == "--no-fit" || want == "experiment" || want.starts_with("--unbounded") {
+            a = train(
+                "rolling_wide.toml",
+                "rolling_wide",
+                "16",
+                &["--extends", "rolling"],
+            );
+        }
+        a.extend_from_slice(extra);
+        let o = mbgc(d, &a);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{extra:?}: {e}");
+    }
     // Groups need a similarity; the wall impact has none.
     let o = refit(&["--correct", "models/wide.json", "--unread-groups", "K_p"]);
     let e = String::from_utf8_lossy(&o.stderr);

@@ -225,6 +225,26 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             )));
         }
     }
+    let fit_flags = req.correct.is_some()
+        || !req.also_fit.is_empty()
+        || !req.unread_groups.is_empty()
+        || !req.unbounded_groups.is_empty();
+    if fit_flags && (req.no_fit || req.shard.is_some()) {
+        return Err(Error::invalid(
+            "--correct, --also-fit, --unread-groups and --unbounded-groups set the fit, and a \
+             train with --no-fit or --shard does not fit: give them to the train that fits",
+        ));
+    }
+    if let Some(g) = req
+        .unbounded_groups
+        .iter()
+        .find(|g| req.unread_groups.contains(g))
+    {
+        return Err(Error::invalid(format!(
+            "--unbounded-groups {g}: it is left unread (--unread-groups), so its range is the \
+             only thing that still holds its inputs to the runs; it cannot also be unbounded"
+        )));
+    }
     if req.validation == 0 && !req.also_fit.is_empty() {
         return Err(Error::invalid(
             "--also-fit: its validation table would be read for nothing, since --validation is 0",
@@ -261,6 +281,21 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         ..Default::default()
     };
     let experiment = experiment_by_name(&req.experiment, &settings)?;
+    // Files the fit reads are checked before any run, like its settings.
+    let corrected = req
+        .correct
+        .as_ref()
+        .map(|m| -> Result<Metamodel> {
+            let model = Metamodel::load(m)?;
+            check_corrected(&model, m, req, &space, class.as_ref())?;
+            Ok(model)
+        })
+        .transpose()?;
+    for (t, v) in &req.also_fit {
+        for f in [t, v] {
+            also_fit_header(f)?;
+        }
+    }
     let name = req
         .name
         .clone()
@@ -570,7 +605,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
             seed: req.seed,
             ..req.config.clone()
         })
-        .space(space);
+        .space(space.clone());
     fit_settings.model_class = class;
     fit_settings.similarity = similarity;
     if req.correction {
@@ -579,28 +614,35 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         })?;
         fit_settings.extends = Some(Box::new(Metamodel::load(&old.model)?));
     }
-    if let Some(m) = &req.correct {
-        fit_settings.extends = Some(Box::new(Metamodel::load(m)?));
+    if let Some(m) = corrected {
+        fit_settings.extends = Some(Box::new(m));
     }
     fit_settings.check()?;
     let mut table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
     let mut validation = (req.validation > 0)
         .then(|| TrainingTable::read_csv(&paths.validation_table, &record.inputs, &responses))
         .transpose()?;
-    let class_params = class.map(|c| c.parameters(experiment.pairs()));
-    let off_value = |name: &str| {
-        class_params
-            .as_ref()?
-            .iter()
-            .find(|(n, _, _)| *n == name)
-            .and_then(|(_, spec, _)| spec.off)
+    let also = AlsoFit {
+        inputs: &record.inputs,
+        responses: &responses,
+        class: class.as_ref(),
+        pairs: experiment.pairs(),
+        space: &space,
     };
     for (t, v) in &req.also_fit {
-        let other = read_also_fit(t, &record.inputs, &responses, &off_value)?;
-        table = table.with_rows_of(&other, &inside)?;
+        let before = table.rows();
+        table = table.with_rows_of(&also.read(t)?, &inside)?;
+        let added = table.rows() - before;
         if let Some(val) = validation.take() {
-            let other = read_also_fit(v, &record.inputs, &responses, &off_value)?;
-            validation = Some(val.with_rows_of(&other, &inside)?);
+            validation = Some(val.with_rows_of(&also.read(v)?, &inside)?);
+        }
+        if added == 0 {
+            return Err(Error::input(
+                t.display(),
+                "rows",
+                "a run inside this space that this train's tables do not hold already (--also-fit \
+                 would add nothing)",
+            ));
         }
     }
     if !req.also_fit.is_empty() {
@@ -637,6 +679,12 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         validation = validation
             .map(|v| inside_corrected(v, base, &base_name, "validation", observer))
             .transpose()?;
+        if validation.as_ref().is_some_and(|v| v.rows() == 0) {
+            return Err(Error::invalid(format!(
+                "every validation run lies outside where {base_name} holds, so the corrected fit \
+                 would have nothing to be validated on; widen that model or the validation design"
+            )));
+        }
     }
     fit_settings.validation = validation;
     // A resumed train whose tables, record and settings are those of the saved fit would only
@@ -769,6 +817,12 @@ fn fit_stamp(
     // space file's bytes stand for it, constraints and scales included.
     let mut record = record.clone();
     record.space = String::new();
+    // Likewise the other files as typed: their bytes are hashed below. The record holds the
+    // groups left unread or unbounded (absent when none, so older stamps still match).
+    record.correct = record.correct.map(|_| String::new());
+    for pair in &mut record.also_fit {
+        *pair = (String::new(), String::new());
+    }
     h.str(&serde_json::to_string(&record).map_err(|e| Error::invalid(e.to_string()))?);
     h.str(&format!(
         "{:?} seed {} correction {} no_similarity {}",
@@ -790,8 +844,6 @@ fn fit_stamp(
     if let Some(m) = &req.correct {
         files.push(m.clone());
     }
-    h.str(&req.unread_groups.join(","));
-    h.str(&req.unbounded_groups.join(","));
     // Contents only: another spelling of the same directory fits the same.
     for f in files {
         let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
@@ -801,64 +853,209 @@ fn fit_stamp(
     Ok(format!("{:016x}", h.0))
 }
 
-/// A table of `--also-fit`: its columns `inputs` and `responses`, where an input it lacks is
-/// the parameter of an effect its campaign ran without, taken at the value that switches the
-/// effect off (`off_value`; a base model's runs are a cohesive model's at ced = 0, as
-/// `--extends` copies them). Its rows then carry no model class label: they are of the train's
-/// class with the effect off.
-fn read_also_fit(
-    path: &Path,
-    inputs: &[String],
-    responses: &[String],
-    off_value: &dyn Fn(&str) -> Option<f64>,
-) -> Result<TrainingTable> {
-    let header: Vec<String> = csv::Reader::from_path(path)
+/// The header of an `--also-fit` table, read before any run.
+fn also_fit_header(path: &Path) -> Result<Vec<String>> {
+    csv::Reader::from_path(path)
         .and_then(|mut r| r.headers().map(|h| h.iter().map(str::to_string).collect()))
-        .map_err(|e| Error::input(path.display(), "header", format!("a CSV header ({e})")))?;
-    let mut fills = Vec::new();
-    for name in inputs.iter().filter(|n| !header.contains(n)) {
-        let Some(off) = off_value(name) else {
+        .map_err(|e| Error::input(path.display(), "header", format!("a CSV header ({e})")))
+}
+
+/// How `--also-fit` reads another campaign's table into this train's columns.
+struct AlsoFit<'a> {
+    inputs: &'a [String],
+    responses: &'a [String],
+    class: Option<&'a ModelClass>,
+    pairs: &'a [Pair],
+    space: &'a Space,
+}
+
+impl AlsoFit<'_> {
+    /// The table's columns `inputs` and `responses`. An input it lacks must be the parameter of
+    /// an effect its runs were made without, taken at the value that switches the effect off (a
+    /// base model's runs are a cohesive model's at ced = 0, as `--extends` copies them); its
+    /// rows' model class must then be this train's without those effects, and otherwise this
+    /// train's. A parameter this space fixes must hold that value in every row the table has a
+    /// column for: a run of another material is refused, not fitted.
+    fn read(&self, path: &Path) -> Result<TrainingTable> {
+        let header = also_fit_header(path)?;
+        let params = self
+            .class
+            .map(|c| c.parameters(self.pairs))
+            .unwrap_or_default();
+        let mut fills = Vec::new();
+        let mut off_effects: Vec<&str> = Vec::new();
+        for name in self.inputs.iter().filter(|n| !header.contains(n)) {
+            let Some((off, effect)) = params
+                .iter()
+                .find(|(n, _, _)| *n == name.as_str())
+                .and_then(|(_, spec, e)| spec.off.map(|o| (o, e.name)))
+            else {
+                return Err(Error::input(
+                    path.display(),
+                    format!("column {name}"),
+                    format!(
+                        "the input {name}; only the parameter of an effect the table's runs were \
+                         made without may be missing (it is then taken at its off value)"
+                    ),
+                ));
+            };
+            fills.push((name.clone(), off));
+            if !off_effects.contains(&effect) {
+                off_effects.push(effect);
+            }
+        }
+        let fixed: Vec<(String, f64)> = self
+            .space
+            .parameters
+            .iter()
+            .filter_map(|p| p.fixed.map(|v| (p.name.clone(), v)))
+            .filter(|(n, _)| header.contains(n) && !self.inputs.contains(n))
+            .collect();
+        let present: Vec<String> = self
+            .inputs
+            .iter()
+            .filter(|n| header.contains(n))
+            .chain(fixed.iter().map(|(n, _)| n))
+            .cloned()
+            .collect();
+        let mut t = TrainingTable::read_csv(path, &present, self.responses)?;
+        for (name, want) in &fixed {
+            let col = t.column(name)?;
+            if let Some(r) = col.iter().position(|v| v != want) {
+                return Err(Error::input(
+                    path.display(),
+                    format!("column {name}, usable row {}", r + 1),
+                    format!(
+                        "{want:?}, the value this space fixes {name} at; found {:?} (a run of \
+                         another material)",
+                        col[r]
+                    ),
+                ));
+            }
+        }
+        if let (Some(class), Some(labels)) = (self.class, &t.model_class) {
+            let want: Vec<&str> = class
+                .effects()
+                .iter()
+                .map(|e| e.name)
+                .filter(|e| !off_effects.contains(e))
+                .collect();
+            for (r, label) in labels.iter().enumerate() {
+                let theirs = ModelClass::parse(&label.replace('+', ","))?;
+                let got: Vec<&str> = theirs.effects().iter().map(|e| e.name).collect();
+                if got != want {
+                    return Err(Error::input(
+                        path.display(),
+                        format!("column model_class, usable row {}", r + 1),
+                        format!(
+                            "{} (this train's class{}), found {label}",
+                            want.join("+"),
+                            if off_effects.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" without {}", off_effects.join(", "))
+                            }
+                        ),
+                    ));
+                }
+            }
+        }
+        let rows = t.rows();
+        let mut read = std::mem::take(&mut t.columns).into_iter();
+        let mut columns = Vec::with_capacity(self.inputs.len() + self.responses.len());
+        for name in self.inputs {
+            match fills.iter().find(|(n, _)| n == name) {
+                Some((_, off)) => columns.push((name.clone(), vec![*off; rows])),
+                None => columns.extend(read.next()),
+            }
+        }
+        // The fixed columns were read after the inputs; the responses follow them.
+        let rest: Vec<(String, Vec<f64>)> = read.collect();
+        columns.extend(rest.into_iter().skip(fixed.len()));
+        t.columns = columns;
+        if !fills.is_empty() {
+            t.model_class = None;
+            t.source = format!(
+                "{} (at {})",
+                t.source,
+                fills
+                    .iter()
+                    .map(|(n, v)| format!("{n} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        Ok(t)
+    }
+}
+
+/// Refuses a `--correct` model made for another experiment, box scale, class or material than
+/// this train: its equation would be corrected as if it described these runs.
+fn check_corrected(
+    model: &Metamodel,
+    path: &Path,
+    req: &TrainRequest,
+    space: &Space,
+    class: Option<&ModelClass>,
+) -> Result<()> {
+    let file = path.display();
+    if let Some(e) = model.experiment.as_deref().filter(|e| *e != req.experiment) {
+        return Err(Error::input(
+            &file,
+            "experiment",
+            format!("{}, this train's experiment; found {e}", req.experiment),
+        ));
+    }
+    let scale = req
+        .box_scale
+        .or_else(|| (req.experiment == "shear-box").then_some(10.0));
+    if let (Some(m), Some(t)) = (model.box_scale, scale) {
+        if m != t {
             return Err(Error::input(
-                path.display(),
-                format!("column {name}"),
-                format!(
-                    "the input {name}; only the parameter of an effect the table's runs were                      made without may be missing (it is then taken at its off value)"
-                ),
+                &file,
+                "box_scale",
+                format!("{t}, this train's box scale; found {m}"),
             ));
-        };
-        fills.push((name.clone(), off));
-    }
-    if fills.is_empty() {
-        return TrainingTable::read_csv(path, inputs, responses);
-    }
-    let present: Vec<String> = inputs
-        .iter()
-        .filter(|n| header.contains(n))
-        .cloned()
-        .collect();
-    let mut t = TrainingTable::read_csv(path, &present, responses)?;
-    let rows = t.rows();
-    let mut columns = Vec::with_capacity(t.columns.len() + fills.len());
-    let mut read = std::mem::take(&mut t.columns).into_iter();
-    for name in inputs {
-        match fills.iter().find(|(n, _)| n == name) {
-            Some((_, off)) => columns.push((name.clone(), vec![*off; rows])),
-            None => columns.extend(read.next()),
         }
     }
-    columns.extend(read);
-    t.columns = columns;
-    t.model_class = None;
-    t.source = format!(
-        "{} (at {})",
-        t.source,
-        fills
-            .iter()
-            .map(|(n, v)| format!("{n} = {v}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    Ok(t)
+    if let (Some(label), Some(class)) = (&model.model_class, class) {
+        let theirs = ModelClass::parse(&label.replace('+', ","))?;
+        let ours: Vec<&str> = class.effects().iter().map(|e| e.name).collect();
+        if let Some(e) = theirs.effects().iter().find(|e| !ours.contains(&e.name)) {
+            return Err(Error::input(
+                &file,
+                "model_class",
+                format!(
+                    "a class whose effects this train's {} holds; found {label}, with {}",
+                    class.label(),
+                    e.name
+                ),
+            ));
+        }
+    }
+    for c in &model.constants {
+        match space.get(&c.name) {
+            Some(p) if p.fixed == Some(c.value) => {}
+            Some(p) => {
+                return Err(Error::input(
+                    &file,
+                    format!("constants.{}", c.name),
+                    format!(
+                        "the value this train's space gives {} ({}); found {:?}: the model \
+                         describes another material",
+                        c.name,
+                        match p.fixed {
+                            Some(v) => format!("fixed at {v:?}"),
+                            None => format!("varied over [{:?}, {:?}]", p.min, p.max),
+                        },
+                        c.value
+                    ),
+                ));
+            }
+            None => {}
+        }
+    }
+    Ok(())
 }
 
 /// The rows of `table` inside where the corrected model `base` holds (its inputs' and groups'
