@@ -1101,6 +1101,26 @@ mod tests {
         }
     }
 
+    /// K = E / (rho d) and the contact pull A = ced E^(-2/3) (rho d)^(-1/3).
+    fn stiffness_and_pull() -> Vec<Group> {
+        let third = 1.0 / 3.0;
+        vec![
+            group("K", mono(1.0, &[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
+            group(
+                "A",
+                mono(
+                    1.0,
+                    &[
+                        ("ced", 1.0),
+                        ("rho", -third),
+                        ("d", -third),
+                        ("E", -2.0 * third),
+                    ],
+                ),
+            ),
+        ]
+    }
+
     /// A group named (and described) `name`.
     fn group(name: &str, monomial: Monomial) -> Group {
         Group {
@@ -1548,7 +1568,6 @@ mod tests {
             text.push_str(&format!("{e},2000,4,{ced},{}\n", 10.0 + ced / 8000.0));
         }
         std::fs::write(&data, text).unwrap();
-        let third = 1.0 / 3.0;
         let inputs: Vec<String> = ["E", "rho", "d", "ced"].map(String::from).to_vec();
         let settings = FitSettings::new(inputs.clone(), vec!["y".into()])
             .test_fraction(0.0)
@@ -1558,21 +1577,7 @@ mod tests {
                 ..gp::Config::default()
             })
             .similarity(Similarity {
-                groups: vec![
-                    group("K", mono(1.0, &[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
-                    group(
-                        "A",
-                        mono(
-                            1.0,
-                            &[
-                                ("ced", 1.0),
-                                ("rho", -third),
-                                ("d", -third),
-                                ("E", -2.0 * third),
-                            ],
-                        ),
-                    ),
-                ],
+                groups: stiffness_and_pull(),
                 support: vec![group(
                     "C",
                     mono(1.0, &[("ced", 1.0), ("rho", -1.0), ("d", -1.0)]),
@@ -1633,21 +1638,7 @@ mod tests {
         }
         std::fs::write(&data, text).unwrap();
         let similarity = Similarity {
-            groups: vec![
-                group("K", mono(1.0, &[("E", 1.0), ("rho", -1.0), ("d", -1.0)])),
-                group(
-                    "A",
-                    mono(
-                        1.0,
-                        &[
-                            ("ced", 1.0),
-                            ("rho", -third),
-                            ("d", -third),
-                            ("E", -2.0 * third),
-                        ],
-                    ),
-                ),
-            ],
+            groups: stiffness_and_pull(),
             support: vec![],
             scaled: vec![],
         };
