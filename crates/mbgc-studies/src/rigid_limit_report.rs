@@ -35,6 +35,11 @@ pub struct Args {
     /// reading its cohesion at the edge. The runs without cohesion come from `--tables`.
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
     pub cohesion_tables: Vec<PathBuf>,
+    /// K_p where the model's cohesive runs stop, when below its edge (a cohesion correction
+    /// that reads the stiffness only through the contact pull, fitted onto a wider base): the
+    /// similarity's scatter then counts from there, inside the model's data as beyond it.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub cohesion_edge: Option<f64>,
     /// The largest E_p and E_w the model then takes (seed 004's top, Pa); K_p and K_w stay
     /// bounded by the lines' reach.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 5e8))]
@@ -79,6 +84,12 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         edge_decades: a.edge_decades,
     };
     let mut extended = fit_rigid_limit(&model, &fit, &lines)?;
+    if a.cohesion_edge.is_some() && a.cohesion_tables.is_empty() {
+        anyhow::bail!(
+            "--cohesion-edge without --cohesion-tables: the scatter it places is measured on \
+             the cohesion lines"
+        );
+    }
     if !a.cohesion_tables.is_empty() {
         if a.bond != 0.0 {
             anyhow::bail!(
@@ -120,6 +131,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             ["E_p", "E_p"],
             &coh_lines,
             measured,
+            a.cohesion_edge,
         )?;
         let mut cohesion = vec![pp.clone()];
         if let Some(pw_group) = group_of("ced_pw") {
@@ -273,7 +285,12 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel) -> String {
         if a.cohesion_tables.is_empty() {
             String::new()
         } else {
-            format!(" --cohesion-tables {}", join(&a.cohesion_tables))
+            format!(
+                " --cohesion-tables {}{}",
+                join(&a.cohesion_tables),
+                a.cohesion_edge
+                    .map_or(String::new(), |e| format!(" --cohesion-edge {e}"))
+            )
         },
         if a.edge_decades == mbgc::metamodel::rigid_fit::EDGE_DECADES {
             String::new()
@@ -373,6 +390,19 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel) -> String {
         let _ = writeln!(w);
     }
     for c in &lim.cohesion {
+        // The knots count from the effect's runs' edge where it lies below the model's.
+        let origin = c.runs_edge.unwrap_or(domain[1]);
+        if let Some(e) = c.runs_edge {
+            let _ = writeln!(
+                w,
+                "## {} beyond its runs\n\nThe model's cohesive runs stop at K_p {e:.4e}, below \
+                 its edge ({:.4e}): between the two it reads the cohesion through {} alone, as \
+                 the similarity below carries it, so the similarity's scatter is added from \
+                 K_p {e:.4e} on, inside the data as beyond it (the knots' decades count from \
+                 there).\n",
+                c.group, domain[1], c.group
+            );
+        }
         let _ = writeln!(
             w,
             "## {} beyond the stiffness edge\n\nA material beyond the edge is read on it with \
@@ -409,7 +439,7 @@ fn report(a: &Args, before: &Metamodel, m: &Metamodel) -> String {
                     w,
                     "| {} | {:.3e} | {:+.3} | {} | {:+.3} | {:.3} | {:.3} |",
                     cc.response,
-                    domain[1] * 10f64.powf(k.decades),
+                    origin * 10f64.powf(k.decades),
                     k.decades,
                     k.lines,
                     k.mean * scale,

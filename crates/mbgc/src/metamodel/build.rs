@@ -1772,13 +1772,13 @@ mod tests {
                 .collect(),
         };
         let lines = [line("a", 0.0), line("b", 0.0)];
-        let coh = fit_cohesion(&m, "C", "ced", ["E", "E"], &lines, "t".into()).unwrap();
+        let coh = fit_cohesion(&m, "C", "ced", ["E", "E"], &lines, "t".into(), None).unwrap();
         assert_eq!(coh.reference, 50.0);
         let k = &coh.curves[0].knots[0];
         assert!((k.decades - 8f64.log10()).abs() < 1e-12);
         assert!(k.sd < 1e-9 && k.mean.abs() < 1e-9, "{k:?}");
         let off = [line("a", 0.0), line("b", 4.0)];
-        let coh_off = fit_cohesion(&m, "C", "ced", ["E", "E"], &off, "t".into()).unwrap();
+        let coh_off = fit_cohesion(&m, "C", "ced", ["E", "E"], &off, "t".into(), None).unwrap();
         let k = &coh_off.curves[0].knots[0];
         // Line b gains 3 over the edge (4 at C 200 less 1 at C 50).
         assert!(
@@ -1820,5 +1820,74 @@ mod tests {
         m.save(&path).unwrap();
         let back = Metamodel::load(&path).unwrap();
         assert_eq!(back.rigid_limit, m.rigid_limit);
+
+        // A correction fitted beyond its runs: they stop at hi / 8, so the lines' edge runs
+        // are there and the scatter counts from there, inside the data as beyond it.
+        let runs_edge = hi / 8.0;
+        let early = |label: &str, kept: f64| CohesionLine {
+            label: label.into(),
+            inputs: vec![1e6, 2000.0, 4.0, 0.0],
+            runs: [(runs_edge, 0.0), (runs_edge, 50.0), (hi, 0.0), (hi, 200.0)]
+                .iter()
+                .map(|&(k, c)| (k, 8000.0 * c, vec![10.0 + c * kept]))
+                .collect(),
+        };
+        let coh = fit_cohesion(
+            &m,
+            "C",
+            "ced",
+            ["E", "E"],
+            &[early("a", 0.0), early("b", 0.01)],
+            "t".into(),
+            Some(runs_edge),
+        )
+        .unwrap();
+        assert_eq!(coh.runs_edge, Some(runs_edge));
+        assert_eq!(coh.reference, 50.0);
+        assert!((coh.curves[0].knots[0].decades - 8f64.log10()).abs() < 1e-12);
+        for bad in [hi, 2.0 * hi] {
+            let err = fit_cohesion(
+                &m,
+                "C",
+                "ced",
+                ["E", "E"],
+                &[early("a", 0.0)],
+                "t".into(),
+                Some(bad),
+            )
+            .unwrap_err();
+            assert!(
+                err.to_string().contains("inside the model's range"),
+                "{err}"
+            );
+        }
+        let mut w = back;
+        {
+            let c = &mut w.rigid_limit.as_mut().unwrap().cohesion[0];
+            c.runs_edge = Some(runs_edge);
+        }
+        let y = &w.responses[0];
+        // Inside the data, four times stiffer than the runs' edge: C carried there is
+        // C 4^(-2/3), the knot (sd 0.5 at 8x) read at 4x.
+        let c = 0.5 * c_hi;
+        let inside = [0.5 * hi * 8000.0, 2000.0, 4.0, c * 8000.0];
+        let want = 0.5 * (4f64.log10() / 8f64.log10()) * c * 4f64.powf(-2.0 / 3.0) / 50.0;
+        let sd = w.extrapolation_sd(y, &inside);
+        assert!((sd - want).abs() < 1e-9, "{sd} against {want}");
+        assert_eq!(w.prediction_error(y, &inside), Some(sd));
+        assert_eq!(w.predict_point(y, &inside), m.predict_point(y, &inside));
+        // Softer than the runs' edge: nothing added; no cohesion, nothing added.
+        assert_eq!(
+            w.extrapolation_sd(y, &[runs_edge * 4000.0, 2000.0, 4.0, c * 8000.0]),
+            0.0
+        );
+        assert_eq!(w.extrapolation_sd(y, &[inside[0], 2000.0, 4.0, 0.0]), 0.0);
+        // Beyond the model's edge the cohesion is still carried to it (the same prediction),
+        // and the scatter counts 64x from the runs' edge: twice the knot's sd, at C / 16.
+        let c = 2.0 * c_hi;
+        let x = [8.0 * hi * 8000.0, 2000.0, 4.0, c * 8000.0];
+        assert_eq!(w.predict_point(y, &x), m.predict_point(y, &x));
+        let sd = w.extrapolation_sd(y, &x);
+        assert!((sd - 2.0 * 0.5 * (c / 16.0) / 50.0).abs() < 1e-9, "{sd}");
     }
 }

@@ -1101,25 +1101,78 @@ impl Metamodel {
                 slope * v
             }
         };
-        // The similarity's scatter, in proportion to the carried cohesion.
-        let mut var = sd * sd;
-        for c in &cohesion {
-            let coh = &lim.cohesion[c.cohesion];
-            let Some(curve) = coh.curves.iter().find(|k| k.response == response.name) else {
-                return Some(nan(clamped));
-            };
-            let Some(gd) = self.groups.iter().find(|g| g.group.name == coh.group) else {
-                continue;
-            };
-            let carried = self.group_value(&gd.group, &clamped);
-            var += (curve.sd_at(c.decades) * carried / coh.reference).powi(2);
-        }
+        let Some(similarity) = self.similarity_var(response, x, &cohesion, &clamped) else {
+            return Some(nan(clamped));
+        };
         Some(Beyond {
             clamped,
             place,
             value: f0 + shift,
-            sd: var.sqrt() * factor,
+            sd: (sd * sd + similarity).sqrt() * factor,
         })
+    }
+
+    /// The variance (fitted unit) the cohesion similarity adds at `x`: per cohesion group of the
+    /// rigid limit, its scatter curve at the decades beyond where the scatter counts from, in
+    /// proportion to the cohesion carried there over the reference. A group whose scatter
+    /// counts from the model's edge uses `carried`, the point's reading beyond it (empty
+    /// inside the data), read at `clamped`; one whose effect's runs stop below the edge
+    /// ([`crate::metamodel::rigid_limit::Cohesion::runs_edge`]) is moved from `x` along the
+    /// lines (E_p and E_w together) onto that edge, inside the data as beyond it. `None`: a
+    /// curve lacks the response.
+    fn similarity_var(
+        &self,
+        response: &ResponseModel,
+        x: &[f64],
+        carried: &[Carried],
+        clamped: &[f64],
+    ) -> Option<f64> {
+        let Some(lim) = self.rigid_limit.as_ref() else {
+            return Some(0.0);
+        };
+        let mut var = 0.0;
+        for (i, coh) in lim.cohesion.iter().enumerate() {
+            let Some(gd) = self.groups.iter().find(|g| g.group.name == coh.group) else {
+                continue;
+            };
+            let (decades, value) = match coh.runs_edge {
+                None => match carried.iter().find(|c| c.cohesion == i) {
+                    Some(c) => (c.decades, self.group_value(&gd.group, clamped)),
+                    None => continue,
+                },
+                Some(edge) => {
+                    let (Some(stiff), Some(k), Some(ced)) = (
+                        self.groups.iter().find(|g| g.group.name == lim.group),
+                        self.along_input(&lim.group, &lim.along),
+                        self.along_input(&coh.group, &coh.along),
+                    ) else {
+                        continue;
+                    };
+                    let scale = edge / self.group_value(&stiff.group, x);
+                    // Softer than the runs' edge, or no stiffness to read (NaN): none added.
+                    if scale.is_nan() || scale >= 1.0 {
+                        continue;
+                    }
+                    let mut moved = x.to_vec();
+                    moved[k] *= scale;
+                    if let Some(w) = lim.wall.as_ref().and_then(|(g, a)| self.along_input(g, a)) {
+                        moved[w] *= scale;
+                    }
+                    moved[ced] *= scale.powf(COHESION_POWER);
+                    (-scale.log10(), self.group_value(&gd.group, &moved))
+                }
+            };
+            let curve = coh.curves.iter().find(|k| k.response == response.name)?;
+            var += (curve.sd_at(decades) * value / coh.reference).powi(2);
+        }
+        Some(var)
+    }
+
+    /// The similarity's scatter (response unit) at a point inside the stiffness data: nonzero
+    /// only beyond a cohesion group's runs' edge (NaN where its curve lacks the response).
+    fn inside_similarity_sd(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        self.similarity_var(response, x, &[], x)
+            .map_or(f64::NAN, |v| v.sqrt() * self.factor_at(response, x))
     }
 
     /// The equation's slope per decade of the inputs `along` moved together (scaling an input
@@ -1169,10 +1222,15 @@ impl Metamodel {
             })
     }
 
-    /// The rigid limit's scatter at `x` for `response` (0 inside the data or without a limit;
-    /// NaN past the reach): what a prediction there adds to the model's own error.
+    /// The rigid limit's scatter at `x` for `response` (NaN past the reach), and inside the
+    /// stiffness data the cohesion similarity's beyond its runs' edge (0 elsewhere or without a
+    /// limit): what a prediction there adds to the model's own error.
     pub fn extrapolation_sd(&self, response: &ResponseModel, x: &[f64]) -> f64 {
-        self.beyond(response, x).map_or(0.0, |b| b.sd)
+        match self.beyond(response, x) {
+            Some(b) => b.sd,
+            None if self.rigid_limit.is_some() => self.inside_similarity_sd(response, x),
+            None => 0.0,
+        }
     }
 
     /// The inputs of `x` scaled to [0, 1] over the model's space (0.5 for an input the model
@@ -1204,6 +1262,9 @@ impl Metamodel {
         let e = response.error_model.as_ref()?;
         Some(match self.beyond(response, x) {
             Some(b) => e.sd(&self.unit(&b.clamped)).hypot(b.sd),
+            None if self.rigid_limit.is_some() => e
+                .sd(&self.unit(x))
+                .hypot(self.inside_similarity_sd(response, x)),
             None => e.sd(&self.unit(x)),
         })
     }

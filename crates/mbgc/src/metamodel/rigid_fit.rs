@@ -272,6 +272,11 @@ const SAME_COHESION: f64 = 1e-3;
 /// on the edge with cohesion C_e and without, and beyond it at K with C_e (K / K_e)^(2/3) and
 /// without; the cohesion effect there minus the edge's is what the similarity misses. Runs at
 /// other cohesions are left out. `model` must carry its rigid limit.
+///
+/// `runs_edge`: where the effect's own runs stop in the stiffness group, when below the model's
+/// edge (a correction fitted beyond its runs through the contact pull); the lines' edge runs
+/// are then those at it, and the scatter counts from it
+/// ([`super::rigid_limit::Cohesion::runs_edge`]).
 pub fn fit_cohesion(
     model: &Metamodel,
     group: &str,
@@ -279,6 +284,7 @@ pub fn fit_cohesion(
     contact: [&str; 2],
     lines: &[CohesionLine],
     measured: String,
+    runs_edge: Option<f64>,
 ) -> Result<Cohesion> {
     let bad = |what: String| Error::invalid(format!("rigid limit, cohesion: {what}"));
     let lim = model
@@ -293,7 +299,16 @@ pub fn fit_cohesion(
         .iter()
         .find(|g| g.group.name == lim.group)
         .ok_or_else(|| bad(format!("the model has no group {}", lim.group)))?;
-    let edge = gd.domain[1];
+    if let Some(e) = runs_edge {
+        if !(e > gd.domain[0] && e < gd.domain[1]) {
+            return Err(bad(format!(
+                "the effect's runs' edge {e:.4e} must lie inside the model's range of {} \
+                 ([{:.4e}, {:.4e}]); at its top, leave it out",
+                lim.group, gd.domain[0], gd.domain[1]
+            )));
+        }
+    }
+    let edge = runs_edge.unwrap_or(gd.domain[1]);
     let mut reference: Option<f64> = None;
     // A line's inputs on the edge, where the reference is read in the model's group.
     let mut edge_point: Option<Vec<f64>> = None;
@@ -445,5 +460,6 @@ pub fn fit_cohesion(
         reference,
         curves,
         measured,
+        runs_edge,
     })
 }

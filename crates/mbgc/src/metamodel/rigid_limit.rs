@@ -137,6 +137,12 @@ pub struct Cohesion {
     /// Where the curves come from (the lines and tables, or the group they were taken from when
     /// this one was not measured).
     pub measured: String,
+    /// The stiffness group's value where the effect's own runs stop, when that lies below the
+    /// model's edge: a correction that reads the stiffness only through the contact pull
+    /// (`C K^(-2/3)`) answers beyond its runs inside the model's data by the similarity alone,
+    /// so its scatter counts from here, inside the data as beyond it. `None`: from the edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub runs_edge: Option<f64>,
 }
 
 /// How far the cohesion effect beyond the edge may lie from the edge's at the same carried
@@ -421,6 +427,14 @@ impl RigidLimit {
                     format!("rigid_limit.cohesion[{i}].reference"),
                     "a positive value of the group",
                 );
+            }
+            if let Some(e) = c.runs_edge {
+                if !(e.is_finite() && e > 0.0) {
+                    return bad(
+                        format!("rigid_limit.cohesion[{i}].runs_edge"),
+                        "a positive value of the stiffness group",
+                    );
+                }
             }
             for (j, cc) in c.curves.iter().enumerate() {
                 let mut last = 0.0;
