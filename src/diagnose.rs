@@ -43,7 +43,10 @@ pub struct DiagnoseArgs {
     /// Build the models the diagnosis lacks before it runs: for each candidate effect (all, or
     /// those named, e.g. `--build sjkr`) that no model covers for this material, a local model
     /// around it (known values fixed; searched ones, the effect's strength and the samples' span
-    /// varied), trained into --build-dir and resumed by the next call.
+    /// varied), trained into --build-dir and resumed by the next call. When the given models
+    /// cover everything but limit the diagnosis (their own error above the measurements' sd and
+    /// no candidate decisive), a local model of the best candidate (or of those named) instead,
+    /// which replaces them for its experiment.
     #[arg(long, value_name = "EFFECTS", num_args = 0.., value_delimiter = ',')]
     pub build: Option<Vec<String>>,
     /// DEM runs per local model, in two rounds: half over the whole search range (a fifth
@@ -112,79 +115,37 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
         // Each build sees the set as given; the diagnosis then searches where the built models
         // are valid (a second round's box narrows it).
         let original = set.clone();
-        if plans.is_empty() {
-            say!(
-                out,
-                "--build: the given models cover every candidate for this material; nothing to build"
-            );
-        }
         for p in &plans {
-            say!(out, "{}", plan_text(p, &build_opts));
-            let printer = crate::train_progress::Printer::new(build_opts.config.generations);
-            let built = build::build(&original, p, &build_opts, &printer);
-            printer.bar.finish_and_clear();
-            let built = built?;
-            if let Some(first) = &built.first {
+            let (model, json) = build_one(p, &original, &build_opts, &out, &mut set)?;
+            models.push(model);
+            built_models.push(json);
+        }
+        if plans.is_empty() {
+            // Covered: but are the models as precise as the measurements? A first diagnosis
+            // with them says.
+            let first = diagnose(&set, &models, &opts)?;
+            let sharper = build::plan_sharper(&set, &models, wanted, &first)?;
+            if sharper.is_empty() {
                 say!(
                     out,
-                    "local model {} (first round, the whole search range): {} training runs; {}",
-                    first.path.display(),
-                    first.training_runs,
-                    build::precision_text(first)
+                    "--build: the given models cover every candidate for this material and do not \
+                     limit its diagnosis; nothing to build"
                 );
             }
-            say!(
-                out,
-                "local model {}: {} training runs ({} finished rows fitted{}){}; {}",
-                built.path.display(),
-                built.training_runs,
-                built.model.data.train_rows,
-                if built.first.is_some() {
-                    ", the first round's inside its box among them"
-                } else {
-                    ""
-                },
-                if built.first.is_some() {
-                    format!(" over {}", build::ranges_text(&built.plan.varied))
-                } else {
-                    String::new()
-                },
-                build::precision_text(&built)
-            );
-            if !built.precise_enough() {
+            for p in &sharper {
+                say!(out, "--build: for {}, {}", p.experiment, p.reason);
+                let (model, json) = build_one(p, &original, &build_opts, &out, &mut set)?;
+                let before = models.len();
+                models.retain(|m| !build::replaced_by(m, p));
                 say!(
                     out,
-                    "warning: the local model's own error exceeds the measurement sd of a \
-                     response, so it, not the measurements, limits the diagnosis; a larger \
-                     --budget-runs extends its design (its runs are kept)"
+                    "the local model replaces the {} given model(s) of {} in this diagnosis",
+                    before - models.len(),
+                    p.experiment
                 );
+                models.push(model);
+                built_models.push(json);
             }
-            if !built.focus.is_empty() {
-                say!(
-                    out,
-                    "the search ranges are those the second round's model was built for: {}",
-                    build::ranges_text(&built.focus)
-                );
-                set = build::narrow(&set, &built);
-            }
-            models.push(build::surrogate(&built)?);
-            built_models.push(serde_json::json!({
-                "name": built.plan.name,
-                "model": built.path,
-                "class": built.plan.class.to_string(),
-                "experiment": built.plan.experiment,
-                "effect": built.plan.effect.map(|e| e.name),
-                "varied": built.plan.varied,
-                "training_runs": built.training_runs,
-                "precision": precision_json(&built),
-                "focus": built.focus,
-                "first_round": built.first.as_ref().map(|f| serde_json::json!({
-                    "model": f.path,
-                    "varied": f.plan.varied,
-                    "training_runs": f.training_runs,
-                    "precision": precision_json(f),
-                })),
-            }));
         }
     }
     let d = match diagnose(&set, &models, &opts) {
@@ -239,6 +200,84 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     report["built"] = serde_json::Value::Array(built_models);
     out.object(&report)?;
     Ok(())
+}
+
+/// Builds (or resumes) one local model and says what it is; narrows `set` to a second round's
+/// box. Its surrogate and its entry of the report's `built`.
+fn build_one(
+    p: &build::LocalPlan,
+    original: &MeasurementSet,
+    build_opts: &BuildOptions,
+    out: &Output,
+    set: &mut MeasurementSet,
+) -> anyhow::Result<(Surrogate, serde_json::Value)> {
+    say!(out, "{}", plan_text(p, build_opts));
+    let printer = crate::train_progress::Printer::new(build_opts.config.generations);
+    let built = build::build(original, p, build_opts, &printer);
+    printer.bar.finish_and_clear();
+    let built = built?;
+    if let Some(first) = &built.first {
+        say!(
+            out,
+            "local model {} (first round, the whole search range): {} training runs; {}",
+            first.path.display(),
+            first.training_runs,
+            build::precision_text(first)
+        );
+    }
+    say!(
+        out,
+        "local model {}: {} training runs ({} finished rows fitted{}){}; {}",
+        built.path.display(),
+        built.training_runs,
+        built.model.data.train_rows,
+        if built.first.is_some() {
+            ", the first round's inside its box among them"
+        } else {
+            ""
+        },
+        if built.first.is_some() {
+            format!(" over {}", build::ranges_text(&built.plan.varied))
+        } else {
+            String::new()
+        },
+        build::precision_text(&built)
+    );
+    if !built.precise_enough() {
+        say!(
+            out,
+            "warning: the local model's own error exceeds the measurement sd of a response, so \
+             it, not the measurements, limits the diagnosis; a larger --budget-runs extends its \
+             design (its runs are kept)"
+        );
+    }
+    if !built.focus.is_empty() {
+        say!(
+            out,
+            "the search ranges are those the second round's model was built for: {}",
+            build::ranges_text(&built.focus)
+        );
+        *set = build::narrow(set, &built);
+    }
+    let json = serde_json::json!({
+        "name": built.plan.name,
+        "model": built.path,
+        "class": built.plan.class.to_string(),
+        "experiment": built.plan.experiment,
+        "effect": built.plan.effect.map(|e| e.name),
+        "reason": built.plan.reason,
+        "varied": built.plan.varied,
+        "training_runs": built.training_runs,
+        "precision": precision_json(&built),
+        "focus": built.focus,
+        "first_round": built.first.as_ref().map(|f| serde_json::json!({
+            "model": f.path,
+            "varied": f.plan.varied,
+            "training_runs": f.training_runs,
+            "precision": precision_json(f),
+        })),
+    });
+    Ok((build::surrogate(&built)?, json))
 }
 
 fn precision_json(b: &build::Built) -> Vec<serde_json::Value> {

@@ -216,3 +216,93 @@ fn a_second_round_is_built_near_the_material_with_the_first_rounds_runs() {
     assert_eq!(j2["built"][0]["focus"], built["focus"]);
     assert_eq!(j2["verdict"], j["verdict"]);
 }
+
+/// A global model that covers the material but is less precise than the measurements: the
+/// diagnosis with it cannot decide, says the models limit it, and `--build sjkr` builds a local
+/// cohesive model that replaces it (for both classes), which names the hidden cohesion.
+#[test]
+fn a_diagnosis_sharpens_a_covering_model_less_precise_than_its_measurements() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    measurement_set(d);
+    // The coarse model: 24 runs over a wide box, a two-generation GP.
+    std::fs::write(
+        d.join("space.toml"),
+        "name = \"coarse impact\"\n[model]\nclass = \"hertz,mindlin,sjkr\"\n[parameters]\n\
+         E_p = { min = 1e6, max = 1e8, fixed = 5e6 }\n\
+         nu_p = { min = 0.1, max = 0.5, fixed = 0.3 }\n\
+         rho_p = { min = 1000, max = 3000, fixed = 2600 }\n\
+         d50 = { min = 1, max = 10, fixed = 4 }\n\
+         E_w = { min = 1e6, max = 1e8, fixed = 5e6 }\n\
+         impact_speed = { min = 0.04, max = 0.7 }\n\
+         impact_angle = { min = 10, max = 60, fixed = 30 }\n\
+         e_pw = { min = 0.35, max = 0.95 }\n\
+         mu_pw = { min = 0.1, max = 0.5, fixed = 0.3 }\n\
+         ced_pw = { min = 0, max = 6e4 }\n",
+    )
+    .unwrap();
+    ok(
+        d,
+        &[
+            "train",
+            "--space",
+            "space.toml",
+            "--experiment",
+            "wall-impact",
+            "--name",
+            "coarse",
+            "--n",
+            "24",
+            "--validation",
+            "8",
+            "--threads",
+            "1",
+            "--population",
+            "40",
+            "--generations",
+            "2",
+            "--restarts",
+            "1",
+        ],
+    );
+    let coarse = "models/coarse.json";
+    assert!(d.join(coarse).exists());
+    let quick = ["--samples", "500", "--starts", "4", "--json"];
+    let (out, _) = ok(
+        d,
+        &[
+            &["diagnose", "--measurements", "set.toml", "--model", coarse][..],
+            &quick,
+        ]
+        .concat(),
+    );
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let v = j["verdict"].as_str().unwrap();
+    assert!(
+        v.contains("limit this verdict") && v.contains("--build sjkr"),
+        "the premise: the coarse model limits the diagnosis: {v}"
+    );
+    let mut args = build_args("60");
+    args.extend(["--model", coarse]);
+    let (out, err) = ok(d, &args);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(
+        err.contains("their own error exceeds the measurements' sd")
+            && err.contains("replaces the 1 given model(s) of wall-impact"),
+        "{err}"
+    );
+    let built = &j["built"][0];
+    assert_eq!(built["class"], "hertz,mindlin,sjkr", "{built}");
+    assert!(
+        built["reason"]
+            .as_str()
+            .unwrap()
+            .starts_with("the given models cover it"),
+        "{built}"
+    );
+    let v = j["verdict"].as_str().unwrap();
+    assert!(v.starts_with("sjkr explains it"), "{v}");
+    let s = &j["ranking"][0]["strength"][0];
+    let (lo, hi) = (s["q05"].as_f64().unwrap(), s["q95"].as_f64().unwrap());
+    assert!(lo < HIDDEN_CED && HIDDEN_CED < hi, "[{lo}, {hi}]");
+}

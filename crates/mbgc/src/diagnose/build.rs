@@ -12,7 +12,7 @@
 
 use std::path::PathBuf;
 
-use super::diagnosis::Parameter;
+use super::diagnosis::{limited_by_models, Diagnosis, Parameter};
 use super::joint::{with_effect, Joint};
 use super::measurements::{owns, switchable_effects, MeasurementSet};
 use super::surrogate::Surrogate;
@@ -232,6 +232,77 @@ pub fn plan(
         }
     }
     Ok(plans)
+}
+
+/// Local models for a set the given models cover, but less precisely than its measurements
+/// (`d`, its diagnosis with them, says so: [`super::diagnosis::limited_by_models`]): per
+/// experiment of the set, a model of each effect in `wanted`, or of the best-ranked candidate
+/// when `wanted` is empty. An effect model also describes the set's class (with the effect
+/// off), so the diagnosis then weighs both classes on models of one precision; the given
+/// models of that experiment give way to it ([`replaced_by`]). Empty when the models do not
+/// limit the diagnosis.
+pub fn plan_sharper(
+    set: &MeasurementSet,
+    models: &[Surrogate],
+    wanted: &[String],
+    d: &Diagnosis,
+) -> Result<Vec<LocalPlan>> {
+    let Some(limit) = limited_by_models(d) else {
+        return Ok(Vec::new());
+    };
+    let mut effects = switchable_effects(&set.class);
+    for c in &set.candidates {
+        if !effects.iter().any(|e| e.name == c.effect.name) {
+            effects.push(c.effect);
+        }
+    }
+    let names: Vec<String> = if wanted.is_empty() {
+        d.ranking
+            .first()
+            .map(|r| r.effect.clone())
+            .into_iter()
+            .collect()
+    } else {
+        wanted.to_vec()
+    };
+    let mut plans = Vec::new();
+    let mut experiments: Vec<&str> = Vec::new();
+    for s in &set.samples {
+        if !experiments.contains(&s.experiment.as_str()) {
+            experiments.push(&s.experiment);
+        }
+    }
+    for exp in experiments {
+        let sub = only_experiment(set, exp);
+        for name in &names {
+            let Some(&e) = effects.iter().find(|e| e.name == name) else {
+                return Err(Error::invalid(format!(
+                    "--build {name}: not a candidate effect of the set's class {}",
+                    set.class
+                )));
+            };
+            plans.push(local_plan(
+                &sub,
+                models,
+                exp,
+                Some(e),
+                format!(
+                    "the given models cover it, but their own error exceeds the measurements' \
+                     sd ({limit})"
+                ),
+            )?);
+        }
+    }
+    Ok(plans)
+}
+
+/// Whether a given model gives way to the local model `plan` sharpened
+/// ([`plan_sharper`]): a model of the same experiment, or of none (it could stand in for any).
+pub fn replaced_by(model: &Surrogate, plan: &LocalPlan) -> bool {
+    model
+        .experiment
+        .as_deref()
+        .is_none_or(|e| e == plan.experiment)
 }
 
 /// The set with the samples of one experiment only.

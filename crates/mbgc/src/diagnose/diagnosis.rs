@@ -527,15 +527,20 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
     });
     // Without degrees of freedom (p NaN) the chi^2 test cannot reject.
     let consistent = not_rejected(base.p_value, opts.alpha) && base.structured.is_empty();
+    let limit = models_limit(&base, ranked.first().map(|(r, f)| (r, f)));
     let mut verdict = verdict(
         &base,
         consistent,
         ranked.first().map(|r| &r.0),
         &unavailable,
         opts.alpha,
+        limit.is_some(),
     );
     if let Some(tie) = inseparable(&base, &ranked, opts.alpha) {
         verdict = format!("{tie}; {verdict}");
+    }
+    if let Some(limit) = limit {
+        verdict.push_str(&limit);
     }
     Ok(Diagnosis {
         set: set.name.clone(),
@@ -587,6 +592,78 @@ fn inseparable(base: &ClassFit, ranked: &[(Ranked, ClassFit)], alpha: f64) -> Op
     ))
 }
 
+/// Where no candidate reaches a Bayes factor of 10 and the models' own error exceeds the
+/// measurements' sd, the models, not the measurements, cap the evidence: a candidate that
+/// removes most of the misfit is then penalised for the error of its model as much as it is
+/// rewarded for the fit. Said with the numbers (median over the samples, per response, at each
+/// class's best fit), so the user knows which to improve. `None` when a candidate is strong or
+/// the models are more precise than the measurements.
+fn models_limit(base: &ClassFit, best: Option<(&Ranked, &ClassFit)>) -> Option<String> {
+    let (ranked, fit) = best?;
+    let parts = precision_limit(base, ranked, fit)?;
+    Some(format!(
+        "; the models, not the measurements, limit this verdict: their own error (the set's \
+         class and {} at their best fits, median over the samples) exceeds the measurements' \
+         sd: {parts}. An effect that moves the responses by less than that goes unseen ({} \
+         lowers chi^2 {:.1}-fold, ln Bayes factor {:.1}); models as precise as the \
+         measurements around this material would tell (`--build {}` builds them)",
+        ranked.effect, ranked.effect, ranked.chi2_ratio, ranked.log_bayes_factor, ranked.effect
+    ))
+}
+
+/// Whether the models, not the measurements, limit `d` (no candidate reaches a Bayes factor of
+/// 10, and a model's own error at its best fit exceeds the measurements' sd): per response,
+/// the set's class's and the best candidate's own errors against the sd. `None`: they do not.
+pub fn limited_by_models(d: &Diagnosis) -> Option<String> {
+    precision_limit(&d.base, d.ranking.first()?, d.extended.first()?)
+}
+
+fn precision_limit(base: &ClassFit, ranked: &Ranked, fit: &ClassFit) -> Option<String> {
+    if ranked.log_bayes_factor > STRONG {
+        return None;
+    }
+    let median = |mut v: Vec<f64>| -> f64 {
+        v.sort_by(f64::total_cmp);
+        match v.len() {
+            0 => f64::NAN,
+            n if n % 2 == 1 => v[n / 2],
+            n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+        }
+    };
+    let own = |f: &ClassFit, response: &str| {
+        median(
+            f.residuals
+                .iter()
+                .filter(|r| r.response == response)
+                .map(|r| (r.sigma * r.sigma - r.sd * r.sd).max(0.0).sqrt())
+                .collect(),
+        )
+    };
+    let mut responses: Vec<&str> = Vec::new();
+    for r in &base.residuals {
+        if !responses.contains(&r.response.as_str()) {
+            responses.push(&r.response);
+        }
+    }
+    let mut parts = Vec::new();
+    let mut limited = false;
+    for resp in responses {
+        let sd = median(
+            base.residuals
+                .iter()
+                .filter(|r| r.response == resp)
+                .map(|r| r.sd)
+                .collect(),
+        );
+        let (e0, e1) = (own(base, resp), own(fit, resp));
+        limited |= e0 > sd || e1 > sd;
+        parts.push(format!(
+            "{resp} {e0:.3} and {e1:.3} against an sd of {sd:.3}"
+        ));
+    }
+    limited.then(|| parts.join("; "))
+}
+
 fn not_rejected(p: f64, alpha: f64) -> bool {
     p.is_nan() || p >= alpha
 }
@@ -597,9 +674,10 @@ fn verdict(
     best: Option<&Ranked>,
     untested: &[Unavailable],
     alpha: f64,
+    models_limit: bool,
 ) -> String {
     let strong = best.filter(|b| b.log_bayes_factor > STRONG);
-    let main = verdict_without_caveat(base, consistent, best, strong, alpha);
+    let main = verdict_without_caveat(base, consistent, best, strong, alpha, models_limit);
     // A candidate no model could evaluate is a caveat of every verdict, never silently dropped:
     // it might have explained the data as well or better.
     let (lacking, other): (Vec<&Unavailable>, Vec<&Unavailable>) = untested
@@ -662,6 +740,7 @@ fn verdict_without_caveat(
     best: Option<&Ranked>,
     strong: Option<&Ranked>,
     alpha: f64,
+    models_limit: bool,
 ) -> String {
     match (consistent, strong) {
         (true, None) => format!(
@@ -694,13 +773,15 @@ fn verdict_without_caveat(
                 Some(b) => format!(
                 "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}); {} removes the misfit (chi^2/dof \
                  -> {:.2}, no structure left) but the evidence for it is weak (ln Bayes factor \
-                 {:.1}, below ln 10): more samples or repeats would decide",
+                 {:.1}, below ln 10){}",
                 base.chi2_dof,
                 base.p_value,
                 if base.structured.is_empty() { "" } else { ", structured residuals" },
                 b.effect,
                 b.chi2_dof_after,
-                b.log_bayes_factor
+                b.log_bayes_factor,
+                // Where the models limit it, the caveat that follows says what would decide.
+                if models_limit { "" } else { ": more samples or repeats would decide" }
             ),
                 None => format!(
                     "inconsistent (chi^2/dof {:.2}, p = {:.2e}{}) and none of the evaluated \
@@ -763,6 +844,36 @@ mod tests {
             structure_left: false,
             strength: vec![],
         }
+    }
+
+    /// A weak candidate with models less precise than the measurements: the verdict says the
+    /// models limit it, with each response's own errors and sd; precise models or a strong
+    /// candidate: nothing said.
+    #[test]
+    fn models_less_precise_than_the_measurements_are_named_as_the_limit() {
+        let with_error = |model_error: f64| {
+            let mut f = fit(&[0.0, 0.0]);
+            for r in &mut f.residuals {
+                r.sd = 1.0;
+                r.sigma = 1f64.hypot(model_error);
+            }
+            f
+        };
+        let weak = ranked("sjkr", -1.5, 0.5);
+        let text = models_limit(&with_error(2.0), Some((&weak, &with_error(3.0)))).unwrap();
+        assert!(
+            text.contains("limit this verdict")
+                && text.contains("r 2.000 and 3.000 against an sd of 1.000"),
+            "{text}"
+        );
+        assert!(
+            text.contains("10.0-fold") && text.contains("-1.5"),
+            "{text}"
+        );
+        assert!(models_limit(&with_error(0.5), Some((&weak, &with_error(0.8)))).is_none());
+        let strong = ranked("sjkr", 3.0, 0.5);
+        assert!(models_limit(&with_error(2.0), Some((&strong, &with_error(3.0)))).is_none());
+        assert!(models_limit(&with_error(2.0), None).is_none());
     }
 
     /// Two effects that both explain the data within a factor 10 of evidence are named together
