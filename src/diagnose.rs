@@ -110,6 +110,8 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
     }
     build_opts.seed = a.seed;
     let mut built_models = Vec::new();
+    // A diagnosis already made with the models used for the final one.
+    let mut first_diagnosis = None;
     if let Some(wanted) = &a.build {
         let plans = build::plan(&set, &models, wanted)?;
         // Each build sees the set as given; the diagnosis then searches where the built models
@@ -128,27 +130,36 @@ pub fn run(a: &DiagnoseArgs) -> anyhow::Result<()> {
             if sharper.is_empty() {
                 say!(
                     out,
-                    "--build: the given models cover every candidate for this material and do not \
-                     limit its diagnosis; nothing to build"
+                    "--build: the given models cover every candidate for this material{}; nothing \
+                     to build",
+                    if first.ranking.is_empty() {
+                        " (none could be evaluated with them, so none can be sharpened)"
+                    } else {
+                        " and do not limit its diagnosis"
+                    }
                 );
+                first_diagnosis = Some(first);
             }
+            let mut local = Vec::new();
             for p in &sharper {
                 say!(out, "--build: for {}, {}", p.experiment, p.reason);
                 let (model, json) = build_one(p, &original, &build_opts, &out, &mut set)?;
                 let before = models.len();
-                models.retain(|m| !build::replaced_by(m, p));
+                models.retain(|m| !build::replaced_by(m, p, &set.class));
                 say!(
                     out,
-                    "the local model replaces the {} given model(s) of {} in this diagnosis",
+                    "the local model replaces the {} given model(s) of {} it stands for in this \
+                     diagnosis",
                     before - models.len(),
                     p.experiment
                 );
-                models.push(model);
+                local.push(model);
                 built_models.push(json);
             }
+            models.extend(local);
         }
     }
-    let d = match diagnose(&set, &models, &opts) {
+    let d = match first_diagnosis.map_or_else(|| diagnose(&set, &models, &opts), Ok) {
         Ok(d) => d,
         Err(e) if a.build.is_none() => match build::plan(&set, &models, &[]) {
             Ok(plans) if !plans.is_empty() => anyhow::bail!(

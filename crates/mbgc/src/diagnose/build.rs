@@ -235,21 +235,19 @@ pub fn plan(
 }
 
 /// Local models for a set the given models cover, but less precisely than its measurements
-/// (`d`, its diagnosis with them, says so: [`super::diagnosis::limited_by_models`]): per
-/// experiment of the set, a model of each effect in `wanted`, or of the best-ranked candidate
-/// when `wanted` is empty. An effect model also describes the set's class (with the effect
-/// off), so the diagnosis then weighs both classes on models of one precision; the given
-/// models of that experiment give way to it ([`replaced_by`]). Empty when the models do not
-/// limit the diagnosis.
+/// (`d`, its diagnosis with them, says so per experiment:
+/// [`super::diagnosis::limited_by_models`]): for each experiment of the set where they limit
+/// it, a model of each effect in `wanted`, or of the best-ranked candidate when `wanted` is
+/// empty (an effect with every parameter fixed has nothing to fit and is skipped). An effect
+/// model also describes the set's class (with the effect off), so the diagnosis then weighs
+/// both classes on models of one precision; the given models it stands for give way to it
+/// ([`replaced_by`]). Empty when the models limit no experiment.
 pub fn plan_sharper(
     set: &MeasurementSet,
     models: &[Surrogate],
     wanted: &[String],
     d: &Diagnosis,
 ) -> Result<Vec<LocalPlan>> {
-    let Some(limit) = limited_by_models(d) else {
-        return Ok(Vec::new());
-    };
     let mut effects = switchable_effects(&set.class);
     for c in &set.candidates {
         if !effects.iter().any(|e| e.name == c.effect.name) {
@@ -273,6 +271,9 @@ pub fn plan_sharper(
         }
     }
     for exp in experiments {
+        let Some(limit) = limited_by_models(d, set, Some(exp)) else {
+            continue;
+        };
         let sub = only_experiment(set, exp);
         for name in &names {
             let Some(&e) = effects.iter().find(|e| e.name == name) else {
@@ -281,6 +282,15 @@ pub fn plan_sharper(
                     set.class
                 )));
             };
+            let settings = sub.candidate(e);
+            let free = e.params.iter().any(|p| {
+                Pair::BOTH
+                    .iter()
+                    .any(|&pair| !settings.fixed.iter().any(|(n, _)| n == p.name(pair)))
+            });
+            if !free {
+                continue;
+            }
             plans.push(local_plan(
                 &sub,
                 models,
@@ -296,13 +306,16 @@ pub fn plan_sharper(
     Ok(plans)
 }
 
-/// Whether a given model gives way to the local model `plan` sharpened
-/// ([`plan_sharper`]): a model of the same experiment, or of none (it could stand in for any).
-pub fn replaced_by(model: &Surrogate, plan: &LocalPlan) -> bool {
+/// Whether a given model gives way to the local model `plan` sharpened ([`plan_sharper`]) for
+/// a set of class `set_class`: a model of the same experiment (or of none, which could stand in
+/// for any) and of a class the local model stands for, the set's or the plan's. Models of other
+/// classes stay for the other candidates.
+pub fn replaced_by(model: &Surrogate, plan: &LocalPlan, set_class: &ModelClass) -> bool {
     model
         .experiment
         .as_deref()
         .is_none_or(|e| e == plan.experiment)
+        && (model.class == *set_class || model.class == plan.class)
 }
 
 /// The set with the samples of one experiment only.

@@ -527,7 +527,7 @@ pub fn diagnose(set: &MeasurementSet, models: &[Surrogate], opts: &Options) -> R
     });
     // Without degrees of freedom (p NaN) the chi^2 test cannot reject.
     let consistent = not_rejected(base.p_value, opts.alpha) && base.structured.is_empty();
-    let limit = models_limit(&base, ranked.first().map(|(r, f)| (r, f)));
+    let limit = models_limit(set, &base, ranked.first().map(|(r, f)| (r, f)));
     let mut verdict = verdict(
         &base,
         consistent,
@@ -596,32 +596,76 @@ fn inseparable(base: &ClassFit, ranked: &[(Ranked, ClassFit)], alpha: f64) -> Op
 /// measurements' sd, the models, not the measurements, cap the evidence: a candidate that
 /// removes most of the misfit is then penalised for the error of its model as much as it is
 /// rewarded for the fit. Said with the numbers (median over the samples, per response, at each
-/// class's best fit), so the user knows which to improve. `None` when a candidate is strong or
-/// the models are more precise than the measurements.
-fn models_limit(base: &ClassFit, best: Option<(&Ranked, &ClassFit)>) -> Option<String> {
+/// class's best fit), so the user knows which to improve. `None` when a candidate is strong,
+/// the models are more precise than the measurements, or the set states their error itself
+/// (`[model_error]`: no model built would change it).
+fn models_limit(
+    set: &MeasurementSet,
+    base: &ClassFit,
+    best: Option<(&Ranked, &ClassFit)>,
+) -> Option<String> {
     let (ranked, fit) = best?;
-    let parts = precision_limit(base, ranked, fit)?;
+    let parts = precision_limit(set, None, base, ranked, fit)?;
+    let mut models: Vec<&str> = Vec::new();
+    for m in base.models.iter().chain(&fit.models) {
+        if !models.contains(&m.as_str()) {
+            models.push(m);
+        }
+    }
     Some(format!(
         "; the models, not the measurements, limit this verdict: their own error (the set's \
          class and {} at their best fits, median over the samples) exceeds the measurements' \
          sd: {parts}. An effect that moves the responses by less than that goes unseen ({} \
          lowers chi^2 {:.1}-fold, ln Bayes factor {:.1}); models as precise as the \
-         measurements around this material would tell (`--build {}` builds them)",
-        ranked.effect, ranked.effect, ranked.chi2_ratio, ranked.log_bayes_factor, ranked.effect
+         measurements around this material would tell (`mbgc diagnose --model {} --build {}` \
+         builds them; where they are such local models already, a larger `--budget-runs` \
+         extends them)",
+        ranked.effect,
+        ranked.effect,
+        ranked.chi2_ratio,
+        ranked.log_bayes_factor,
+        models.join(" --model "),
+        ranked.effect
     ))
 }
 
-/// Whether the models, not the measurements, limit `d` (no candidate reaches a Bayes factor of
-/// 10, and a model's own error at its best fit exceeds the measurements' sd): per response,
-/// the set's class's and the best candidate's own errors against the sd. `None`: they do not.
-pub fn limited_by_models(d: &Diagnosis) -> Option<String> {
-    precision_limit(&d.base, d.ranking.first()?, d.extended.first()?)
+/// Whether the models, not the measurements, limit `d`, the diagnosis of `set`, in the samples
+/// of `experiment` (all when `None`): no candidate reaches a Bayes factor of 10, and a model's
+/// own error at its best fit exceeds the measurements' sd in a response whose error the set
+/// does not state itself. Per response, the set's class's and the best candidate's own errors
+/// against the sd. `None`: they do not.
+pub fn limited_by_models(
+    d: &Diagnosis,
+    set: &MeasurementSet,
+    experiment: Option<&str>,
+) -> Option<String> {
+    precision_limit(
+        set,
+        experiment,
+        &d.base,
+        d.ranking.first()?,
+        d.extended.first()?,
+    )
 }
 
-fn precision_limit(base: &ClassFit, ranked: &Ranked, fit: &ClassFit) -> Option<String> {
+fn precision_limit(
+    set: &MeasurementSet,
+    experiment: Option<&str>,
+    base: &ClassFit,
+    ranked: &Ranked,
+    fit: &ClassFit,
+) -> Option<String> {
     if ranked.log_bayes_factor > STRONG {
         return None;
     }
+    let keep = |r: &Residual| {
+        !set.model_error.iter().any(|(n, _)| *n == r.response)
+            && experiment.is_none_or(|e| {
+                set.samples
+                    .iter()
+                    .any(|s| s.name == r.sample && s.experiment == e)
+            })
+    };
     let median = |mut v: Vec<f64>| -> f64 {
         v.sort_by(f64::total_cmp);
         match v.len() {
@@ -634,13 +678,13 @@ fn precision_limit(base: &ClassFit, ranked: &Ranked, fit: &ClassFit) -> Option<S
         median(
             f.residuals
                 .iter()
-                .filter(|r| r.response == response)
+                .filter(|r| r.response == response && keep(r))
                 .map(|r| (r.sigma * r.sigma - r.sd * r.sd).max(0.0).sqrt())
                 .collect(),
         )
     };
     let mut responses: Vec<&str> = Vec::new();
-    for r in &base.residuals {
+    for r in base.residuals.iter().filter(|r| keep(r)) {
         if !responses.contains(&r.response.as_str()) {
             responses.push(&r.response);
         }
@@ -651,7 +695,7 @@ fn precision_limit(base: &ClassFit, ranked: &Ranked, fit: &ClassFit) -> Option<S
         let sd = median(
             base.residuals
                 .iter()
-                .filter(|r| r.response == resp)
+                .filter(|r| r.response == resp && keep(r))
                 .map(|r| r.sd)
                 .collect(),
         );
@@ -819,7 +863,7 @@ mod tests {
                 .iter()
                 .map(|&p| Residual {
                     sample: "s".into(),
-                    response: "r".into(),
+                    response: "shear_angle".into(),
                     measured: 0.0,
                     predicted: p,
                     sd: 1.0,
@@ -832,6 +876,16 @@ mod tests {
             structure: vec![],
             structured: vec![],
         }
+    }
+
+    fn limited_by_models_in(
+        set: &MeasurementSet,
+        experiment: Option<&str>,
+        base: &ClassFit,
+        ranked: &Ranked,
+        fit: &ClassFit,
+    ) -> Option<String> {
+        precision_limit(set, experiment, base, ranked, fit)
     }
 
     fn ranked(effect: &str, ln_bf: f64, p: f64) -> Ranked {
@@ -859,21 +913,48 @@ mod tests {
             }
             f
         };
+        let set = |extra: &str| {
+            MeasurementSet::from_toml_str(
+                &format!(
+                    "name = \"t\"\n{extra}[model]\nclass = \"hertz,mindlin,epsd2\"\n\
+                     [[sample]]\nname = \"s\"\nexperiment = \"shear-box\"\n\
+                     psd = {{ d50_mm = 2, sigma_ln = 0.12 }}\n\
+                     measured.shear_angle = {{ value = 30, sd = 1 }}\n"
+                ),
+                "t.toml",
+            )
+            .unwrap()
+        };
+        let plain = set("");
         let weak = ranked("sjkr", -1.5, 0.5);
-        let text = models_limit(&with_error(2.0), Some((&weak, &with_error(3.0)))).unwrap();
+        let text = models_limit(&plain, &with_error(2.0), Some((&weak, &with_error(3.0)))).unwrap();
         assert!(
             text.contains("limit this verdict")
-                && text.contains("r 2.000 and 3.000 against an sd of 1.000"),
+                && text.contains("shear_angle 2.000 and 3.000 against an sd of 1.000"),
             "{text}"
         );
         assert!(
             text.contains("10.0-fold") && text.contains("-1.5"),
             "{text}"
         );
-        assert!(models_limit(&with_error(0.5), Some((&weak, &with_error(0.8)))).is_none());
+        assert!(models_limit(&plain, &with_error(0.5), Some((&weak, &with_error(0.8)))).is_none());
         let strong = ranked("sjkr", 3.0, 0.5);
-        assert!(models_limit(&with_error(2.0), Some((&strong, &with_error(3.0)))).is_none());
-        assert!(models_limit(&with_error(2.0), None).is_none());
+        assert!(
+            models_limit(&plain, &with_error(2.0), Some((&strong, &with_error(3.0)))).is_none()
+        );
+        assert!(models_limit(&plain, &with_error(2.0), None).is_none());
+        // The set states the models' error itself: no model built would change it.
+        let stated = set("[model_error]\nshear_angle = 2.0\n");
+        assert!(models_limit(&stated, &with_error(2.0), Some((&weak, &with_error(3.0)))).is_none());
+        // Samples of another experiment only: nothing limits this one.
+        assert!(limited_by_models_in(
+            &plain,
+            Some("hopper"),
+            &with_error(2.0),
+            &weak,
+            &with_error(3.0)
+        )
+        .is_none());
     }
 
     /// Two effects that both explain the data within a factor 10 of evidence are named together

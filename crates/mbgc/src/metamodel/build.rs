@@ -1889,5 +1889,23 @@ mod tests {
         assert_eq!(w.predict_point(y, &x), m.predict_point(y, &x));
         let sd = w.extrapolation_sd(y, &x);
         assert!((sd - 2.0 * 0.5 * (c / 16.0) / 50.0).abs() < 1e-9, "{sd}");
+        // A file's runs_edge must lie inside the stiffness group's range, with a scatter curve
+        // for every response.
+        let path = dir.path().join("edge.json");
+        let lo = w.groups[0].domain[0];
+        for (edge, good) in [(runs_edge, true), (2.0 * hi, false), (0.5 * lo, false)] {
+            let mut v = w.clone();
+            v.rigid_limit.as_mut().unwrap().cohesion[0].runs_edge = Some(edge);
+            v.save(&path).unwrap();
+            match Metamodel::load(&path) {
+                Ok(_) => assert!(good, "{edge} was taken"),
+                Err(e) => assert!(!good && e.to_string().contains("runs_edge"), "{edge}: {e}"),
+            }
+        }
+        let mut v = w.clone();
+        v.rigid_limit.as_mut().unwrap().cohesion[0].curves.clear();
+        v.save(&path).unwrap();
+        let err = Metamodel::load(&path).unwrap_err().to_string();
+        assert!(err.contains("a scatter curve for every response"), "{err}");
     }
 }

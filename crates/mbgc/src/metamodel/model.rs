@@ -577,6 +577,42 @@ impl Metamodel {
                         format!("curves of the model's responses, got \"{}\"", cc.response),
                     ));
                 }
+                if let Some(e) = c.runs_edge {
+                    // Its scatter joins the error inside the data, for every response.
+                    if let Some(r) = m
+                        .responses
+                        .iter()
+                        .find(|r| !c.curves.iter().any(|cc| cc.response == r.name))
+                    {
+                        return Err(Error::input(
+                            &file,
+                            format!("{field}.curves"),
+                            format!(
+                                "a scatter curve for every response with runs_edge, none for \"{}\"",
+                                r.name
+                            ),
+                        ));
+                    }
+                    let domain = m
+                        .groups
+                        .iter()
+                        .find(|g| g.group.name == lim.group)
+                        .map(|g| g.domain);
+                    if !domain.is_some_and(|[lo, hi]| e > lo && e < hi) {
+                        return Err(Error::input(
+                            &file,
+                            format!("{field}.runs_edge"),
+                            format!(
+                                "a value of {} inside the model's range ({}), got {e}",
+                                lim.group,
+                                domain.map_or(
+                                    "none: the model has no such group".to_string(),
+                                    |[lo, hi]| { format!("{lo:.4e} to {hi:.4e}") }
+                                )
+                            ),
+                        ));
+                    }
+                }
             }
             let pairs = pairs.chain(lim.cohesion.iter().map(|c| (&c.group, &c.along)));
             for (g, a) in pairs {
@@ -1118,8 +1154,10 @@ impl Metamodel {
     /// counts from the model's edge uses `carried`, the point's reading beyond it (empty
     /// inside the data), read at `clamped`; one whose effect's runs stop below the edge
     /// ([`crate::metamodel::rigid_limit::Cohesion::runs_edge`]) is moved from `x` along the
-    /// lines (E_p and E_w together) onto that edge, inside the data as beyond it. `None`: a
-    /// curve lacks the response.
+    /// lines (E_p and E_w together) onto that edge, inside the data as beyond it: both
+    /// contacts then count their decades on K_p, as the lines moved the wall with the particles
+    /// (where the cohesive runs' walls stopped is not recorded). `None`: a curve lacks the
+    /// response.
     fn similarity_var(
         &self,
         response: &ResponseModel,
@@ -1162,6 +1200,10 @@ impl Metamodel {
                     (-scale.log10(), self.group_value(&gd.group, &moved))
                 }
             };
+            // No cohesion, no scatter (whether or not a curve exists).
+            if value == 0.0 {
+                continue;
+            }
             let curve = coh.curves.iter().find(|k| k.response == response.name)?;
             var += (curve.sd_at(decades) * value / coh.reference).powi(2);
         }
