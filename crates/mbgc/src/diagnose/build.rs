@@ -178,12 +178,7 @@ pub fn plan(
     models: &[Surrogate],
     wanted: &[String],
 ) -> Result<Vec<LocalPlan>> {
-    let mut effects = switchable_effects(&set.class);
-    for c in &set.candidates {
-        if !effects.iter().any(|e| e.name == c.effect.name) {
-            effects.push(c.effect);
-        }
-    }
+    let effects = candidate_effects(set);
     for w in wanted {
         if !effects.iter().any(|e| e.name == w) {
             return Err(Error::invalid(format!(
@@ -197,12 +192,7 @@ pub fn plan(
             )));
         }
     }
-    let mut experiments: Vec<&str> = Vec::new();
-    for s in &set.samples {
-        if !experiments.contains(&s.experiment.as_str()) {
-            experiments.push(&s.experiment);
-        }
-    }
+    let experiments = experiments_of(set);
     let mut plans = Vec::new();
     for exp in experiments {
         let sub = only_experiment(set, exp);
@@ -211,13 +201,7 @@ pub fn plan(
             if !wanted.is_empty() && !wanted.iter().any(|w| w == e.name) {
                 continue;
             }
-            let settings = sub.candidate(e);
-            let free = e.params.iter().any(|p| {
-                Pair::BOTH
-                    .iter()
-                    .any(|&pair| !settings.fixed.iter().any(|(n, _)| n == p.name(pair)))
-            });
-            if !free {
+            if !has_free_parameter(&sub, e) {
                 continue;
             }
             if let Some(reason) = lacks(&sub, models, Some(e)) {
@@ -248,12 +232,7 @@ pub fn plan_sharper(
     wanted: &[String],
     d: &Diagnosis,
 ) -> Result<Vec<LocalPlan>> {
-    let mut effects = switchable_effects(&set.class);
-    for c in &set.candidates {
-        if !effects.iter().any(|e| e.name == c.effect.name) {
-            effects.push(c.effect);
-        }
-    }
+    let effects = candidate_effects(set);
     let names: Vec<String> = if wanted.is_empty() {
         d.ranking
             .first()
@@ -264,12 +243,7 @@ pub fn plan_sharper(
         wanted.to_vec()
     };
     let mut plans = Vec::new();
-    let mut experiments: Vec<&str> = Vec::new();
-    for s in &set.samples {
-        if !experiments.contains(&s.experiment.as_str()) {
-            experiments.push(&s.experiment);
-        }
-    }
+    let experiments = experiments_of(set);
     for exp in experiments {
         let Some(limit) = limited_by_models(d, set, Some(exp)) else {
             continue;
@@ -282,13 +256,7 @@ pub fn plan_sharper(
                     set.class
                 )));
             };
-            let settings = sub.candidate(e);
-            let free = e.params.iter().any(|p| {
-                Pair::BOTH
-                    .iter()
-                    .any(|&pair| !settings.fixed.iter().any(|(n, _)| n == p.name(pair)))
-            });
-            if !free {
+            if !has_free_parameter(&sub, e) {
                 continue;
             }
             plans.push(local_plan(
@@ -316,6 +284,38 @@ pub fn replaced_by(model: &Surrogate, plan: &LocalPlan, set_class: &ModelClass) 
         .as_deref()
         .is_none_or(|e| e == plan.experiment)
         && (model.class == *set_class || model.class == plan.class)
+}
+
+/// The candidate effects of a set: its class's switchable ones and those it names.
+fn candidate_effects(set: &MeasurementSet) -> Vec<&'static EffectSpec> {
+    let mut effects = switchable_effects(&set.class);
+    for c in &set.candidates {
+        if !effects.iter().any(|e| e.name == c.effect.name) {
+            effects.push(c.effect);
+        }
+    }
+    effects
+}
+
+/// The experiments of a set's samples, in order of first appearance.
+fn experiments_of(set: &MeasurementSet) -> Vec<&str> {
+    let mut experiments: Vec<&str> = Vec::new();
+    for s in &set.samples {
+        if !experiments.contains(&s.experiment.as_str()) {
+            experiments.push(&s.experiment);
+        }
+    }
+    experiments
+}
+
+/// Whether the set leaves a parameter of `effect` to fit (not every one fixed by its candidate).
+fn has_free_parameter(set: &MeasurementSet, effect: &'static EffectSpec) -> bool {
+    let settings = set.candidate(effect);
+    effect.params.iter().any(|p| {
+        Pair::BOTH
+            .iter()
+            .any(|&pair| !settings.fixed.iter().any(|(n, _)| n == p.name(pair)))
+    })
 }
 
 /// The set with the samples of one experiment only.
