@@ -41,3 +41,17 @@ pub fn bar() -> ObserverHandle {
     }
     ObserverHandle::new(Bar(bar))
 }
+
+/// Tells that `run_campaign` added response columns to the table at `out` (a table written
+/// before the experiment recorded them): its earlier runs have no value there.
+pub fn note_added_columns(out: &std::path::Path, s: &mbgc::campaign::Summary) {
+    if !s.added_columns.is_empty() {
+        eprintln!(
+            "{}: added the column(s) {} that the experiment records since the table was \
+             written; its earlier runs have NaN there (to record them for a run, delete its \
+             line and resume)",
+            out.display(),
+            s.added_columns.join(", ")
+        );
+    }
+}

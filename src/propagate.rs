@@ -159,7 +159,7 @@ fn run_design(
 ) -> anyhow::Result<Plan> {
     let plan = Plan::new(experiment, design, set, a.seed, settings, None)?;
     let threads = worker_threads(a.threads, None)?;
-    run_campaign(
+    let s = run_campaign(
         experiment,
         &plan,
         &CampaignOptions {
@@ -167,6 +167,7 @@ fn run_design(
             ..CampaignOptions::new(out.to_path_buf(), threads)
         },
     )?;
+    crate::campaign_progress::note_added_columns(out, &s);
     Ok(plan)
 }
 
@@ -550,9 +551,9 @@ fn report(
             "\n## Events\n\nRuns that finished without some of their measured quantities, and \
              why. They count as missing above in what their event voids. The share of the \
              finished runs estimates the posterior mean of the event's probability, as a lower \
-             bound where the experiment cannot catch every case (a hopper's arch that forms \
-             after half the column over the orifice has left, or a stall after its last flow \
-             bin); the share is the mean over the draws of their runs' share. The interval \
+             bound where the experiment cannot catch every case (a hopper's late arch in a run \
+             that has no `arch_held`, recorded since 2026-11-30, or a stall after its last \
+             flow bin); the share is the mean over the draws of their runs' share. The interval \
              is Jeffreys' (Beta(k + 1/2, n - k + 1/2)) with n the independent runs: all of them \
              with one run per draw, else the effective number (Korn and Graubard), since the \
              seeds of one draw share its parameters.\n\n\

@@ -228,6 +228,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
             ..CampaignOptions::new(out_path.clone(), threads)
         },
     )?;
+    crate::campaign_progress::note_added_columns(a_out, &s);
     if s.truncated_bytes > 0 {
         eprintln!(
             "{}: removed an incomplete last line ({} bytes, an interrupted write); its run was \
@@ -291,11 +292,15 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     if failed > 0 {
         anyhow::bail!(
             "{failed} of the {} runs of {} failed ({} in this invocation, {} earlier): they have \
-             status=failed and their reason in the error column; rerun with --retry-failed",
+             status=failed and their reason in the error column; rerun with --retry-failed{}",
             s.planned,
             a_out.display(),
             s.failed,
-            s.failed_before
+            s.failed_before,
+            s.first_failure
+                .as_ref()
+                .map(|(id, e)| format!("\nthe first failed here, run {id}: {e}"))
+                .unwrap_or_default()
         );
     }
     Ok(())

@@ -12,6 +12,8 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Instant;
 
+use csv::StringRecord;
+
 use super::columns::{
     identity_len, is_pre_class_header, FIXED_COLUMNS, MODEL_CLASS_COLUMN, PRE_CLASS_TABLE,
 };
@@ -19,7 +21,7 @@ use super::lock::TableLock;
 use super::observer::ObserverHandle;
 use super::plan::{Plan, PlannedRun};
 use super::status::{meta_path, Meta};
-use super::table::{self, csv_line, read_table, DONE, FAILED};
+use super::table::{self, csv_line, read_table, Table, DONE, FAILED};
 use crate::error::{write_atomic, Error, Result};
 use crate::experiments::{Experiment, Outcome, RunOptions};
 
@@ -81,8 +83,14 @@ pub struct Summary {
     pub no_value: usize,
     /// Runs that ended in an error in this invocation (recorded as failed).
     pub failed: usize,
+    /// The first of those, as its run id and the error recorded in its row: the reason a
+    /// caller shows without making the user open the table.
+    pub first_failure: Option<(String, String)>,
     /// Bytes of an incomplete last line removed from the table before resuming.
     pub truncated_bytes: u64,
+    /// Response columns the experiment gained since the table was written, added to it with
+    /// NaN (no value) in the runs already there.
+    pub added_columns: Vec<String>,
     /// Worker threads used.
     pub threads: usize,
     /// Wall-clock time of the invocation, s.
@@ -110,8 +118,12 @@ impl Summary {
             "no_value": self.no_value,
             "failed": self.failed,
             "failed_before": self.failed_before,
+            "first_failure": self.first_failure.as_ref().map(|(id, e)| {
+                serde_json::json!({ "run_id": id, "error": e })
+            }),
             "retried": self.retried,
             "truncated_bytes": self.truncated_bytes,
+            "added_columns": self.added_columns,
             "threads": self.threads,
             "elapsed_s": self.elapsed_s,
             "cancelled": self.cancelled,
@@ -156,7 +168,11 @@ pub fn run_campaign(
     // Before the table is read: a second process must not resume from a table that the first
     // is still appending to.
     let mut lock = TableLock::acquire(&opts.out)?;
-    let (mut present, truncated_bytes) = prepare_table(plan, &opts.out)?;
+    let Prepared {
+        mut present,
+        truncated_bytes,
+        added_columns,
+    } = prepare_table(plan, &opts.out)?;
     let selected: Vec<&PlannedRun> = plan
         .selected()
         .filter(|r| opts.only.as_ref().is_none_or(|ids| ids.contains(&r.run_id)))
@@ -191,7 +207,9 @@ pub fn run_campaign(
         done: 0,
         no_value: 0,
         failed: 0,
+        first_failure: None,
         truncated_bytes,
+        added_columns,
         threads,
         elapsed_s: 0.0,
         cancelled: 0,
@@ -213,7 +231,7 @@ pub fn run_campaign(
 
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
-    let (tx, rx) = mpsc::channel::<(bool, bool, Result<Vec<u8>>)>();
+    let (tx, rx) = mpsc::channel::<(Option<(String, String)>, bool, Result<Vec<u8>>)>();
     let mut write_error = None;
     std::thread::scope(|s| {
         for _ in 0..threads {
@@ -244,14 +262,15 @@ pub fn run_campaign(
                 write_error = Some(e);
                 break;
             }
-            if failed {
+            if let Some(f) = &failed {
                 summary.failed += 1;
+                summary.first_failure.get_or_insert_with(|| f.clone());
             } else {
                 summary.done += 1;
                 summary.no_value += usize::from(no_value);
             }
             if let Some(o) = observer {
-                o.run_recorded(failed);
+                o.run_recorded(failed.is_some());
             }
         }
     });
@@ -296,15 +315,32 @@ fn remove_failed_lines(out: &Path, ids: &HashSet<String>) -> Result<usize> {
     Ok(removed)
 }
 
+/// What [`prepare_table`] found and did.
+struct Prepared {
+    /// The run ids already in the table, each with whether its run failed.
+    present: HashMap<String, bool>,
+    /// Bytes of an incomplete last line removed.
+    truncated_bytes: u64,
+    /// Response columns added to the table ([`with_added_responses`]).
+    added_columns: Vec<String>,
+}
+
 /// Creates the table (header only) or checks an existing one against the plan, writes the
-/// sidecar, and truncates an incomplete last line. Returns the run ids already present, each
-/// with whether its run failed. Nothing is modified when the table belongs to another campaign.
-fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)> {
+/// sidecar, and truncates an incomplete last line. A table that lacks only response columns the
+/// experiment gained since it was written gets them (NaN in its runs). Nothing is modified when
+/// the table belongs to another campaign.
+fn prepare_table(plan: &Plan, out: &Path) -> Result<Prepared> {
     let file = out.display().to_string();
     let columns = plan.columns();
     let mut present = HashMap::new();
     let exists = out.exists();
-    let table = if exists { Some(read_table(out)?) } else { None };
+    let mut table = if exists { Some(read_table(out)?) } else { None };
+    let mut added_columns = Vec::new();
+    if let Some(t) = table.take() {
+        let (t, added) = with_added_responses(t, &columns, &plan.responses);
+        table = Some(t);
+        added_columns = added;
+    }
     if let Some(t) = &table {
         if t.header.is_empty() && t.partial_len > 0 {
             return Err(Error::input(
@@ -478,6 +514,14 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
     }
     Meta::of(plan).write(out)?;
     match &table {
+        // Every check passed on the widened records: the table is this campaign's.
+        Some(t) if !added_columns.is_empty() => {
+            let mut bytes = csv_line(&t.header)?;
+            for (_, rec) in &t.records {
+                bytes.extend(csv_line(rec.iter())?);
+            }
+            write_atomic(out, &bytes)?;
+        }
         Some(t) if !t.header.is_empty() => {
             if t.partial_len > 0 {
                 let f = OpenOptions::new()
@@ -492,7 +536,54 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<(HashMap<String, bool>, u64)
         // New (or empty) table: the header appears whole or not at all.
         _ => write_atomic(out, &csv_line(&columns)?)?,
     }
-    Ok((present, table.map(|t| t.partial_len).unwrap_or(0)))
+    Ok(Prepared {
+        present,
+        truncated_bytes: table.map(|t| t.partial_len).unwrap_or(0),
+        added_columns,
+    })
+}
+
+/// The table with the response columns it lacks, when those are all it lacks: `columns`
+/// without them is its header, in order. Each record gets NaN (no value) there, as a run that
+/// measured none would have (its warnings say nothing of it). Returns the table unchanged, and
+/// no names, otherwise.
+fn with_added_responses(
+    mut t: Table,
+    columns: &[String],
+    responses: &[String],
+) -> (Table, Vec<String>) {
+    let missing: Vec<&String> = columns.iter().filter(|c| !t.header.contains(c)).collect();
+    let only_responses = !missing.is_empty() && missing.iter().all(|c| responses.contains(c));
+    let rest_in_order = columns
+        .iter()
+        .filter(|c| !missing.contains(c))
+        .eq(t.header.iter());
+    if t.header.is_empty() || !only_responses || !rest_in_order {
+        return (t, Vec::new());
+    }
+    for (_, rec) in &mut t.records {
+        // A failed run's response cells are empty.
+        let fill = if rec.get(2) == Some(FAILED) {
+            ""
+        } else {
+            "NaN"
+        };
+        let mut old = rec.iter();
+        let fields: Vec<String> = columns
+            .iter()
+            .map(|c| {
+                if missing.contains(&c) {
+                    fill
+                } else {
+                    old.next().unwrap_or("")
+                }
+                .to_string()
+            })
+            .collect();
+        *rec = StringRecord::from(fields);
+    }
+    t.header = columns.to_vec();
+    (t, missing.into_iter().cloned().collect())
 }
 
 fn header_mismatch(file: &str, want: &[String], found: &[String]) -> Error {
@@ -524,7 +615,7 @@ fn execute(
     plan: &Plan,
     run: &PlannedRun,
     campaign: &CampaignOptions,
-) -> (bool, bool, Result<Vec<u8>>) {
+) -> (Option<(String, String)>, bool, Result<Vec<u8>>) {
     let opts = RunOptions {
         vtk_dir: campaign.vtk_dir.as_ref().map(|d| d.join(&run.run_id)),
         picture: None,
@@ -547,7 +638,10 @@ fn execute(
             .any(|r| o.get(r).is_some_and(f64::is_nan))
     });
     (
-        result.is_err(),
+        result
+            .as_ref()
+            .err()
+            .map(|e| (run.run_id.clone(), e.clone())),
         no_value,
         table::run_line(
             run,
@@ -627,6 +721,71 @@ mod tests {
         let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
         assert_eq!((s.skipped, s.done, s.failed), (4, 0, 0));
         assert_eq!(std::fs::read(&opts.out).unwrap(), before);
+    }
+
+    /// A table written before the experiment recorded `noise` (the column cut out of every
+    /// line, one run's line removed) gains the column with NaN in its runs; the run done now
+    /// records it, and the first failure is named. A table that lacks a design column is
+    /// another campaign's and stays as it is.
+    #[test]
+    fn a_table_without_a_response_the_experiment_gained_gets_the_column() {
+        let (_dir, plan, opts) = setup("x,y,fail\n1,1,0\n2,1,1\n3,1,0\n", None);
+        run_campaign(&SleepTest, &plan, &opts).unwrap();
+        let full = read_table(&opts.out).unwrap();
+        let noise = table::column(&full.header, "noise").unwrap();
+        let cut = |keep: &dyn Fn(&StringRecord) -> bool, col: usize| {
+            let drop_col = |r: &StringRecord| {
+                r.iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != col)
+                    .map(|(_, v)| v.to_string())
+                    .collect::<Vec<_>>()
+            };
+            let mut bytes = csv_line(drop_col(&StringRecord::from(full.header.clone()))).unwrap();
+            for (_, r) in full.records.iter().filter(|(_, r)| keep(r)) {
+                bytes.extend(csv_line(drop_col(r)).unwrap());
+            }
+            bytes
+        };
+        std::fs::write(&opts.out, cut(&|r| &r[1] != "2", noise)).unwrap();
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert_eq!(s.added_columns, ["noise"]);
+        assert_eq!((s.skipped, s.done, s.failed), (2, 1, 0));
+        let t = read_table(&opts.out).unwrap();
+        assert_eq!(t.header, full.header);
+        let by_row = |row: &str| {
+            t.records
+                .iter()
+                .find(|(_, r)| &r[1] == row)
+                .unwrap()
+                .1
+                .clone()
+        };
+        assert_eq!(&by_row("0")[noise], "NaN");
+        assert_eq!(&by_row("1")[noise], "");
+        assert_eq!(&by_row("1")[2], "failed");
+        let redone = full.records.iter().find(|(_, r)| &r[1] == "2").unwrap();
+        assert_eq!(by_row("2")[noise], redone.1[noise]);
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        assert!(s.added_columns.is_empty() && s.skipped == 3);
+
+        let x = table::column(&full.header, "x").unwrap();
+        let theirs = cut(&|_| true, x);
+        std::fs::write(&opts.out, &theirs).unwrap();
+        let e = run_campaign(&SleepTest, &plan, &opts)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("header") && e.contains("other columns"), "{e}");
+        assert_eq!(std::fs::read(&opts.out).unwrap(), theirs);
+    }
+
+    #[test]
+    fn a_failure_is_named_in_the_summary() {
+        let (_dir, plan, opts) = setup("x,y,fail\n1,1,0\n2,1,1\n", None);
+        let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
+        let (id, e) = s.first_failure.expect("a failure");
+        assert_eq!(id, plan.rows[1].run_id);
+        assert!(e.contains("second line"), "{e}");
     }
 
     #[test]

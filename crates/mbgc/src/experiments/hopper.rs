@@ -40,7 +40,13 @@
 //!   no steady flow, crater or pile, so `flow_rate`, `beverloo_ratio` and the repose angles
 //!   ([`VOIDED_BY_CLOG`] and the sector angles) are NaN and the run warns; `discharged_fraction` is the avalanche
 //!   before the arch. The event is `clogged` ([`Experiment::events`]), which a propagation
-//!   counts; it is a lower bound of the clogs (a later arch only warns).
+//!   counts.
+//! - a late clog: a discharge that flowed past that share and came to rest with an arch over
+//!   the orifice (`arch_held` > 0, [`clogged_late`]). Its flow rate is that of the flow before
+//!   the arch and stands; the crater and the pile are those of a discharge cut short, not the
+//!   ones seed 000 measures, so the repose angles are NaN ([`VOIDED_BY_LATE_CLOG`]). The event
+//!   is `clogged_late`; `clogged` and `clogged_late` together are the runs whose orifice ended
+//!   blocked.
 //! - an intermittent discharge: the binned flow rate falls below half its peak and rises again
 //!   by a quarter of it ([`intermittent`]): an arch formed and collapsed. It has no steady
 //!   rate, so `flow_rate` and `beverloo_ratio` are NaN ([`VOIDED_BY_INTERMITTENT`]) and the run
@@ -48,7 +54,9 @@
 //!   last bin is not seen).
 //! - diagnostics: `discharged_mass` (kg), `discharged_fraction`, `flow_R2` (of the flow-rate fit),
 //!   `bulk_density` (kg/m^3, settled fill), `beverloo_ratio` (flow_rate over
-//!   [`beverloo_flow_rate`] with the measured bulk density and d50).
+//!   [`beverloo_flow_rate`] with the measured bulk density and d50), `arch_held` (the particles
+//!   at rest wholly over the orifice at the end: 0 after a free discharge, whose crater walls
+//!   stand outside the orifice's edge; NaN when the run ended before it came to rest).
 //! - the flow rate against time: `flow_rate_t1` .. `flow_rate_t8` (kg/s), the mean rate in
 //!   consecutive bins of `flow_bin_width` seconds from the opening of the shutter. The width is
 //!   [`FLOW_BIN_WIDTH`] of the [`nominal_discharge_time`], which does not depend on friction or
@@ -173,6 +181,12 @@ pub const VOIDED_BY_CLOG: [&str; 4] = [
 
 /// The event of a clogged orifice ([`clogged`]).
 pub const CLOGGED: &str = "clogged";
+/// The event of an orifice an arch blocked after a steady flow ([`clogged_late`]).
+pub const CLOGGED_LATE: &str = "clogged_late";
+
+/// The responses a late clog has no value of: the crater and the pile of a discharge an arch
+/// cut short (the sector angles too). Its flow rate, that of the flow before the arch, stands.
+pub const VOIDED_BY_LATE_CLOG: [&str; 2] = ["repose_angle_top", "repose_angle_bottom"];
 /// The event of a discharge that stalled and started again ([`intermittent`]).
 pub const INTERMITTENT: &str = "intermittent";
 
@@ -218,11 +232,18 @@ pub fn intermittent(bins: &[f64]) -> bool {
 /// Whether a discharge that stopped at `discharged_fraction` of the fill clogged: an arch over
 /// the orifice stopped it before half the material standing over the orifice had left
 /// ([`CLOG_SHARE`]). The rule reads only a recorded response, so a table written before runs
-/// were voided is read alike. It is a lower bound of the clogs: an arch that forms later is not
-/// caught (the run warns when it holds particles over the orifice at the end; its flow rate is
-/// that of the flow before it); a flow that stops and starts again is [`intermittent`].
+/// were voided is read alike. An arch that forms later is [`clogged_late`]; a flow that stops
+/// and starts again is [`intermittent`].
 pub fn clogged(discharged_fraction: f64) -> bool {
     discharged_fraction < CLOG_SHARE
+}
+
+/// Whether a discharge that flowed past [`CLOG_SHARE`] came to rest with `arch_held` particles
+/// held over the orifice: an arch that formed late. False when the count is not finite (a run
+/// that ended before it came to rest, or a table written before the hopper recorded it, whose
+/// late arches are then only in the warnings).
+pub fn clogged_late(discharged_fraction: f64, arch_held: f64) -> bool {
+    !clogged(discharged_fraction) && arch_held.is_finite() && arch_held > 0.0
 }
 
 /// Beverloo's mass flow rate W = C rho_b sqrt(g) (D_o - k d)^(5/2), kg/s (SI units; 0 if
@@ -994,6 +1015,8 @@ impl Hopper {
                 x[2] >= z_pass && x[2] < top && x[0].hypot(x[1]) + p.r[i] < geo.orifice_radius
             })
             .count();
+        // Particles still moving over the hole may be falling through it.
+        let arch_held = if settled { held as f64 } else { f64::NAN };
         let t_unit = FLOW_BIN_WIDTH
             * nominal_discharge_time(s.fill_mass, s.rho, 2.0 * geo.orifice_radius, s.d50);
         let bins = binned_flow_rates(&series, t_unit, FLOW_BINS, settled);
@@ -1020,10 +1043,11 @@ impl Hopper {
             flow_rate = f64::NAN;
             top_angles = [f64::NAN; 4];
             bottom_angles = [f64::NAN; 4];
-        } else if settled && held > 0 {
+        } else if clogged_late(discharged_fraction, arch_held) {
             warnings.push(format!(
                 "an arch holds {held} particles over the orifice after {:.1} % of the fill left: \
-                 the discharge stopped by a late clog{}",
+                 the discharge stopped by a late clog; the repose angles are NaN (a crater and \
+                 a pile cut short){}",
                 100.0 * discharged_fraction,
                 if stalled {
                     ""
@@ -1031,12 +1055,17 @@ impl Hopper {
                     "; flow_rate is that of the flow before it"
                 }
             ));
+            top_angles = [f64::NAN; 4];
+            bottom_angles = [f64::NAN; 4];
         }
         let top = finite_mean(&top_angles);
         let bottom = finite_mean(&bottom_angles);
         for (name, a) in [("top", &top_angles), ("bottom", &bottom_angles)] {
             let bad = a.iter().filter(|v| !v.is_finite()).count();
-            if bad > 0 && !clogged(discharged_fraction) {
+            if bad > 0
+                && !clogged(discharged_fraction)
+                && !clogged_late(discharged_fraction, arch_held)
+            {
                 warnings.push(format!(
                     "repose angle {name}: {bad} of 4 sectors had too few surface points"
                 ));
@@ -1061,6 +1090,9 @@ impl Hopper {
                 .map(|n| n.to_string())
                 .zip(sectors),
         );
+        // Last, so that a table written before the hopper recorded it gains only a final
+        // response column.
+        responses.push(("arch_held".into(), arch_held));
         let outcome = Outcome {
             responses,
             diagnostics: Diagnostics {
@@ -1126,7 +1158,7 @@ impl Experiment for Hopper {
     }
 
     fn events(&self) -> Vec<&'static str> {
-        vec![CLOGGED, INTERMITTENT]
+        vec![CLOGGED, CLOGGED_LATE, INTERMITTENT]
     }
 
     fn voided_by(&self, event: &str) -> Vec<&'static str> {
@@ -1136,15 +1168,27 @@ impl Experiment for Hopper {
                 .chain(&SECTOR_ANGLE_NAMES)
                 .copied()
                 .collect(),
+            CLOGGED_LATE => VOIDED_BY_LATE_CLOG
+                .iter()
+                .chain(&SECTOR_ANGLE_NAMES)
+                .copied()
+                .collect(),
             INTERMITTENT => VOIDED_BY_INTERMITTENT.to_vec(),
             _ => Vec::new(),
         }
     }
 
-    /// A clog first: its flow bins (an avalanche, then nothing) never restart.
+    /// A clog first: its flow bins (an avalanche, then nothing) never restart. A late clog
+    /// before a stall: the orifice ended blocked whatever the flow did before.
     fn event_of(&self, value: &dyn Fn(&str) -> Option<f64>) -> Option<&'static str> {
-        if value("discharged_fraction").is_some_and(|f| f.is_finite() && clogged(f)) {
+        let fraction = value("discharged_fraction").filter(|f| f.is_finite());
+        if fraction.is_some_and(clogged) {
             return Some(CLOGGED);
+        }
+        if let (Some(f), Some(h)) = (fraction, value("arch_held")) {
+            if clogged_late(f, h) {
+                return Some(CLOGGED_LATE);
+            }
         }
         let bins: Option<Vec<f64>> = FLOW_BIN_NAMES.iter().map(|n| value(n)).collect();
         bins.filter(|b| intermittent(b)).map(|_| INTERMITTENT)
@@ -1164,6 +1208,7 @@ impl Experiment for Hopper {
         ];
         r.extend(FLOW_BIN_NAMES);
         r.extend(SECTOR_ANGLE_NAMES);
+        r.push("arch_held");
         r
     }
 
@@ -1303,7 +1348,26 @@ mod tests {
         assert_eq!(event(Some(0.085)), None);
         assert_eq!(event(Some(f64::NAN)), None);
         assert_eq!(event(None), None);
-        assert_eq!(hopper.events(), vec!["clogged", "intermittent"]);
+        assert_eq!(
+            hopper.events(),
+            vec!["clogged", "clogged_late", "intermittent"]
+        );
+        // A late arch: the flow passed the line and came to rest with particles held over the
+        // orifice. Without the count (an older table, or a run that never came to rest) it is
+        // not seen; an early clog stays an early clog whatever the count.
+        let late = |f: f64, held: Option<f64>| {
+            hopper.event_of(&|n: &str| match n {
+                "discharged_fraction" => Some(f),
+                "arch_held" => held,
+                _ => None,
+            })
+        };
+        assert_eq!(late(0.088, Some(86.0)), Some("clogged_late"));
+        assert_eq!(late(0.42, Some(1.0)), Some("clogged_late"));
+        assert_eq!(late(0.42, Some(0.0)), None);
+        assert_eq!(late(0.088, Some(f64::NAN)), None);
+        assert_eq!(late(0.088, None), None);
+        assert_eq!(late(0.02, Some(120.0)), Some("clogged"));
     }
 
     /// The stall rule on binned flow rates of real runs (docs/data/propagation/gravel/hopper):

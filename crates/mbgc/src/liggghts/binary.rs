@@ -62,7 +62,12 @@ pub fn run_deck_on(binary: &Path, dir: &Path, input: &str, log: &str, ranks: usi
         .args(args)
         // Open MPI refuses root unless told twice; containers and CI run as root.
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        // Its shared-memory transport copies large messages with process_vm_readv (CMA), which
+        // a container without ptrace rights refuses ("Read -1 ... errno = 1", open-mpi/ompi
+        // #4948) and the run aborts; copying through the shared segment works everywhere and
+        // gives the same numbers.
+        .env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
         c
     } else {
         let mut c = Command::new(binary);

@@ -99,6 +99,7 @@ fn known(name: &str) -> Option<&'static str> {
         "flow_R2" => "R² of the flow-rate fit",
         "beverloo_ratio" => "flow rate / Beverloo flow rate",
         "flow_bin_width" => "flow bin width (s)",
+        "arch_held" => "particles held over the orifice",
         // Wall impact.
         "cnr" => "normal coefficient of restitution",
         "ctr" => "tangential coefficient of restitution",
@@ -168,6 +169,7 @@ mod tests {
             "bulk_density",
             "beverloo_ratio",
             "flow_bin_width",
+            "arch_held",
         ];
         for name in params
             .iter()

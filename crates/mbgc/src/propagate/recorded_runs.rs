@@ -112,6 +112,7 @@ mod tests {
                 "flow_rate" => flow,
                 "repose_angle_top" => top,
                 "discharged_fraction" => fraction,
+                "arch_held" => 0.0,
                 _ => 1.0,
             })
             .collect()
@@ -186,6 +187,47 @@ mod tests {
         assert_eq!(
             runs.event_counts(),
             (3, vec![("clogged", 1), ("intermittent", 1)])
+        );
+    }
+
+    /// Row 8 of the gravel propagation (docs/data/propagation/gravel/hopper_poured): the flow
+    /// stopped at 8.8 % of the fill with 86 particles held over the orifice. It keeps its flow
+    /// rate and loses its angles; a run of a table without the count (NaN) has no late clog.
+    #[test]
+    fn a_late_arch_is_a_late_clog_with_its_flow_rate() {
+        let h = Hopper {
+            class: Default::default(),
+        };
+        let held = h
+            .responses()
+            .iter()
+            .position(|n| *n == "arch_held")
+            .unwrap();
+        let mut late = hopper_row(&h, 1.6, 35.0, 0.088);
+        late[held] = 86.0;
+        let mut old = late.clone();
+        old[held] = f64::NAN;
+        let mut early = hopper_row(&h, 0.9, 30.0, 0.03);
+        early[held] = 120.0;
+        let runs = RecordedRuns::new(
+            &h,
+            vec![
+                Some(late),
+                Some(old),
+                Some(early),
+                Some(hopper_row(&h, 2.5, 44.0, 0.37)),
+            ],
+        );
+        let flow = runs.values("flow_rate");
+        assert_eq!((flow[0], flow[1], flow[3]), (1.6, 1.6, 2.5));
+        assert!(flow[2].is_nan());
+        let top = runs.values("repose_angle_top");
+        assert!(top[0].is_nan() && top[2].is_nan());
+        assert_eq!((top[1], top[3]), (35.0, 44.0));
+        assert!(runs.values("repose_angle_bottom_2")[0].is_nan());
+        assert_eq!(
+            runs.event_counts(),
+            (4, vec![("clogged", 1), ("clogged_late", 1)])
         );
     }
 }
