@@ -48,8 +48,8 @@ pub fn note_added_columns(out: &std::path::Path, s: &mbgc::campaign::Summary) {
     if !s.added_columns.is_empty() {
         eprintln!(
             "{}: added the column(s) {} that the experiment records since the table was \
-             written; its earlier runs have NaN there (to record them for a run, delete its \
-             line and resume)",
+             written, filled for its earlier runs from what their lines tell, NaN where they \
+             cannot (to record a run's value, delete its line and resume)",
             out.display(),
             s.added_columns.join(", ")
         );

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use mbgc::metamodel::noise::replicate_noise;
+use mbgc::metamodel::noise::record_replicate_noise;
 use mbgc::metamodel::Metamodel;
 use mbgc::outputs::refuse_overwriting_inputs;
 use mbgc_output::{say, Output};
@@ -41,34 +41,36 @@ pub fn run(a: &NoiseArgs) -> anyhow::Result<()> {
         ],
     )?;
     let mut model = Metamodel::load(&a.model)?;
-    let responses: Vec<String> = model.responses.iter().map(|r| r.name.clone()).collect();
-    let noise = replicate_noise(
-        &a.validation,
-        &a.replicates,
-        &model.input_names(),
-        &responses,
-    )?;
-    say!(out, "| response | replicate sd | pairs | validation RMSE |");
-    say!(out, "|---|---|---|---|");
-    for (r, n) in model.responses.iter_mut().zip(&noise) {
-        r.replicate_sd = Some(n.sd);
-        r.replicate_pairs = Some(n.pairs);
+    let (noise, notes) = record_replicate_noise(&mut model, &a.validation, &a.replicates)?;
+    for n in &notes {
+        eprintln!("warning: {}: {n}", a.model.display());
+    }
+    say!(
+        out,
+        "| response | replicate sd | pairs | validation RMSE | errors at |"
+    );
+    say!(out, "|---|---|---|---|---|");
+    for (r, n) in model.responses.iter().zip(&noise) {
         say!(
             out,
-            "| {} | {:.4} | {} | {} |",
+            "| {} | {:.4} | {} | {} | {} |",
             n.response,
             n.sd,
             n.pairs,
             r.validation
-                .map_or("-".to_string(), |v| format!("{:.4}", v.rmse))
+                .map_or("-".to_string(), |v| format!("{:.4}", v.rmse)),
+            r.error_reference
+                .map_or("-".to_string(), |f| format!("factor {f}"))
         );
     }
     model.save(&a.out)?;
     say!(out, "wrote {}", a.out.display());
     out.object(&serde_json::json!({
         "out": a.out,
-        "noise": noise.iter().map(|n| serde_json::json!({
-            "response": n.response, "sd": n.sd, "pairs": n.pairs
+        "noise": noise.iter().zip(&model.responses).map(|(n, r)| serde_json::json!({
+            "response": n.response, "sd": n.sd, "pairs": n.pairs,
+            "error_reference": r.error_reference,
         })).collect::<Vec<_>>(),
+        "notes": notes,
     }))
 }

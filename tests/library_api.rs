@@ -410,3 +410,46 @@ fn small_test_sets_and_constant_heavy_equations_are_warned_of() {
         f.warnings
     );
 }
+
+/// The shipped model's bulk density is rho_p times its fitted solid fraction, and its errors were
+/// measured on runs at rho_p 2600 kg/m3: a material of half the density (with half the
+/// stiffness, so every group is the same) gets half the prediction and half the stated error.
+/// The shear angle, which has no factor, is the same at both.
+#[test]
+fn a_bulk_density_error_scales_with_the_particle_density() {
+    let model = Metamodel::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/models/shear_box_wide.json"
+    )))
+    .unwrap();
+    let names = model.input_names();
+    let at = |scale: f64| -> Vec<f64> {
+        names
+            .iter()
+            .map(|n| match n.as_str() {
+                "E_p" | "E_w" => 4e7 * scale,
+                "rho_p" => 2600.0 * scale,
+                "d50" => 10.0,
+                "sigma_ln" => 0.15,
+                "nu_p" => 0.3,
+                _ => 0.4,
+            })
+            .collect()
+    };
+    let (heavy, light) = (at(1.0), at(0.5));
+    let r = |n: &str| model.responses.iter().find(|r| r.name == n).unwrap();
+    let (density, angle) = (r("bulk_density"), r("shear_angle"));
+    assert_eq!(density.error_reference, Some(2600.0));
+    let ratio = |f: &dyn Fn(&[f64]) -> f64| f(&light) / f(&heavy);
+    assert!((ratio(&|x| model.predict_point(density, x)) - 0.5).abs() < 1e-9);
+    let e = |x: &[f64]| model.prediction_error(density, x).unwrap();
+    assert!(
+        (ratio(&e) - 0.5).abs() < 1e-9,
+        "{} {}",
+        e(&light),
+        e(&heavy)
+    );
+    assert!(e(&heavy) > 1.0, "{}", e(&heavy));
+    let a = |x: &[f64]| model.prediction_error(angle, x).unwrap();
+    assert!((ratio(&a) - 1.0).abs() < 1e-9);
+}

@@ -154,10 +154,21 @@ pub fn merge_tables(inputs: &[PathBuf]) -> Result<(Vec<String>, Vec<StringRecord
                     "header",
                     format!(
                         "differs from the header of {first} at column {} ({} vs {}): merge tables \
-                         of one campaign only",
+                         of one campaign only{}",
                         k + 1,
                         t.header.get(k).map(String::as_str).unwrap_or("(none)"),
-                        h.get(k).map(String::as_str).unwrap_or("(none)")
+                        h.get(k).map(String::as_str).unwrap_or("(none)"),
+                        // One table holds every column of the other: a shard written before the
+                        // experiment gained a response.
+                        if h.iter().all(|c| t.header.contains(c))
+                            || t.header.iter().all(|c| h.contains(c))
+                        {
+                            "; if one was written before the experiment recorded more \
+                             responses, resume it with its simulate command first (that adds \
+                             the columns)"
+                        } else {
+                            ""
+                        }
                     ),
                 ));
             }

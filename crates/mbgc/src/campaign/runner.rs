@@ -172,7 +172,7 @@ pub fn run_campaign(
         mut present,
         truncated_bytes,
         added_columns,
-    } = prepare_table(plan, &opts.out)?;
+    } = prepare_table(experiment, plan, &opts.out)?;
     let selected: Vec<&PlannedRun> = plan
         .selected()
         .filter(|r| opts.only.as_ref().is_none_or(|ids| ids.contains(&r.run_id)))
@@ -329,7 +329,7 @@ struct Prepared {
 /// sidecar, and truncates an incomplete last line. A table that lacks only response columns the
 /// experiment gained since it was written gets them (NaN in its runs). Nothing is modified when
 /// the table belongs to another campaign.
-fn prepare_table(plan: &Plan, out: &Path) -> Result<Prepared> {
+fn prepare_table(experiment: &dyn Experiment, plan: &Plan, out: &Path) -> Result<Prepared> {
     let file = out.display().to_string();
     let columns = plan.columns();
     let mut present = HashMap::new();
@@ -337,7 +337,7 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<Prepared> {
     let mut table = if exists { Some(read_table(out)?) } else { None };
     let mut added_columns = Vec::new();
     if let Some(t) = table.take() {
-        let (t, added) = with_added_responses(t, &columns, &plan.responses);
+        let (t, added) = with_added_responses(experiment, t, &columns, &plan.responses);
         table = Some(t);
         added_columns = added;
     }
@@ -544,10 +544,11 @@ fn prepare_table(plan: &Plan, out: &Path) -> Result<Prepared> {
 }
 
 /// The table with the response columns it lacks, when those are all it lacks: `columns`
-/// without them is its header, in order. Each record gets NaN (no value) there, as a run that
-/// measured none would have (its warnings say nothing of it). Returns the table unchanged, and
-/// no names, otherwise.
+/// without them is its header, in order. Each done run gets what its line tells of the value
+/// ([`Experiment::backfill`]), else NaN (no value); a failed run empty cells. Returns the table
+/// unchanged, and no names, otherwise.
 fn with_added_responses(
+    experiment: &dyn Experiment,
     mut t: Table,
     columns: &[String],
     responses: &[String],
@@ -561,23 +562,30 @@ fn with_added_responses(
     if t.header.is_empty() || !only_responses || !rest_in_order {
         return (t, Vec::new());
     }
+    let header = t.header.clone();
     for (_, rec) in &mut t.records {
-        // A failed run's response cells are empty.
-        let fill = if rec.get(2) == Some(FAILED) {
-            ""
-        } else {
-            "NaN"
+        let failed = rec.get(2) == Some(FAILED);
+        let cell = |name: &str| {
+            header
+                .iter()
+                .position(|h| h == name)
+                .and_then(|k| rec.get(k))
+                .map(str::to_string)
         };
         let mut old = rec.iter();
         let fields: Vec<String> = columns
             .iter()
             .map(|c| {
-                if missing.contains(&c) {
-                    fill
+                if !missing.contains(&c) {
+                    old.next().unwrap_or("").to_string()
+                } else if failed {
+                    // A failed run's response cells are empty.
+                    String::new()
                 } else {
-                    old.next().unwrap_or("")
+                    experiment
+                        .backfill(c, &cell)
+                        .map_or_else(|| "NaN".to_string(), table::number)
                 }
-                .to_string()
             })
             .collect();
         *rec = StringRecord::from(fields);

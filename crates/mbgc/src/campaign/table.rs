@@ -34,7 +34,7 @@ where
 }
 
 /// Shortest text that reads back to the same f64 (`NaN`, `inf` included).
-fn number(v: f64) -> String {
+pub fn number(v: f64) -> String {
     format!("{v:?}")
 }
 

@@ -18,7 +18,7 @@ use super::measurements::{owns, switchable_effects, MeasurementSet};
 use super::surrogate::Surrogate;
 use crate::campaign::{experiment_by_name, ExperimentSettings};
 use crate::error::{write_atomic, Error, Result};
-use crate::metamodel::noise::replicate_noise;
+use crate::metamodel::noise::replicate_noise_scaled;
 use crate::metamodel::Metamodel;
 use crate::train::{train, TrainObserver, TrainOutcome, TrainPaths, TrainRequest, TrainStage};
 use mbgc_dem::contact::{EffectSpec, ModelClass, Pair};
@@ -964,15 +964,28 @@ fn round(
     let mut model = *model;
     let noise = replicate_runs(plan, &paths, replicates, opts, observer)
         .and_then(|table| {
-            replicate_noise(
+            let m = &model;
+            let names: Vec<String> = plan.responses.iter().map(|(r, _)| r.clone()).collect();
+            // Each pair brought to the factor the model's errors are read at (its validation
+            // runs' mean rho_p for a bulk density).
+            replicate_noise_scaled(
                 &paths.validation_table,
                 &table,
-                &model.input_names(),
-                &plan
-                    .responses
-                    .iter()
-                    .map(|(r, _)| r.clone())
-                    .collect::<Vec<_>>(),
+                &m.input_names(),
+                &names,
+                &|k, x| {
+                    m.responses
+                        .iter()
+                        .find(|r| r.name == names[k])
+                        .map_or(1.0, |r| {
+                            let s = m.error_scale(r, x);
+                            if s.is_finite() && s > 0.0 {
+                                1.0 / s
+                            } else {
+                                1.0
+                            }
+                        })
+                },
             )
         })
         .map_err(|e| {

@@ -42,11 +42,13 @@
 //!   before the arch. The event is `clogged` ([`Experiment::events`]), which a propagation
 //!   counts.
 //! - a late clog: a discharge that flowed past that share and came to rest with an arch over
-//!   the orifice (`arch_held` > 0, [`clogged_late`]). Its flow rate is that of the flow before
-//!   the arch and stands; the crater and the pile are those of a discharge cut short, not the
-//!   ones seed 000 measures, so the repose angles are NaN ([`VOIDED_BY_LATE_CLOG`]). The event
-//!   is `clogged_late`; `clogged` and `clogged_late` together are the runs whose orifice ended
-//!   blocked.
+//!   the orifice (`arch_held` > 0, [`clogged_late`]). Its flow, crater and pile are those of a
+//!   discharge an arch cut short, not the ones seed 000 measures: the flow-rate window (10-50 %
+//!   of what left) lies in the first few per cent of the fill, where the arch was forming (row
+//!   8 of the gravel propagation, stopped at 8.8 %, ran at 1.09 kg/s against 1.66 or more for
+//!   every free discharge). So the same responses as a clog's are NaN ([`VOIDED_BY_CLOG`]).
+//!   The event is `clogged_late`; `clogged` and `clogged_late` together are the runs whose
+//!   orifice ended blocked.
 //! - an intermittent discharge: the binned flow rate falls below half its peak and rises again
 //!   by a quarter of it ([`intermittent`]): an arch formed and collapsed. It has no steady
 //!   rate, so `flow_rate` and `beverloo_ratio` are NaN ([`VOIDED_BY_INTERMITTENT`]) and the run
@@ -184,9 +186,6 @@ pub const CLOGGED: &str = "clogged";
 /// The event of an orifice an arch blocked after a steady flow ([`clogged_late`]).
 pub const CLOGGED_LATE: &str = "clogged_late";
 
-/// The responses a late clog has no value of: the crater and the pile of a discharge an arch
-/// cut short (the sector angles too). Its flow rate, that of the flow before the arch, stands.
-pub const VOIDED_BY_LATE_CLOG: [&str; 2] = ["repose_angle_top", "repose_angle_bottom"];
 /// The event of a discharge that stalled and started again ([`intermittent`]).
 pub const INTERMITTENT: &str = "intermittent";
 
@@ -243,7 +242,10 @@ pub fn clogged(discharged_fraction: f64) -> bool {
 /// that ended before it came to rest, or a table written before the hopper recorded it, whose
 /// late arches are then only in the warnings).
 pub fn clogged_late(discharged_fraction: f64, arch_held: f64) -> bool {
-    !clogged(discharged_fraction) && arch_held.is_finite() && arch_held > 0.0
+    discharged_fraction.is_finite()
+        && !clogged(discharged_fraction)
+        && arch_held.is_finite()
+        && arch_held > 0.0
 }
 
 /// Beverloo's mass flow rate W = C rho_b sqrt(g) (D_o - k d)^(5/2), kg/s (SI units; 0 if
@@ -1044,17 +1046,15 @@ impl Hopper {
             top_angles = [f64::NAN; 4];
             bottom_angles = [f64::NAN; 4];
         } else if clogged_late(discharged_fraction, arch_held) {
+            // The wording up to the count is what `backfill` reads in tables from before the
+            // column.
             warnings.push(format!(
                 "an arch holds {held} particles over the orifice after {:.1} % of the fill left: \
-                 the discharge stopped by a late clog; the repose angles are NaN (a crater and \
-                 a pile cut short){}",
+                 the discharge stopped by a late clog; flow_rate, beverloo_ratio and the repose \
+                 angles are NaN (a flow, a crater and a pile cut short)",
                 100.0 * discharged_fraction,
-                if stalled {
-                    ""
-                } else {
-                    "; flow_rate is that of the flow before it"
-                }
             ));
+            flow_rate = f64::NAN;
             top_angles = [f64::NAN; 4];
             bottom_angles = [f64::NAN; 4];
         }
@@ -1168,7 +1168,7 @@ impl Experiment for Hopper {
                 .chain(&SECTOR_ANGLE_NAMES)
                 .copied()
                 .collect(),
-            CLOGGED_LATE => VOIDED_BY_LATE_CLOG
+            CLOGGED_LATE => VOIDED_BY_CLOG
                 .iter()
                 .chain(&SECTOR_ANGLE_NAMES)
                 .copied()
@@ -1192,6 +1192,23 @@ impl Experiment for Hopper {
         }
         let bins: Option<Vec<f64>> = FLOW_BIN_NAMES.iter().map(|n| value(n)).collect();
         bins.filter(|b| intermittent(b)).map(|_| INTERMITTENT)
+    }
+
+    /// `arch_held` of a run from before the column: the run warned of every late arch with
+    /// its count, so a settled flowing run without that warning held none. An early clog's
+    /// count and an unsettled run's are not known.
+    fn backfill(&self, response: &str, cell: &dyn Fn(&str) -> Option<String>) -> Option<f64> {
+        if response != "arch_held" {
+            return None;
+        }
+        if let Some(w) = cell("warnings") {
+            if let Some(rest) = w.split("an arch holds ").nth(1) {
+                return rest.split(' ').next().and_then(|n| n.parse::<f64>().ok());
+            }
+        }
+        let fraction = cell("discharged_fraction").and_then(|v| v.parse::<f64>().ok())?;
+        (cell("settled").as_deref() == Some("true") && fraction.is_finite() && !clogged(fraction))
+            .then_some(0.0)
     }
 
     fn responses(&self) -> Vec<&'static str> {
@@ -1368,6 +1385,50 @@ mod tests {
         assert_eq!(late(0.088, Some(f64::NAN)), None);
         assert_eq!(late(0.088, None), None);
         assert_eq!(late(0.02, Some(120.0)), Some("clogged"));
+        assert!(!clogged_late(f64::NAN, 3.0));
+    }
+
+    /// A table from before `arch_held`: the count of a late arch is read from the run's
+    /// warning (row 51 of docs/data/propagation/gravel/hopper/runs.csv), a settled flowing run
+    /// without one held none, and an early clog or an unsettled run is not known.
+    #[test]
+    fn an_old_line_tells_the_arch_it_warned_of() {
+        let hopper = Hopper {
+            class: ModelClass::default(),
+        };
+        let line = |warnings: &str, settled: &str, fraction: &str| {
+            let (w, s, f) = (
+                warnings.to_string(),
+                settled.to_string(),
+                fraction.to_string(),
+            );
+            move |n: &str| match n {
+                "warnings" => Some(w.clone()),
+                "settled" => Some(s.clone()),
+                "discharged_fraction" => Some(f.clone()),
+                _ => None,
+            }
+        };
+        let row51 = line(
+            "an arch holds 190 particles over the orifice after 5.1 % of the fill left: the \
+             discharge stopped by a late clog; flow_rate is that of the flow before it",
+            "true",
+            "0.051",
+        );
+        assert_eq!(hopper.backfill("arch_held", &row51), Some(190.0));
+        assert_eq!(hopper.backfill("flow_rate", &row51), None);
+        assert_eq!(
+            hopper.backfill("arch_held", &line("", "true", "0.42")),
+            Some(0.0)
+        );
+        assert_eq!(
+            hopper.backfill("arch_held", &line("", "false", "0.42")),
+            None
+        );
+        assert_eq!(
+            hopper.backfill("arch_held", &line("", "true", "0.02")),
+            None
+        );
     }
 
     /// The stall rule on binned flow rates of real runs (docs/data/propagation/gravel/hopper):

@@ -177,6 +177,14 @@ pub trait Experiment: Send + Sync {
     fn voided_by(&self, _event: &str) -> Vec<&'static str> {
         self.calibration_responses()
     }
+    /// The value of `response`, which the experiment records since a table was written, for a
+    /// run of that table, from what its line holds (`cell` gives a cell by column name, the
+    /// `warnings` and `settled` columns included): `None` when the line cannot tell (the cell
+    /// then holds NaN). A hopper's late arch, for one, was named in the warnings before it had
+    /// a column.
+    fn backfill(&self, _response: &str, _cell: &dyn Fn(&str) -> Option<String>) -> Option<f64> {
+        None
+    }
     /// Which of [`Experiment::events`] a finished run had, from its recorded responses (`value`
     /// gives one by name, `None` when the table lacks it). The run itself already left its
     /// calibration responses NaN; reading the event from what a table records lets a table

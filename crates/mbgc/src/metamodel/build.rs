@@ -731,6 +731,8 @@ fn fit_response(
         error_model: None,
         replicate_sd: None,
         replicate_pairs: None,
+        // Set with the error model, from the validation runs ([`Metamodel::fit_error_models`]).
+        error_reference: None,
     };
     let splits = ResponseSplits {
         response: target.to_string(),

@@ -261,6 +261,14 @@ pub struct ResponseModel {
     /// loose estimate, which [`super::noise::lower_bound`] allows for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replicate_pairs: Option<usize>,
+    /// For a response that is a factor times its fitted group (bulk density = rho_p phi): the
+    /// factor's value on the runs the validation RMSE, the error model and the replicate sd were
+    /// measured on (a campaign that held rho_p at 2600 kg/m3: 2600). Those errors are in the
+    /// response's unit there; at another factor they scale with it, as the prediction does (a
+    /// material of rho_p 500 misses by a fifth as many kg/m3). `None`: not scaled (no factor,
+    /// or a file from before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error_reference: Option<f64>,
 }
 
 /// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
@@ -500,6 +508,24 @@ impl Metamodel {
             ));
         }
         for r in &m.responses {
+            if let Some(v) = r.error_reference {
+                let factor = r.grouped.as_ref().and_then(|g| g.factor.as_ref());
+                if factor.is_none() || !(v.is_finite() && v > 0.0) {
+                    return Err(Error::input(
+                        &file,
+                        format!("responses.{}.error_reference", r.name),
+                        if factor.is_none() {
+                            format!(
+                                "none: the response has no factor to scale its errors by, got {v}"
+                            )
+                        } else {
+                            format!(
+                                "the factor's value (> 0) where the errors were measured, got {v}"
+                            )
+                        },
+                    ));
+                }
+            }
             if let Some(v) = r.replicate_sd {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(Error::input(
@@ -1302,13 +1328,30 @@ impl Metamodel {
     /// added (in quadrature).
     pub fn error_at(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
         let e = response.error_model.as_ref()?;
+        let scale = self.error_scale(response, x);
         Some(match self.beyond(response, x) {
-            Some(b) => e.sd(&self.unit(&b.clamped)).hypot(b.sd),
-            None if self.rigid_limit.is_some() => e
-                .sd(&self.unit(x))
-                .hypot(self.inside_similarity_sd(response, x)),
-            None => e.sd(&self.unit(x)),
+            Some(b) => (scale * e.sd(&self.unit(&b.clamped))).hypot(b.sd),
+            None if self.rigid_limit.is_some() => {
+                (scale * e.sd(&self.unit(x))).hypot(self.inside_similarity_sd(response, x))
+            }
+            None => scale * e.sd(&self.unit(x)),
         })
+    }
+
+    /// How the errors measured at the response's [`ResponseModel::error_reference`] scale at
+    /// `x`: the factor there over the reference (1 without one).
+    pub fn error_scale(&self, response: &ResponseModel, x: &[f64]) -> f64 {
+        match response.error_reference {
+            Some(r) => {
+                let f = self.factor_at(response, x);
+                if f.is_finite() && f > 0.0 {
+                    f / r
+                } else {
+                    1.0
+                }
+            }
+            None => 1.0,
+        }
     }
 
     /// The error of a prediction at `x`: the equation's own error there ([`Metamodel::error_at`])
@@ -1316,7 +1359,11 @@ impl Metamodel {
     /// rigid limit's group the limit's scatter is included. `None`: the model states no error.
     pub fn prediction_error(&self, response: &ResponseModel, x: &[f64]) -> Option<f64> {
         self.error_at(response, x).or_else(|| {
-            let rmse = response.validation.or(response.test).map(|v| v.rmse);
+            let scale = self.error_scale(response, x);
+            let rmse = response
+                .validation
+                .or(response.test)
+                .map(|v| scale * v.rmse);
             let extra = self.extrapolation_sd(response, x);
             match rmse {
                 Some(r) => Some(r.hypot(extra)),
@@ -1341,12 +1388,36 @@ impl Metamodel {
         for k in 0..self.responses.len() {
             let observed = validation.column(&self.responses[k].name)?.to_vec();
             let predicted = self.predict(&self.responses[k], &cols);
+            // A response with a factor misses in proportion to it: the residuals are brought to
+            // the runs' mean factor, where the error model then holds.
+            let has_factor = self.responses[k]
+                .grouped
+                .as_ref()
+                .is_some_and(|g| g.factor.is_some());
+            let factors: Vec<f64> = (0..n)
+                .map(|i| {
+                    let x: Vec<f64> = cols.iter().map(|c| c[i]).collect();
+                    self.factor_at(&self.responses[k], &x)
+                })
+                .collect();
+            let usable: Vec<f64> = factors
+                .iter()
+                .copied()
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .collect();
+            let reference = (has_factor && !usable.is_empty())
+                .then(|| usable.iter().sum::<f64>() / usable.len() as f64);
             let r: Vec<f64> = observed
                 .iter()
                 .zip(&predicted)
-                .map(|(o, p)| o - p)
+                .zip(&factors)
+                .map(|((o, p), f)| match reference {
+                    Some(rf) => (o - p) * rf / f,
+                    None => o - p,
+                })
                 .collect();
             self.responses[k].error_model = ErrorModel::fit(&u, &r);
+            self.responses[k].error_reference = reference;
         }
         Ok(())
     }

@@ -4,7 +4,9 @@
 
 use std::path::Path;
 
+use super::model::Metamodel;
 use super::table::read_columns_skipping_nan;
+use super::training_table::TrainingTable;
 use crate::error::{Error, Result};
 
 /// The noise that a replicate sd `sd` from `pairs` pairs is at least, with 95 % confidence
@@ -44,13 +46,26 @@ pub fn replicate_noise(
     inputs: &[String],
     responses: &[String],
 ) -> Result<Vec<ReplicateNoise>> {
+    replicate_noise_scaled(validation, replicates, inputs, responses, &|_, _| 1.0)
+}
+
+/// [`replicate_noise`] with each pair's difference multiplied by `scale(response index, the
+/// pair's inputs)`: a response that grows with a factor of the inputs (bulk density with rho_p)
+/// is brought to one reference value of it.
+pub fn replicate_noise_scaled(
+    validation: &Path,
+    replicates: &Path,
+    inputs: &[String],
+    responses: &[String],
+    scale: &dyn Fn(usize, &[f64]) -> f64,
+) -> Result<Vec<ReplicateNoise>> {
     let same = |a: &[f64], b: &[f64]| {
         a.iter()
             .zip(b)
             .all(|(x, y)| (x - y).abs() <= 1e-12 * x.abs().max(y.abs()))
     };
     let mut out = Vec::new();
-    for r in responses {
+    for (k, r) in responses.iter().enumerate() {
         let mut names = inputs.to_vec();
         names.push(r.clone());
         let read = |p: &Path| -> Result<Vec<Vec<f64>>> {
@@ -67,7 +82,7 @@ pub fn replicate_noise(
             .filter_map(|b| {
                 v.iter()
                     .find(|a| same(&a[..n], &b[..n]))
-                    .map(|a| a[n] - b[n])
+                    .map(|a| (a[n] - b[n]) * scale(k, &a[..n]))
             })
             .collect();
         if d.is_empty() {
@@ -89,6 +104,84 @@ pub fn replicate_noise(
         });
     }
     Ok(out)
+}
+
+/// Records in `model` each response's replicate sd from `replicates` (runs at inputs of the
+/// `validation` runs with another seed). A response with a factor (bulk density = rho_p phi)
+/// keeps its errors at its [`super::ResponseModel::error_reference`]: when the model has none
+/// yet (a file from before it was recorded) it is set to the validation runs' mean factor, where
+/// the model's validation RMSE and error model were measured, and each pair's difference is
+/// brought to it. Returns notes for the caller: a reference set now over validation runs whose
+/// factor varies (the old error model then mixed them).
+pub fn record_replicate_noise(
+    model: &mut Metamodel,
+    validation: &Path,
+    replicates: &Path,
+) -> Result<(Vec<ReplicateNoise>, Vec<String>)> {
+    let inputs = model.input_names();
+    let responses: Vec<String> = model.responses.iter().map(|r| r.name.clone()).collect();
+    let mut notes = Vec::new();
+    let has_factor = |m: &Metamodel, k: usize| {
+        m.responses[k]
+            .grouped
+            .as_ref()
+            .is_some_and(|g| g.factor.is_some())
+    };
+    if (0..responses.len())
+        .any(|k| has_factor(model, k) && model.responses[k].error_reference.is_none())
+    {
+        let t = TrainingTable::read_csv(validation, &inputs, &responses)?;
+        let cols = inputs
+            .iter()
+            .map(|i| t.column(i).map(<[f64]>::to_vec))
+            .collect::<Result<Vec<_>>>()?;
+        for (k, name) in responses.iter().enumerate() {
+            if !has_factor(model, k) || model.responses[k].error_reference.is_some() {
+                continue;
+            }
+            let f: Vec<f64> = (0..t.rows())
+                .map(|i| {
+                    let x: Vec<f64> = cols.iter().map(|c| c[i]).collect();
+                    model.factor_at(&model.responses[k], &x)
+                })
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .collect();
+            if f.is_empty() {
+                continue;
+            }
+            let mean = f.iter().sum::<f64>() / f.len() as f64;
+            let (lo, hi) = f
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+            if hi - lo > 1e-9 * mean {
+                notes.push(format!(
+                    "{}: the validation runs' factor ranges over [{lo}, {hi}]; its errors are \
+                     now read at their mean {mean}, but the error model was fitted on them \
+                     unscaled (train again to fit it at one reference)",
+                    name
+                ));
+            }
+            model.responses[k].error_reference = Some(mean);
+        }
+    }
+    let noise = {
+        let m: &Metamodel = model;
+        replicate_noise_scaled(validation, replicates, &inputs, &responses, &|k, x| {
+            let r = &m.responses[k];
+            let e = r.error_reference.unwrap_or(1.0);
+            let f = m.factor_at(r, x);
+            if r.error_reference.is_some() && f.is_finite() && f > 0.0 {
+                e / f
+            } else {
+                1.0
+            }
+        })?
+    };
+    for (r, n) in model.responses.iter_mut().zip(&noise) {
+        r.replicate_sd = Some(n.sd);
+        r.replicate_pairs = Some(n.pairs);
+    }
+    Ok((noise, notes))
 }
 
 #[cfg(test)]

@@ -226,8 +226,11 @@ fn line_shifts(
     // One run's noise variance in the fitted unit, at its 95 % lower bound (only what surely
     // is noise is taken off); unknown noise is taken as none (the scatter then keeps it, which
     // errs on the safe side).
+    // The sd was measured at the response's error reference (rho_p of its runs), not here.
     let var = resp.replicate_sd.map_or(0.0, |sd| {
-        (super::noise::lower_bound(sd, resp.replicate_pairs) / factor).powi(2)
+        (super::noise::lower_bound(sd, resp.replicate_pairs)
+            / resp.error_reference.unwrap_or(factor))
+        .powi(2)
     });
     let beyond: Vec<&(f64, f64, usize)> = means
         .iter()
@@ -376,7 +379,9 @@ pub fn fit_cohesion(
         for (r, resp) in model.responses.iter().enumerate() {
             let factor = model.factor_at(resp, &x);
             let var = resp.replicate_sd.map_or(0.0, |sd| {
-                (super::noise::lower_bound(sd, resp.replicate_pairs) / factor).powi(2)
+                (super::noise::lower_bound(sd, resp.replicate_pairs)
+                    / resp.error_reference.unwrap_or(factor))
+                .powi(2)
             });
             let (Some((ye_c, ne_c)), Some((ye_0, ne_0))) = (mean(k_e, c_e, r), mean(k_e, 0.0, r))
             else {

@@ -342,7 +342,15 @@ pub fn copy_table(old_table: &Path, plan: &Plan, out: &Path, ext: &Extension) ->
             f.push(v);
         }
         for name in header.iter().skip(plan.identity_len() + plan.inputs.len()) {
-            let mut v = col(name).map(|c| rec[c].to_string()).unwrap_or_default();
+            let mut v = col(name).map(|c| rec[c].to_string()).unwrap_or_else(|| {
+                // A response the experiment gained since the old table was written: a done run
+                // has no value of it (NaN), a failed one no cells at all.
+                if plan.responses.iter().any(|r| r == name) && &rec[2] == "done" {
+                    "NaN".to_string()
+                } else {
+                    String::new()
+                }
+            });
             if name == "warnings" {
                 let note = format!(
                     "copied from {file} row {row}, run by {} {}",
