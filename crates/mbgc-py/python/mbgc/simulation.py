@@ -160,10 +160,20 @@ def simulate(
         info["out"] = None
     failed = info["failed"] + info["failed_before"]
     if failed:
+        first = info.get("first_failure")
         warnings.warn(
             f"{failed} of the {info['planned']} runs of {info['out'] or 'the campaign'} failed "
             f"({info['failed']} in this call, {info['failed_before']} earlier): they have "
-            "status=failed and their reason in the error column; rerun with retry_failed=True",
+            "status=failed and their reason in the error column; rerun with retry_failed=True"
+            + (f"; the first failed here, run {first['run_id']}: {first['error']}" if first else ""),
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    if info.get("added_columns"):
+        warnings.warn(
+            f"{info['out']}: added the column(s) {', '.join(info['added_columns'])} that the "
+            "experiment records since the table was written, filled for its earlier runs from "
+            "what their lines tell, NaN where they cannot",
             RuntimeWarning,
             stacklevel=2,
         )
