@@ -686,6 +686,16 @@ mod tests {
     use crate::campaign::registry::sleep_test::SleepTest;
     use crate::campaign::registry::ExperimentSettings;
 
+    /// The line of design row `row` in a table.
+    fn line_of(t: &Table, row: &str) -> StringRecord {
+        t.records
+            .iter()
+            .find(|(_, r)| &r[1] == row)
+            .unwrap()
+            .1
+            .clone()
+    }
+
     fn setup(design: &str, shard: Option<Shard>) -> (tempfile::TempDir, Plan, CampaignOptions) {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path().join("design.csv");
@@ -711,14 +721,7 @@ mod tests {
         assert_eq!((s.planned, s.done, s.failed, s.skipped), (4, 2, 2, 0));
         let t = read_table(&opts.out).unwrap();
         let err = table::column(&t.header, "error").unwrap();
-        let by_row = |row: &str| {
-            t.records
-                .iter()
-                .find(|(_, r)| &r[1] == row)
-                .unwrap()
-                .1
-                .clone()
-        };
+        let by_row = |row: &str| line_of(&t, row);
         assert_eq!(&by_row("1")[2], "failed");
         assert!(by_row("1")[err].contains(",\nsecond line"));
         assert_eq!(&by_row("2")[2], "failed");
@@ -761,14 +764,7 @@ mod tests {
         assert_eq!((s.skipped, s.done, s.failed), (2, 1, 0));
         let t = read_table(&opts.out).unwrap();
         assert_eq!(t.header, full.header);
-        let by_row = |row: &str| {
-            t.records
-                .iter()
-                .find(|(_, r)| &r[1] == row)
-                .unwrap()
-                .1
-                .clone()
-        };
+        let by_row = |row: &str| line_of(&t, row);
         assert_eq!(&by_row("0")[noise], "NaN");
         assert_eq!(&by_row("1")[noise], "");
         assert_eq!(&by_row("1")[2], "failed");
