@@ -511,6 +511,19 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
                 r.elapsed_s
             ),
         );
+        if !r.added_columns.is_empty() {
+            // The table's bytes changed, so a fit stamped on the old ones is redone.
+            observer.note(
+                TrainStage::Simulate,
+                &format!(
+                    "{}: added the column(s) {} that the experiment records since the table was \
+                     written, filled for its earlier runs from what their lines tell (NaN where \
+                     they cannot)",
+                    table.display(),
+                    r.added_columns.join(", ")
+                ),
+            );
+        }
         if req.shard.is_none() {
             let present = table_run_ids(table)?;
             let missing = p
