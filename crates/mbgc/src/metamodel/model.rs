@@ -271,6 +271,14 @@ pub struct ResponseModel {
     pub error_reference: Option<f64>,
 }
 
+impl ResponseModel {
+    /// Whether the response is a factor times its fitted group (bulk density = rho_p phi), whose
+    /// errors then scale with the factor ([`ResponseModel::error_reference`]).
+    pub fn has_factor(&self) -> bool {
+        self.grouped.as_ref().is_some_and(|g| g.factor.is_some())
+    }
+}
+
 /// An equation in dimensionless groups: `fitted = equation` over the group and input symbols.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GroupedEquation {
@@ -509,12 +517,11 @@ impl Metamodel {
         }
         for r in &m.responses {
             if let Some(v) = r.error_reference {
-                let factor = r.grouped.as_ref().and_then(|g| g.factor.as_ref());
-                if factor.is_none() || !(v.is_finite() && v > 0.0) {
+                if !(r.has_factor() && v.is_finite() && v > 0.0) {
                     return Err(Error::input(
                         &file,
                         format!("responses.{}.error_reference", r.name),
-                        if factor.is_none() {
+                        if !r.has_factor() {
                             format!(
                                 "none: the response has no factor to scale its errors by, got {v}"
                             )
@@ -1390,10 +1397,7 @@ impl Metamodel {
             let predicted = self.predict(&self.responses[k], &cols);
             // A response with a factor misses in proportion to it: the residuals are brought to
             // the runs' mean factor, where the error model then holds.
-            let has_factor = self.responses[k]
-                .grouped
-                .as_ref()
-                .is_some_and(|g| g.factor.is_some());
+            let has_factor = self.responses[k].has_factor();
             let factors: Vec<f64> = (0..n)
                 .map(|i| {
                     let x: Vec<f64> = cols.iter().map(|c| c[i]).collect();

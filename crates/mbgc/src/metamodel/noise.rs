@@ -121,12 +121,7 @@ pub fn record_replicate_noise(
     let inputs = model.input_names();
     let responses: Vec<String> = model.responses.iter().map(|r| r.name.clone()).collect();
     let mut notes = Vec::new();
-    let has_factor = |m: &Metamodel, k: usize| {
-        m.responses[k]
-            .grouped
-            .as_ref()
-            .is_some_and(|g| g.factor.is_some())
-    };
+    let has_factor = |m: &Metamodel, k: usize| m.responses[k].has_factor();
     if (0..responses.len())
         .any(|k| has_factor(model, k) && model.responses[k].error_reference.is_none())
     {
@@ -167,11 +162,10 @@ pub fn record_replicate_noise(
     let noise = {
         let m: &Metamodel = model;
         replicate_noise_scaled(validation, replicates, &inputs, &responses, &|k, x| {
-            let r = &m.responses[k];
-            let e = r.error_reference.unwrap_or(1.0);
-            let f = m.factor_at(r, x);
-            if r.error_reference.is_some() && f.is_finite() && f > 0.0 {
-                e / f
+            // Into the reference's unit: the inverse of what a prediction's error is scaled by.
+            let s = m.error_scale(&m.responses[k], x);
+            if s.is_finite() && s > 0.0 {
+                1.0 / s
             } else {
                 1.0
             }
