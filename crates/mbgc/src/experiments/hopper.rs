@@ -43,16 +43,17 @@
 //!   counts.
 //! - a late clog: a discharge that flowed past that share and came to rest with an arch over
 //!   the orifice (`arch_held` > 0, [`clogged_late`]). Its flow, crater and pile are those of a
-//!   discharge an arch cut short, not the ones seed 000 measures: the flow-rate window (10-50 %
-//!   of what left) lies in the first few per cent of the fill, where the arch was forming (row
-//!   8 of the gravel propagation, stopped at 8.8 %, ran at 1.09 kg/s against 1.66 or more for
-//!   every free discharge). So the same responses as a clog's are NaN ([`VOIDED_BY_CLOG`]).
+//!   discharge an arch cut short, not the ones seed 000 measures: after an early arch the
+//!   flow-rate window (10-50 % of what left) lies in the first few per cent of the fill, where
+//!   the arch was forming (row 8 of the gravel propagation, stopped at 8.8 %, ran at 1.09 kg/s
+//!   against 1.66 or more for every free discharge). So the same responses as a clog's are NaN
+//!   ([`VOIDED_BY_CLOG`]).
 //!   The event is `clogged_late`; `clogged` and `clogged_late` together are the runs whose
 //!   orifice ended blocked.
 //! - an intermittent discharge: the binned flow rate falls below half its peak and rises again
 //!   by a quarter of it ([`intermittent`]): an arch formed and collapsed. It has no steady
 //!   rate, so `flow_rate` and `beverloo_ratio` are NaN ([`VOIDED_BY_INTERMITTENT`]) and the run
-//!   warns; the angles stand. The event is `intermittent`, also a lower bound (a stall after the
+//!   warns; the angles stand. The event is `intermittent`, a lower bound (a stall after the
 //!   last bin is not seen).
 //! - diagnostics: `discharged_mass` (kg), `discharged_fraction`, `flow_R2` (of the flow-rate fit),
 //!   `bulk_density` (kg/m^3, settled fill), `beverloo_ratio` (flow_rate over
