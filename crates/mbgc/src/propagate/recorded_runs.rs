@@ -195,7 +195,7 @@ mod tests {
     /// rate and its angles as a clog does; a run of a table without the count (NaN) has no late
     /// clog.
     #[test]
-    fn a_late_arch_is_a_late_clog_with_its_flow_rate() {
+    fn a_late_arch_is_a_late_clog_voided_as_a_clog() {
         let h = Hopper {
             class: Default::default(),
         };
