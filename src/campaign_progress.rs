@@ -42,16 +42,9 @@ pub fn bar() -> ObserverHandle {
     ObserverHandle::new(Bar(bar))
 }
 
-/// Tells that `run_campaign` added response columns to the table at `out` (a table written
-/// before the experiment recorded them): its earlier runs have no value there.
+/// Tells that `run_campaign` added response columns to the table at `out`.
 pub fn note_added_columns(out: &std::path::Path, s: &mbgc::campaign::Summary) {
-    if !s.added_columns.is_empty() {
-        eprintln!(
-            "{}: added the column(s) {} that the experiment records since the table was \
-             written, filled for its earlier runs from what their lines tell, NaN where they \
-             cannot (to record a run's value, delete its line and resume)",
-            out.display(),
-            s.added_columns.join(", ")
-        );
+    if let Some(note) = s.added_columns_note(out) {
+        eprintln!("{note}");
     }
 }

@@ -124,6 +124,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                     ..CampaignOptions::new(a.dir.join(c.file), 1)
                 },
             )?;
+            if let Some(note) = s.added_columns_note(&a.dir.join(c.file)) {
+                eprintln!("{note}");
+            }
             if s.done + s.failed > 0 {
                 eprintln!(
                     "{}: row {row} {} in {:.1} s",

@@ -101,6 +101,21 @@ pub struct Summary {
 }
 
 impl Summary {
+    /// What to tell the user when this invocation widened the table at `out` with response
+    /// columns the experiment records since the table was written (`None` when it did not):
+    /// its earlier runs hold what their lines tell, NaN where they cannot.
+    pub fn added_columns_note(&self, out: &Path) -> Option<String> {
+        (!self.added_columns.is_empty()).then(|| {
+            format!(
+                "{}: added the column(s) {} that the experiment records since the table was \
+                 written, filled for its earlier runs from what their lines tell, NaN where they \
+                 cannot (to record a run's value, delete its line and resume)",
+                out.display(),
+                self.added_columns.join(", ")
+            )
+        })
+    }
+
     /// The summary as `mbgc simulate --json` prints it: the table `out`, what `plan` ran it
     /// with, and the counts.
     pub fn json(&self, plan: &Plan, out: &Path) -> serde_json::Value {

@@ -1113,6 +1113,9 @@ fn replicate_runs(
             r.failed
         ),
     );
+    if let Some(note) = r.added_columns_note(&table) {
+        observer.note(TrainStage::Simulate, &note);
+    }
     Ok(table)
 }
 

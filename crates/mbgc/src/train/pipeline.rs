@@ -511,18 +511,8 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
                 r.elapsed_s
             ),
         );
-        if !r.added_columns.is_empty() {
-            // The table's bytes changed, so a fit stamped on the old ones is redone.
-            observer.note(
-                TrainStage::Simulate,
-                &format!(
-                    "{}: added the column(s) {} that the experiment records since the table was \
-                     written, filled for its earlier runs from what their lines tell (NaN where \
-                     they cannot)",
-                    table.display(),
-                    r.added_columns.join(", ")
-                ),
-            );
+        if let Some(note) = r.added_columns_note(table) {
+            observer.note(TrainStage::Simulate, &note);
         }
         if req.shard.is_none() {
             let present = table_run_ids(table)?;
@@ -702,9 +692,17 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
     fit_settings.validation = validation;
     // A resumed train whose tables, record and settings are those of the saved fit would only
     // fit the same equations again (a GP search of up to hours): the saved model is kept.
-    let stamp = fit_stamp(req, &record, &paths, &extension)?;
+    // A response the experiment records but this fit does not read leaves the stamp alone: a
+    // table widened with one since the fit (`with_added_responses`) still holds its rows.
+    let unread: Vec<&str> = experiment
+        .responses()
+        .into_iter()
+        .filter(|r| !responses.iter().any(|f| f == r))
+        .collect();
+    let stamp = FitStamp::new(req, &record, &paths, &extension)?;
     if paths.model.exists()
-        && std::fs::read_to_string(&paths.fit_stamp).is_ok_and(|s| s.trim() == stamp)
+        && std::fs::read_to_string(&paths.fit_stamp)
+            .is_ok_and(|s| stamp.matches(&s, &unread).unwrap_or(false))
     {
         let model = Metamodel::load(&paths.model)?;
         observer.note(
@@ -768,7 +766,7 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         )?;
     }
     // Last: a crash before it leaves no stamp, and the next train fits again.
-    write_atomic(&paths.fit_stamp, stamp.as_bytes())?;
+    write_atomic(&paths.fit_stamp, stamp.text().as_bytes())?;
     Ok(TrainOutcome::Fitted {
         model: Box::new(model),
         paths,
@@ -817,53 +815,174 @@ fn table_run_ids(table: &Path) -> Result<std::collections::HashSet<String>> {
 
 /// The fingerprint of a fit: the version, the record (space, inputs, groups, responses, class,
 /// extension), the GP settings and seed, the flags that change the fit, and the bytes of every
-/// table it reads.
-fn fit_stamp(
-    req: &TrainRequest,
-    record: &TrainRecord,
-    paths: &TrainPaths,
-    extension: &Option<(TrainPaths, Extension)>,
-) -> Result<String> {
-    let mut h = crate::numeric::Fnv1a::default();
-    h.str(env!("CARGO_PKG_VERSION"));
-    // The record without the space's path as typed (`./space.toml` is `space.toml`); the
-    // space file's bytes stand for it, constraints and scales included.
-    let mut record = record.clone();
-    record.space = String::new();
-    // Likewise the other files as typed: their bytes are hashed below. The record holds the
-    // groups left unread or unbounded (absent when none, so older stamps still match).
-    record.correct = record.correct.map(|_| String::new());
-    for pair in &mut record.also_fit {
-        *pair = (String::new(), String::new());
-    }
-    h.str(&serde_json::to_string(&record).map_err(|e| Error::invalid(e.to_string()))?);
-    h.str(&format!(
-        "{:?} seed {} correction {} no_similarity {}",
-        req.config, req.seed, req.correction, req.no_similarity
-    ));
-    let mut files = vec![req.space.clone(), paths.table.clone()];
-    if req.validation > 0 {
-        files.push(paths.validation_table.clone());
-    }
-    for (t, v) in &req.also_fit {
-        files.push(t.clone());
-        if req.validation > 0 {
-            files.push(v.clone());
+/// file it reads. The stamp file holds the hash and, for each campaign table, its header then.
+struct FitStamp {
+    /// The hash of everything but the files.
+    settings: crate::numeric::Fnv1a,
+    /// Each file the fit reads, with its bytes.
+    files: Vec<(PathBuf, Vec<u8>)>,
+}
+
+impl FitStamp {
+    fn new(
+        req: &TrainRequest,
+        record: &TrainRecord,
+        paths: &TrainPaths,
+        extension: &Option<(TrainPaths, Extension)>,
+    ) -> Result<FitStamp> {
+        let mut h = crate::numeric::Fnv1a::default();
+        h.str(env!("CARGO_PKG_VERSION"));
+        // The record without the space's path as typed (`./space.toml` is `space.toml`); the
+        // space file's bytes stand for it, constraints and scales included.
+        let mut record = record.clone();
+        record.space = String::new();
+        // Likewise the other files as typed: their bytes are hashed below. The record holds the
+        // groups left unread or unbounded (absent when none, so older stamps still match).
+        record.correct = record.correct.map(|_| String::new());
+        for pair in &mut record.also_fit {
+            *pair = (String::new(), String::new());
         }
+        h.str(&serde_json::to_string(&record).map_err(|e| Error::invalid(e.to_string()))?);
+        h.str(&format!(
+            "{:?} seed {} correction {} no_similarity {}",
+            req.config, req.seed, req.correction, req.no_similarity
+        ));
+        let mut files = vec![req.space.clone(), paths.table.clone()];
+        if req.validation > 0 {
+            files.push(paths.validation_table.clone());
+        }
+        for (t, v) in &req.also_fit {
+            files.push(t.clone());
+            if req.validation > 0 {
+                files.push(v.clone());
+            }
+        }
+        if let (true, Some((old, _))) = (req.correction, extension) {
+            files.push(old.model.clone());
+        }
+        if let Some(m) = &req.correct {
+            files.push(m.clone());
+        }
+        let files = files
+            .into_iter()
+            .map(|f| {
+                let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
+                Ok((f, bytes))
+            })
+            .collect::<Result<_>>()?;
+        Ok(FitStamp { settings: h, files })
     }
-    if let (true, Some((old, _))) = (req.correction, extension) {
-        files.push(old.model.clone());
+
+    /// The hash over the files' bytes, each transformed by `view` (its index and bytes).
+    fn hash(&self, view: impl Fn(usize, &[u8]) -> Result<Vec<u8>>) -> Result<String> {
+        let mut h = crate::numeric::Fnv1a(self.settings.0);
+        // Contents only: another spelling of the same directory fits the same.
+        for (k, (_, bytes)) in self.files.iter().enumerate() {
+            let bytes = view(k, bytes)?;
+            h.u64(bytes.len() as u64);
+            h.bytes(&bytes);
+        }
+        Ok(format!("{:016x}", h.0))
     }
-    if let Some(m) = &req.correct {
-        files.push(m.clone());
+
+    /// The stamp file's text: the hash, then `header <k> <columns>` for each campaign table
+    /// among the files.
+    fn text(&self) -> String {
+        let mut out = self.hash(|_, b| Ok(b.to_vec())).unwrap_or_default();
+        for (k, (_, bytes)) in self.files.iter().enumerate() {
+            if let Some(h) = campaign_header(bytes) {
+                out.push_str(&format!("\nheader {k} {}", h.join(",")));
+            }
+        }
+        out.push('\n');
+        out
     }
-    // Contents only: another spelling of the same directory fits the same.
-    for f in files {
-        let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
-        h.u64(bytes.len() as u64);
-        h.bytes(&bytes);
+
+    /// Whether the stamp file's `text` was written for these files, where a table may since
+    /// have gained the columns of `unread` responses, which the fit does not read. A stamp file
+    /// of one line (written before the headers were kept) matches the bytes as they are.
+    fn matches(&self, text: &str, unread: &[&str]) -> Result<bool> {
+        let mut lines = text.lines();
+        let hash = lines.next().unwrap_or("").trim();
+        let mut then: Vec<Option<Vec<&str>>> = vec![None; self.files.len()];
+        for l in lines {
+            let Some(rest) = l.strip_prefix("header ") else {
+                continue;
+            };
+            let Some((k, cols)) = rest.split_once(' ') else {
+                return Ok(false);
+            };
+            match k.parse::<usize>() {
+                Ok(k) if k < then.len() => then[k] = Some(cols.split(',').collect()),
+                _ => return Ok(false),
+            }
+        }
+        let projected = self.hash(|k, bytes| {
+            let (Some(then), Some(now)) = (&then[k], campaign_header(bytes)) else {
+                return Ok(bytes.to_vec());
+            };
+            let gained: Vec<&str> = now
+                .iter()
+                .map(String::as_str)
+                .filter(|c| !then.contains(c))
+                .collect();
+            if gained.iter().all(|c| unread.contains(c)) {
+                without_columns(&self.files[k].0, bytes, &gained)
+            } else {
+                Ok(bytes.to_vec())
+            }
+        })?;
+        Ok(projected == hash)
     }
-    Ok(format!("{:016x}", h.0))
+}
+
+/// The header of a campaign table's CSV `bytes` (`None` for another file: a space, a model).
+fn campaign_header(bytes: &[u8]) -> Option<Vec<String>> {
+    let first = bytes.split(|&b| b == b'\n').next()?;
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(first);
+    let h = r.byte_records().next()?.ok()?;
+    let h: Vec<String> = h
+        .iter()
+        .map(|c| String::from_utf8_lossy(c).into_owned())
+        .collect();
+    (h.iter().any(|c| c == "run_id") && h.iter().any(|c| c == "status")).then_some(h)
+}
+
+/// The CSV `bytes` of the file `path` without the columns named `drop`, each line written as
+/// the campaign writes its table's lines, so that a table widened with such columns gives back
+/// the bytes it had before. A file with none of them is returned as it is.
+fn without_columns(path: &Path, bytes: &[u8], drop: &[&str]) -> Result<Vec<u8>> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(bytes);
+    let mut records = r.byte_records();
+    let header = match records.next() {
+        Some(Ok(h)) => h,
+        _ => return Ok(bytes.to_vec()),
+    };
+    let keep: Vec<bool> = header
+        .iter()
+        .map(|c| !drop.iter().any(|d| d.as_bytes() == c))
+        .collect();
+    if keep.iter().all(|&k| k) {
+        return Ok(bytes.to_vec());
+    }
+    let line = |rec: &csv::ByteRecord| {
+        crate::campaign::table::csv_line(
+            rec.iter()
+                .zip(keep.iter().chain(std::iter::repeat(&true)))
+                .filter_map(|(f, &k)| k.then_some(f)),
+        )
+    };
+    let mut out = line(&header)?;
+    for rec in records {
+        let rec = rec.map_err(|e| Error::input(path.display(), "CSV", e.to_string()))?;
+        out.extend(line(&rec)?);
+    }
+    Ok(out)
 }
 
 /// The header of an `--also-fit` table, read before any run.
@@ -1347,4 +1466,67 @@ fn extended(dir: &Path, from: &str) -> Result<(PathBuf, String)> {
     }
     let root = models.parent().unwrap_or(Path::new("")).to_path_buf();
     Ok((root, name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{without_columns, FitStamp};
+    use crate::campaign::table::csv_line;
+    use std::path::{Path, PathBuf};
+
+    fn lines(rows: &[&[&str]]) -> Vec<u8> {
+        rows.iter()
+            .flat_map(|r| csv_line(r.iter()).unwrap())
+            .collect()
+    }
+
+    fn tables() -> (Vec<u8>, Vec<u8>) {
+        let old = lines(&[
+            &["run_id", "status", "flow", "warnings", "error"],
+            &["a", "done", "1.5", "an arch holds 3, \"late\"", ""],
+            &["b", "failed", "", "", "no particles"],
+        ]);
+        let widened = lines(&[
+            &["run_id", "status", "flow", "arch_held", "warnings", "error"],
+            &["a", "done", "1.5", "3.0", "an arch holds 3, \"late\"", ""],
+            &["b", "failed", "", "", "", "no particles"],
+        ]);
+        (old, widened)
+    }
+
+    #[test]
+    fn a_table_less_its_gained_columns_is_the_table_it_was() {
+        let (old, widened) = tables();
+        let p = Path::new("runs.csv");
+        assert_eq!(without_columns(p, &widened, &["arch_held"]).unwrap(), old);
+        assert_eq!(without_columns(p, &widened, &[]).unwrap(), widened);
+        assert_eq!(without_columns(p, &old, &["arch_held"]).unwrap(), old);
+        let toml = b"[parameters]\nmu = \"a, b\"\n".to_vec();
+        assert_eq!(without_columns(p, &toml, &["arch_held"]).unwrap(), toml);
+    }
+
+    #[test]
+    fn a_fit_is_kept_when_its_table_gained_only_a_response_it_does_not_read() {
+        let (old, widened) = tables();
+        let stamp = |table: &[u8]| FitStamp {
+            settings: crate::numeric::Fnv1a::default(),
+            files: vec![
+                (PathBuf::from("space.toml"), b"[parameters]\n".to_vec()),
+                (PathBuf::from("runs.csv"), table.to_vec()),
+            ],
+        };
+        let written = stamp(&old).text();
+        assert!(written.contains("\nheader 1 run_id,status,flow,warnings,error\n"));
+        assert!(stamp(&old).matches(&written, &[]).unwrap());
+        assert!(stamp(&widened).matches(&written, &["arch_held"]).unwrap());
+        // A gained column the fit reads, or another row, is another fit.
+        assert!(!stamp(&widened).matches(&written, &[]).unwrap());
+        let mut more = old.clone();
+        more.extend(csv_line(["c", "done", "1.7", "", ""]).unwrap());
+        assert!(!stamp(&more).matches(&written, &["arch_held"]).unwrap());
+        // A stamp file written before the headers were kept: its hash alone, on the bytes.
+        let first = written.lines().next().unwrap().to_string();
+        assert!(stamp(&old).matches(&first, &["arch_held"]).unwrap());
+        assert!(!stamp(&widened).matches(&first, &["arch_held"]).unwrap());
+    }
 }
