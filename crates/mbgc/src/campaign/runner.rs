@@ -776,6 +776,11 @@ mod tests {
         std::fs::write(&opts.out, cut(&|r| &r[1] != "2", noise)).unwrap();
         let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
         assert_eq!(s.added_columns, ["noise"]);
+        let note = s.added_columns_note(&opts.out).unwrap();
+        assert!(
+            note.contains("column(s) noise") && note.contains("NaN"),
+            "{note}"
+        );
         assert_eq!((s.skipped, s.done, s.failed), (2, 1, 0));
         let t = read_table(&opts.out).unwrap();
         assert_eq!(t.header, full.header);
@@ -787,6 +792,7 @@ mod tests {
         assert_eq!(by_row("2")[noise], redone.1[noise]);
         let s = run_campaign(&SleepTest, &plan, &opts).unwrap();
         assert!(s.added_columns.is_empty() && s.skipped == 3);
+        assert!(s.added_columns_note(&opts.out).is_none());
 
         let x = table::column(&full.header, "x").unwrap();
         let theirs = cut(&|_| true, x);

@@ -621,6 +621,9 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         fit_settings.extends = Some(Box::new(m));
     }
     fit_settings.check()?;
+    // Taken before the tables are read for the fit: a row a running campaign appends in between
+    // then makes the stamp older than the fit, which only fits again.
+    let stamp = FitStamp::new(req, &record, &paths, &extension)?;
     let mut table = TrainingTable::read_csv(&paths.table, &record.inputs, &responses)?;
     let mut validation = (req.validation > 0)
         .then(|| TrainingTable::read_csv(&paths.validation_table, &record.inputs, &responses))
@@ -699,7 +702,6 @@ pub fn train(req: &TrainRequest, observer: &dyn TrainObserver) -> Result<TrainOu
         .into_iter()
         .filter(|r| !responses.iter().any(|f| f == r))
         .collect();
-    let stamp = FitStamp::new(req, &record, &paths, &extension)?;
     if paths.model.exists()
         && std::fs::read_to_string(&paths.fit_stamp)
             .is_ok_and(|s| stamp.matches(&s, &unread).unwrap_or(false))
@@ -891,7 +893,11 @@ impl FitStamp {
         let mut out = self.hash(|_, b| Ok(b.to_vec())).unwrap_or_default();
         for (k, (_, bytes)) in self.files.iter().enumerate() {
             if let Some(h) = campaign_header(bytes) {
-                out.push_str(&format!("\nheader {k} {}", h.join(",")));
+                let line = crate::campaign::table::csv_line(&h).unwrap_or_default();
+                out.push_str(&format!(
+                    "\nheader {k} {}",
+                    String::from_utf8_lossy(&line).trim_end()
+                ));
             }
         }
         out.push('\n');
@@ -904,7 +910,7 @@ impl FitStamp {
     fn matches(&self, text: &str, unread: &[&str]) -> Result<bool> {
         let mut lines = text.lines();
         let hash = lines.next().unwrap_or("").trim();
-        let mut then: Vec<Option<Vec<&str>>> = vec![None; self.files.len()];
+        let mut then: Vec<Option<Vec<String>>> = vec![None; self.files.len()];
         for l in lines {
             let Some(rest) = l.strip_prefix("header ") else {
                 continue;
@@ -912,8 +918,8 @@ impl FitStamp {
             let Some((k, cols)) = rest.split_once(' ') else {
                 return Ok(false);
             };
-            match k.parse::<usize>() {
-                Ok(k) if k < then.len() => then[k] = Some(cols.split(',').collect()),
+            match (k.parse::<usize>(), campaign_header(cols.as_bytes())) {
+                (Ok(k), Some(h)) if k < then.len() => then[k] = Some(h),
                 _ => return Ok(false),
             }
         }
@@ -923,8 +929,8 @@ impl FitStamp {
             };
             let gained: Vec<&str> = now
                 .iter()
-                .map(String::as_str)
                 .filter(|c| !then.contains(c))
+                .map(String::as_str)
                 .collect();
             if gained.iter().all(|c| unread.contains(c)) {
                 without_columns(&self.files[k].0, bytes, &gained)
@@ -1499,6 +1505,7 @@ mod tests {
         let (old, widened) = tables();
         let p = Path::new("runs.csv");
         assert_eq!(without_columns(p, &widened, &["arch_held"]).unwrap(), old);
+        assert_ne!(without_columns(p, &widened, &["flow"]).unwrap(), old);
         assert_eq!(without_columns(p, &widened, &[]).unwrap(), widened);
         assert_eq!(without_columns(p, &old, &["arch_held"]).unwrap(), old);
         let toml = b"[parameters]\nmu = \"a, b\"\n".to_vec();
@@ -1521,9 +1528,15 @@ mod tests {
         assert!(stamp(&widened).matches(&written, &["arch_held"]).unwrap());
         // A gained column the fit reads, or another row, is another fit.
         assert!(!stamp(&widened).matches(&written, &[]).unwrap());
-        let mut more = old.clone();
-        more.extend(csv_line(["c", "done", "1.7", "", ""]).unwrap());
+        let mut more = widened.clone();
+        more.extend(csv_line(["c", "done", "1.7", "0.0", "", ""]).unwrap());
         assert!(!stamp(&more).matches(&written, &["arch_held"]).unwrap());
+        let changed = String::from_utf8(widened.clone())
+            .unwrap()
+            .replace("done,1.5,", "done,1.6,");
+        assert!(!stamp(changed.as_bytes())
+            .matches(&written, &["arch_held"])
+            .unwrap());
         // A stamp file written before the headers were kept: its hash alone, on the bytes.
         let first = written.lines().next().unwrap().to_string();
         assert!(stamp(&old).matches(&first, &["arch_held"]).unwrap());
